@@ -1,0 +1,60 @@
+// Emissive triangles as lights: one is picked in proportion to its power (luminance of
+// its radiance times its area), then a point is drawn uniformly on it. Emission is
+// one-sided, from the side the triangle's winding faces.
+
+struct LightSample {
+    wi: vec3<f32>,
+    dist: f32,
+    radiance: vec3<f32>,
+    // Solid-angle density at the shading point, including the pick probability.
+    pdf: f32,
+};
+
+fn pick_light_triangle(u: f32) -> u32 {
+    var lo = 0u;
+    var hi = params.light_count - 1u;
+    while (lo < hi) {
+        let mid = (lo + hi) / 2u;
+        if (light_cdf[mid] <= u) {
+            lo = mid + 1u;
+        } else {
+            hi = mid;
+        }
+    }
+    return lo;
+}
+
+fn sample_light_triangle(p: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample {
+    let light = light_triangles[pick_light_triangle(u_pick)];
+    let b = sample_uniform_triangle(u);
+    let a = light.p0.xyz;
+    let e1 = light.p1.xyz - a;
+    let e2 = light.p2.xyz - a;
+    let q = a + b.x * e1 + b.y * e2;
+    let c = cross(e1, e2);
+    let area2 = length(c);
+    let to_light = q - p;
+    let dist2 = dot(to_light, to_light);
+    let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0);
+    if (area2 == 0.0 || dist2 == 0.0) {
+        return none;
+    }
+    let dist = sqrt(dist2);
+    let wi = to_light / dist;
+    let cos_light = -dot(c / area2, wi);
+    if (cos_light <= 0.0) {
+        return none;
+    }
+    let pdf_area = light.emission.w / (0.5 * area2);
+    return LightSample(wi, dist, light.emission.rgb, pdf_area * dist2 / cos_light);
+}
+
+// Density with which `sample_light_triangle` would have produced a direction that reached
+// an emitter of radiance `emission` at distance `dist` with cosine `cos_light` there.
+// Because the pick probability is proportional to luminance times area, the area cancels.
+fn light_triangle_pdf(emission: vec3<f32>, dist: f32, cos_light: f32) -> f32 {
+    if (cos_light <= 0.0 || params.light_totals.x <= 0.0) {
+        return 0.0;
+    }
+    return luminance(emission) / params.light_totals.x * dist * dist / cos_light;
+}

@@ -1,0 +1,102 @@
+// Scene data as the kernel sees it: the types and bindings of group 0.
+// The Rust mirror of every struct here is in src/render/gpu_types.rs; keep the two in step.
+
+const PI: f32 = 3.14159265358979323846;
+const INV_PI: f32 = 0.31830988618379067154;
+const INV_4PI: f32 = 0.07957747154594766788;
+
+// Params.flags
+const FLAG_LIGHT_SAMPLING: u32 = 1u;
+
+struct Params {
+    film_size: vec2<u32>,
+    tile_origin: vec2<u32>,
+    tile_size: vec2<u32>,
+    sample_start: u32,
+    sample_count: u32,
+    seed: u32,
+    max_bounces: u32,
+    flags: u32,
+    light_count: u32,
+    instance_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
+    // Camera: position, orthonormal frame, and the thin lens (aperture 0 = pinhole).
+    cam_position: vec4<f32>,
+    cam_right: vec4<f32>,
+    cam_up: vec4<f32>,
+    cam_forward: vec4<f32>,
+    // x: tan(fov_y / 2), y: aspect (w / h), z: aperture radius, w: focus distance
+    cam_lens: vec4<f32>,
+    // rgb: uniform environment radiance; w: probability of picking the environment in NEE
+    environment: vec4<f32>,
+    // x: total power of emissive triangles (sum of luminance * area)
+    light_totals: vec4<f32>,
+};
+
+// A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;
+// leaves hold `count` primitives starting at `first`.
+struct BvhNode {
+    min: vec3<f32>,
+    first: u32,
+    max: vec3<f32>,
+    count: u32,
+};
+
+// The three vertices of a triangle in object space, in BVH leaf order.
+struct Triangle {
+    p0: vec4<f32>,
+    p1: vec4<f32>,
+    p2: vec4<f32>,
+};
+
+struct Instance {
+    // Rows of the 3x4 object-to-world and world-to-object matrices.
+    to_world: array<vec4<f32>, 3>,
+    to_object: array<vec4<f32>, 3>,
+    blas_root: u32,
+    material: u32,
+    flags: u32,
+    _pad: u32,
+};
+
+// Instance.flags
+const INSTANCE_HAS_NORMALS: u32 = 1u;
+const INSTANCE_HAS_UVS: u32 = 2u;
+
+struct Material {
+    base_color: vec4<f32>,
+    emission: vec4<f32>,
+};
+
+// An emissive triangle in world space, for next-event estimation.
+struct LightTriangle {
+    p0: vec4<f32>,
+    p1: vec4<f32>,
+    p2: vec4<f32>,
+    // rgb: emitted radiance; w: probability of picking this triangle among the triangles.
+    emission: vec4<f32>,
+};
+
+struct Stats {
+    rays: atomic<u32>,
+    non_finite: atomic<u32>,
+};
+
+@group(0) @binding(0) var<uniform> params: Params;
+@group(0) @binding(1) var<storage, read_write> film_sum: array<vec4<f32>>;
+@group(0) @binding(2) var<storage, read_write> film_compensation: array<vec4<f32>>;
+@group(0) @binding(3) var<storage, read_write> stats: Stats;
+@group(0) @binding(4) var<storage, read> tlas_nodes: array<BvhNode>;
+@group(0) @binding(5) var<storage, read> instances: array<Instance>;
+@group(0) @binding(6) var<storage, read> blas_nodes: array<BvhNode>;
+@group(0) @binding(7) var<storage, read> triangles: array<Triangle>;
+// Three global vertex indices per triangle, in the same order as `triangles`.
+@group(0) @binding(8) var<storage, read> triangle_vertices: array<u32>;
+// Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w unused.
+@group(0) @binding(9) var<storage, read> vertices: array<vec4<u32>>;
+@group(0) @binding(10) var<storage, read> materials: array<Material>;
+@group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;
+// Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
+@group(0) @binding(12) var<storage, read> light_cdf: array<f32>;

@@ -1,0 +1,65 @@
+// The local geometry at a ray hit: position with its error bound, geometric and shading
+// normals, texture coordinates and material, all in world space.
+
+struct Surface {
+    pe: PointError,
+    // Geometric normal from the triangle's winding (front side), unit length.
+    ng: vec3<f32>,
+    // Interpolated vertex normal, or `ng` for meshes without normals; same side as `ng`.
+    ns: vec3<f32>,
+    uv: vec2<f32>,
+    material: u32,
+};
+
+// Octahedral normal decoding (Cigolle et al. 2014, "A Survey of Efficient Representations
+// for Independent Unit Vectors").
+fn decode_octahedral(packed: u32) -> vec3<f32> {
+    let e = unpack2x16snorm(packed);
+    var v = vec3<f32>(e.x, e.y, 1.0 - abs(e.x) - abs(e.y));
+    if (v.z < 0.0) {
+        let s = select(vec2<f32>(-1.0), vec2<f32>(1.0), v.xy >= vec2<f32>(0.0));
+        v = vec3<f32>((1.0 - abs(v.yx)) * s, v.z);
+    }
+    return normalize(v);
+}
+
+fn surface_at(hit: SceneHit) -> Surface {
+    let inst = instances[hit.instance];
+    let tri = triangles[hit.triangle];
+    let b0 = 1.0 - hit.b1 - hit.b2;
+    let p0 = tri.p0.xyz;
+    let p1 = tri.p1.xyz;
+    let p2 = tri.p2.xyz;
+    // Barycentric interpolation is exact up to gamma(7) of the terms (pbrt-v4 §6.8.5),
+    // which keeps the error bound relative to the geometry's own magnitude.
+    let p_object = b0 * p0 + hit.b1 * p1 + hit.b2 * p2;
+    let err_object = gamma(7.0) * (abs(b0 * p0) + abs(hit.b1 * p1) + abs(hit.b2 * p2));
+    let pe = transform_point_error(inst.to_world, PointError(p_object, err_object));
+    let ng = normalize(transform_normal(inst.to_object, cross(p1 - p0, p2 - p0)));
+
+    var ns = ng;
+    var uv = vec2<f32>(hit.b1, hit.b2);
+    let base = hit.triangle * 3u;
+    let v0 = vertices[triangle_vertices[base]];
+    let v1 = vertices[triangle_vertices[base + 1u]];
+    let v2 = vertices[triangle_vertices[base + 2u]];
+    if ((inst.flags & INSTANCE_HAS_NORMALS) != 0u) {
+        let n_object = b0 * decode_octahedral(v0.x) + hit.b1 * decode_octahedral(v1.x) + hit.b2 * decode_octahedral(v2.x);
+        let n = transform_normal(inst.to_object, n_object);
+        let len = length(n);
+        // Opposing vertex normals can cancel: keep the geometric normal then.
+        if (len > 1e-12) {
+            ns = n / len;
+            if (dot(ns, ng) < 0.0) {
+                ns = -ns;
+            }
+        }
+    }
+    if ((inst.flags & INSTANCE_HAS_UVS) != 0u) {
+        let uv0 = bitcast<vec2<f32>>(v0.yz);
+        let uv1 = bitcast<vec2<f32>>(v1.yz);
+        let uv2 = bitcast<vec2<f32>>(v2.yz);
+        uv = b0 * uv0 + hit.b1 * uv1 + hit.b2 * uv2;
+    }
+    return Surface(pe, ng, ns, uv, inst.material);
+}

@@ -1,0 +1,17 @@
+//! Acceleration structures, built on the CPU: one BVH per mesh (BLAS) and one over the
+//! instances (TLAS), laid out as the kernel's `shaders/traverse.wgsl` walks them.
+//!
+//! The trees are built with [`obvhs`] (PLOC, Meister & Bittner 2018, then reinsertion and
+//! SAH-driven leaf collapsing), which is fast enough for million-triangle meshes on two
+//! cores; this module only converts its binary BVH into the flat GPU node layout and
+//! checks that no tree is deeper than the kernel's traversal stacks.
+
+mod bvh;
+mod two_level;
+
+pub use bvh::{Bvh, BvhNode, build_bvh};
+pub use two_level::{AccelError, SceneAccel, build_scene_accel};
+
+/// Traversal stack sizes of `shaders/traverse.wgsl`; a deeper tree cannot be traversed.
+pub const BLAS_STACK_SIZE: u32 = 64;
+pub const TLAS_STACK_SIZE: u32 = 48;

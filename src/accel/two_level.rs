@@ -1,0 +1,110 @@
+//! The two-level structure: a BVH per mesh in object space and one over instances in
+//! world space. A mesh used by many instances gets one BLAS.
+
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use thiserror::Error;
+
+use super::{BLAS_STACK_SIZE, Bvh, TLAS_STACK_SIZE, build_bvh};
+use crate::scene::Scene;
+
+/// Triangles per BLAS leaf at most; obvhs' collapse picks fewer where SAH says so.
+const BLAS_MAX_LEAF_SIZE: u32 = 4;
+const TLAS_MAX_LEAF_SIZE: u32 = 1;
+
+#[derive(Debug, Error)]
+pub enum AccelError {
+    #[error(
+        "the BVH of {what} is {depth} levels deep, more than the kernel's traversal stack of {limit}"
+    )]
+    TooDeep {
+        what: String,
+        depth: u32,
+        limit: u32,
+    },
+}
+
+#[derive(Clone, Debug)]
+pub struct SceneAccel {
+    /// One per mesh of the scene; `None` for meshes no instance uses.
+    pub blas: Vec<Option<Bvh>>,
+    /// Over instances; `None` when the scene has none.
+    pub tlas: Option<Bvh>,
+    pub build_time: Duration,
+}
+
+pub fn build_scene_accel(scene: &Scene) -> Result<SceneAccel, AccelError> {
+    let start = Instant::now();
+    let mut used = vec![false; scene.meshes.len()];
+    for inst in &scene.instances {
+        used[inst.mesh] = true;
+    }
+    let mut blas = Vec::with_capacity(scene.meshes.len());
+    for (mesh, used) in scene.meshes.iter().zip(used) {
+        if !used {
+            blas.push(None);
+            continue;
+        }
+        let boxes: Vec<(Vec3, Vec3)> = (0..mesh.indices.len())
+            .map(|i| {
+                let [a, b, c] = mesh.triangle(i);
+                (a.min(b).min(c), a.max(b).max(c))
+            })
+            .collect();
+        let bvh = build_bvh(&boxes, BLAS_MAX_LEAF_SIZE);
+        if bvh.depth > BLAS_STACK_SIZE {
+            return Err(AccelError::TooDeep {
+                what: format!("mesh \"{}\"", mesh.name),
+                depth: bvh.depth,
+                limit: BLAS_STACK_SIZE,
+            });
+        }
+        blas.push(Some(bvh));
+    }
+
+    let tlas = if scene.instances.is_empty() {
+        None
+    } else {
+        let boxes: Vec<(Vec3, Vec3)> = scene
+            .instances
+            .iter()
+            .map(|inst| {
+                let root = blas[inst.mesh]
+                    .as_ref()
+                    .expect("every instanced mesh has a BLAS")
+                    .nodes[0];
+                let (lo, hi) = root.bounds();
+                let mut wlo = Vec3::splat(f32::INFINITY);
+                let mut whi = Vec3::splat(f32::NEG_INFINITY);
+                for corner in 0..8 {
+                    let p = Vec3::new(
+                        if corner & 1 == 0 { lo.x } else { hi.x },
+                        if corner & 2 == 0 { lo.y } else { hi.y },
+                        if corner & 4 == 0 { lo.z } else { hi.z },
+                    );
+                    let w = inst.transform.transform_point3(p);
+                    wlo = wlo.min(w);
+                    whi = whi.max(w);
+                }
+                // Rounding in the transform may move a vertex past the exact corners.
+                let pad = (whi - wlo).max(wlo.abs().max(whi.abs())) * 1e-6;
+                (wlo - pad, whi + pad)
+            })
+            .collect();
+        let bvh = build_bvh(&boxes, TLAS_MAX_LEAF_SIZE);
+        if bvh.depth > TLAS_STACK_SIZE {
+            return Err(AccelError::TooDeep {
+                what: "the instances".into(),
+                depth: bvh.depth,
+                limit: TLAS_STACK_SIZE,
+            });
+        }
+        Some(bvh)
+    };
+    Ok(SceneAccel {
+        blas,
+        tlas,
+        build_time: start.elapsed(),
+    })
+}

@@ -1,0 +1,136 @@
+//! `kiln bench`: samples/s and rays/s on the bundled Cornell box and on a generated
+//! million-triangle scene, with BVH build and kernel build times reported apart. Prints
+//! Markdown rows for `docs/BENCHMARKS.md`. Timings live here, never in tests.
+
+use std::sync::Arc;
+use std::time::{Duration, Instant};
+
+use anyhow::Result;
+use glam::{Affine3A, Vec3};
+
+use crate::accel::build_scene_accel;
+use crate::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer};
+use crate::scene::{self, Camera, Material, Scene, shapes};
+
+#[derive(clap::Args, Debug)]
+pub struct BenchArgs {
+    /// Triangles in the generated large scene.
+    #[arg(long, default_value_t = 1_000_000)]
+    pub triangles: u32,
+    /// Seconds of timed rendering per scene, after a warm-up.
+    #[arg(long, default_value_t = 10.0)]
+    pub seconds: f64,
+    /// Image size of the timed renders (square).
+    #[arg(long, default_value_t = 512)]
+    pub size: u32,
+}
+
+/// A displaced sphere on a floor, lit by a quad light and a dim sky.
+pub fn large_scene(triangles: u32) -> Scene {
+    let mut scene = Scene::empty(Camera::look_at(
+        Vec3::new(0.0, 1.2, 3.2),
+        Vec3::new(0.0, 0.8, 0.0),
+        40.0,
+    ));
+    scene.environment = Vec3::splat(0.2);
+    let grey = scene.add_material(Material::diffuse("grey", Vec3::splat(0.6)));
+    let orange = scene.add_material(Material::diffuse("orange", Vec3::new(0.8, 0.4, 0.1)));
+    let light = scene.add_material(Material {
+        name: "light".into(),
+        base_color: Vec3::ZERO,
+        emission: Vec3::splat(8.0),
+    });
+    let sphere = scene.add_mesh(shapes::displaced_sphere(triangles));
+    let quad = scene.add_mesh(shapes::quad());
+    scene.add_instance(
+        sphere,
+        orange,
+        Affine3A::from_translation(Vec3::new(0.0, 0.8, 0.0))
+            * Affine3A::from_scale(Vec3::splat(0.75)),
+    );
+    scene.add_instance(quad, grey, Affine3A::from_scale(Vec3::splat(10.0)));
+    // Facing down from above.
+    scene.add_instance(
+        quad,
+        light,
+        Affine3A::from_translation(Vec3::new(0.0, 3.0, 0.0))
+            * Affine3A::from_rotation_x(std::f32::consts::PI),
+    );
+    scene
+}
+
+struct Row {
+    name: String,
+    triangles: u64,
+    bvh: Duration,
+    kernel: Duration,
+    samples_per_sec: f64,
+    rays_per_sec: f64,
+}
+
+fn measure(ctx: &Arc<GpuContext>, name: &str, scene: &Scene, args: &BenchArgs) -> Result<Row> {
+    // The BVH on its own, so its time is not mixed with upload.
+    let t = Instant::now();
+    build_scene_accel(scene)?;
+    let bvh = t.elapsed();
+    let settings = RenderSettings {
+        width: args.size,
+        height: args.size,
+        samples_per_pixel: u32::MAX,
+        ..RenderSettings::from_scene(scene)
+    };
+    let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)?;
+    // Warm-up: lets the batch size settle.
+    renderer.render(0..4, RenderControl::default())?;
+    let deadline = Instant::now() + Duration::from_secs_f64(args.seconds);
+    let stats = renderer.render(
+        4..u32::MAX,
+        RenderControl {
+            deadline: Some(deadline),
+            ..RenderControl::default()
+        },
+    )?;
+    let secs = stats.elapsed.as_secs_f64();
+    Ok(Row {
+        name: name.to_owned(),
+        triangles: scene.triangle_count(),
+        bvh,
+        kernel: renderer.build_info.kernel_build,
+        samples_per_sec: stats.pixel_samples as f64 / secs,
+        rays_per_sec: stats.rays as f64 / secs,
+    })
+}
+
+pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
+    let ctx = GpuContext::new(backend)?;
+    eprintln!("adapter: {}", ctx.describe());
+    let scenes = [
+        ("Cornell box".to_owned(), scene::default_scene()?),
+        (
+            format!("displaced sphere ({} tris)", args.triangles),
+            large_scene(args.triangles),
+        ),
+    ];
+    println!(
+        "Adapter: {}; {}x{} px, max bounces from each scene, NEE + MIS.",
+        ctx.describe(),
+        args.size,
+        args.size
+    );
+    println!();
+    println!("| scene | triangles | BVH build | kernel build | Msamples/s | Mrays/s |");
+    println!("|---|---:|---:|---:|---:|---:|");
+    for (name, scene) in &scenes {
+        let row = measure(&ctx, name, scene, args)?;
+        println!(
+            "| {} | {} | {:.1} ms | {:.0} ms | {:.3} | {:.2} |",
+            row.name,
+            row.triangles,
+            row.bvh.as_secs_f64() * 1e3,
+            row.kernel.as_secs_f64() * 1e3,
+            row.samples_per_sec / 1e6,
+            row.rays_per_sec / 1e6
+        );
+    }
+    Ok(())
+}

@@ -1,0 +1,12 @@
+//! Kiln: a physically based path tracer whose kernel is WGSL run by wgpu.
+//!
+//! Data flows one way: a [`scene::Scene`] is loaded from a `.kiln` file, its meshes get
+//! BVHs ([`accel`]), [`render::Renderer`] uploads both and accumulates samples on the GPU
+//! into a [`film::Film`], which is tonemapped and written by [`film::output`].
+//! The library has no global state and never prints; the `kiln` binary is its CLI.
+
+pub mod accel;
+pub mod bench;
+pub mod film;
+pub mod render;
+pub mod scene;

@@ -1,0 +1,317 @@
+//! `kiln`: the command line. Renders scene files, lists adapters, runs benchmarks.
+//! Errors reach the user as one message with its causes and a non-zero exit code
+//! (2 for usage errors, 1 for everything else), never as a panic.
+
+use std::path::{Path, PathBuf};
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::{Duration, Instant};
+
+use anyhow::{Context, Result, bail};
+use clap::{Parser, Subcommand, ValueEnum};
+use glam::Vec3;
+use indicatif::{ProgressBar, ProgressStyle};
+
+use kiln::film::output::{ViewSettings, write_image};
+use kiln::film::tonemap::Tonemap;
+use kiln::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer, context};
+use kiln::scene::{self, Scene};
+
+#[derive(Parser)]
+#[command(name = "kiln", version, about = "A physically based GPU path tracer")]
+struct Cli {
+    /// Graphics API to run on (default: the best the system offers).
+    #[arg(long, global = true, value_enum)]
+    backend: Option<BackendArg>,
+    #[command(subcommand)]
+    command: Command,
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum BackendArg {
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl From<BackendArg> for Backend {
+    fn from(b: BackendArg) -> Self {
+        match b {
+            BackendArg::Vulkan => Backend::Vulkan,
+            BackendArg::Gl => Backend::Gl,
+            BackendArg::Metal => Backend::Metal,
+            BackendArg::Dx12 => Backend::Dx12,
+        }
+    }
+}
+
+#[derive(Clone, Copy, ValueEnum)]
+enum TonemapArg {
+    None,
+    Agx,
+    Aces,
+    PbrNeutral,
+}
+
+impl From<TonemapArg> for Tonemap {
+    fn from(t: TonemapArg) -> Self {
+        match t {
+            TonemapArg::None => Tonemap::None,
+            TonemapArg::Agx => Tonemap::Agx,
+            TonemapArg::Aces => Tonemap::Aces,
+            TonemapArg::PbrNeutral => Tonemap::PbrNeutral,
+        }
+    }
+}
+
+#[derive(Subcommand)]
+enum Command {
+    /// Render a scene to an image (the bundled Cornell box when no scene is given).
+    Render(RenderArgs),
+    /// List the GPU adapters and the one Kiln would use.
+    Info,
+    /// Measure samples/s, rays/s and BVH build time; prints a Markdown table.
+    Bench(kiln::bench::BenchArgs),
+}
+
+#[derive(clap::Args)]
+struct RenderArgs {
+    /// A .kiln scene file.
+    scene: Option<PathBuf>,
+    /// Output image: .png, .jpg or .exr (linear float).
+    #[arg(short, long, default_value = "out.png")]
+    output: PathBuf,
+    /// Samples per pixel (default: the scene's).
+    #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+    spp: Option<u32>,
+    /// Maximum number of bounces (default: the scene's).
+    #[arg(long)]
+    max_bounces: Option<u32>,
+    /// Image size as WIDTHxHEIGHT (default: the scene's).
+    #[arg(long, value_parser = parse_size)]
+    size: Option<(u32, u32)>,
+    /// Seed of the random sequence; the same seed gives the same image.
+    #[arg(long, default_value_t = 0)]
+    seed: u32,
+    /// Exposure in stops (EV) applied before tonemapping.
+    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
+    exposure: f32,
+    /// View transform from scene radiance to display.
+    #[arg(long, value_enum, default_value = "agx")]
+    tonemap: TonemapArg,
+    /// Stop after this many seconds and write what has accumulated.
+    #[arg(long)]
+    time_limit: Option<f64>,
+    /// Uniform environment radiance R,G,B (overrides the scene's).
+    #[arg(long, value_parser = parse_rgb)]
+    environment: Option<Vec3>,
+    /// Sample BSDFs only, without next-event estimation (a reference for MIS).
+    #[arg(long)]
+    no_light_sampling: bool,
+    /// No progress bar.
+    #[arg(short, long)]
+    quiet: bool,
+}
+
+fn parse_size(s: &str) -> Result<(u32, u32), String> {
+    let (w, h) = s
+        .split_once(['x', 'X'])
+        .ok_or_else(|| format!("expected WIDTHxHEIGHT, e.g. 800x600, got \"{s}\""))?;
+    let parse = |v: &str| -> Result<u32, String> {
+        match v.trim().parse::<u32>() {
+            Ok(n) if (1..=16384).contains(&n) => Ok(n),
+            _ => Err(format!("\"{v}\" is not a size between 1 and 16384")),
+        }
+    };
+    Ok((parse(w)?, parse(h)?))
+}
+
+fn parse_rgb(s: &str) -> Result<Vec3, String> {
+    let parts: Vec<&str> = s.split(',').collect();
+    if parts.len() != 3 {
+        return Err(format!("expected R,G,B, e.g. 0.5,0.5,0.5, got \"{s}\""));
+    }
+    let mut rgb = [0.0f32; 3];
+    for (c, p) in rgb.iter_mut().zip(parts) {
+        *c = p
+            .trim()
+            .parse()
+            .ok()
+            .filter(|v: &f32| v.is_finite() && *v >= 0.0)
+            .ok_or_else(|| format!("\"{p}\" is not a finite non-negative number"))?;
+    }
+    Ok(Vec3::from(rgb))
+}
+
+fn main() -> ExitCode {
+    tracing_subscriber::fmt()
+        .with_env_filter(
+            tracing_subscriber::EnvFilter::try_from_env("KILN_LOG")
+                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+        )
+        .with_writer(std::io::stderr)
+        .init();
+    let cli = Cli::parse();
+    let backend = cli.backend.map(Backend::from);
+    let result = match cli.command {
+        Command::Render(args) => render(args, backend),
+        Command::Info => info(backend),
+        Command::Bench(args) => kiln::bench::run(&args, backend),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+fn info(backend: Option<Backend>) -> Result<()> {
+    let adapters = context::list_adapters(backend);
+    if adapters.is_empty() {
+        println!("no adapters found");
+    }
+    for a in &adapters {
+        println!("adapter: {}", context::describe_adapter(a));
+    }
+    let ctx = GpuContext::new(backend)?;
+    println!("would use: {}", ctx.describe());
+    let l = ctx.limits();
+    println!(
+        "limits: storage binding {} MiB, buffer {} MiB, {} storage buffers per stage",
+        l.max_storage_buffer_binding_size >> 20,
+        l.max_buffer_size >> 20,
+        l.max_storage_buffers_per_shader_stage
+    );
+    Ok(())
+}
+
+fn load(path: Option<&Path>) -> Result<(Scene, String)> {
+    match path {
+        Some(p) => Ok((scene::load_scene(p)?, p.display().to_string())),
+        None => Ok((
+            scene::default_scene()?,
+            scene::DEFAULT_SCENE_PATH.to_owned(),
+        )),
+    }
+}
+
+fn render(args: RenderArgs, backend: Option<Backend>) -> Result<()> {
+    // Refuse an unwritable format before spending minutes on the render.
+    kiln::film::output::OutputFormat::from_path(&args.output)?;
+    if let Some(t) = args.time_limit
+        && !(t.is_finite() && t > 0.0)
+    {
+        bail!("--time-limit must be a positive number of seconds, got {t}");
+    }
+    if !args.exposure.is_finite() {
+        bail!("--exposure must be a finite number of stops");
+    }
+    let (mut scene, name) = load(args.scene.as_deref())?;
+    if let Some(env) = args.environment {
+        scene.environment = env;
+    }
+    let mut settings = RenderSettings::from_scene(&scene);
+    if let Some((w, h)) = args.size {
+        settings.width = w;
+        settings.height = h;
+    }
+    if let Some(spp) = args.spp {
+        settings.samples_per_pixel = spp;
+    }
+    if let Some(b) = args.max_bounces {
+        settings.max_bounces = b;
+    }
+    settings.seed = args.seed;
+    settings.light_sampling = !args.no_light_sampling;
+
+    let ctx = GpuContext::new(backend)?;
+    eprintln!("adapter: {}", ctx.describe());
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
+        .with_context(|| format!("cannot prepare {name} for rendering"))?;
+    let info = renderer.build_info;
+    eprintln!(
+        "scene: {name}: {} triangles, {} instances, {} emissive triangles; BVH {:.0} ms, kernel {:.0} ms",
+        info.triangles,
+        info.instances,
+        info.emissive_triangles,
+        info.accel_build.as_secs_f64() * 1e3,
+        info.kernel_build.as_secs_f64() * 1e3
+    );
+
+    let cancel = Arc::new(AtomicBool::new(false));
+    {
+        let cancel = Arc::clone(&cancel);
+        // A second Ctrl-C while the partial image is written exits at once.
+        ctrlc::set_handler(move || {
+            if cancel.swap(true, Ordering::SeqCst) {
+                std::process::exit(130);
+            }
+        })
+        .context("cannot install the Ctrl-C handler")?;
+    }
+    let pixels = settings.width as u64 * settings.height as u64;
+    let bar = if args.quiet {
+        ProgressBar::hidden()
+    } else {
+        ProgressBar::new(settings.samples_per_pixel as u64)
+    };
+    bar.set_style(
+        ProgressStyle::with_template(
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}  ETA {eta}",
+        )
+        .expect("the template is valid"),
+    );
+    let mut on_progress = |p: &kiln::render::Progress| {
+        bar.set_position(p.pixel_samples_done / pixels.max(1));
+        let secs = p.elapsed.as_secs_f64().max(1e-9);
+        bar.set_message(format!(
+            "{:.2} Msamples/s  {:.1} Mrays/s",
+            p.pixel_samples_done as f64 / secs / 1e6,
+            p.rays as f64 / secs / 1e6
+        ));
+    };
+    let deadline = args
+        .time_limit
+        .map(|t| Instant::now() + Duration::from_secs_f64(t));
+    let stats = renderer.render(
+        0..settings.samples_per_pixel,
+        RenderControl {
+            cancel: Some(&cancel),
+            deadline,
+            progress: Some(&mut on_progress),
+        },
+    )?;
+    bar.finish_and_clear();
+    let film = renderer.read_film()?;
+    let view = ViewSettings {
+        exposure_ev: args.exposure,
+        tonemap: args.tonemap.into(),
+    };
+    write_image(&args.output, &film, view)?;
+    let secs = stats.elapsed.as_secs_f64().max(1e-9);
+    let reason = if stats.completed {
+        ""
+    } else if cancel.load(Ordering::SeqCst) {
+        " (interrupted)"
+    } else {
+        " (time limit reached)"
+    };
+    eprintln!(
+        "wrote {}: {:.1} spp average in {:.2} s{reason}, {:.2} Msamples/s, {:.1} Mrays/s{}",
+        args.output.display(),
+        stats.pixel_samples as f64 / pixels as f64,
+        secs,
+        stats.pixel_samples as f64 / secs / 1e6,
+        stats.rays as f64 / secs / 1e6,
+        if stats.non_finite > 0 {
+            format!(", {} non-finite samples dropped", stats.non_finite)
+        } else {
+            String::new()
+        }
+    );
+    Ok(())
+}

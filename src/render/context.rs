@@ -1,0 +1,142 @@
+//! The wgpu device the renderer runs on: adapter choice, device creation, and the
+//! adapter list `kiln info` prints.
+
+use std::sync::Arc;
+
+use thiserror::Error;
+
+/// Which graphics API to run compute on.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Backend {
+    Vulkan,
+    Gl,
+    Metal,
+    Dx12,
+}
+
+impl Backend {
+    fn backends(self) -> wgpu::Backends {
+        match self {
+            Backend::Vulkan => wgpu::Backends::VULKAN,
+            Backend::Gl => wgpu::Backends::GL,
+            Backend::Metal => wgpu::Backends::METAL,
+            Backend::Dx12 => wgpu::Backends::DX12,
+        }
+    }
+}
+
+#[derive(Debug, Error)]
+pub enum GpuError {
+    #[error(
+        "no usable GPU adapter{backend}: {reason}. On Linux without a GPU, install Mesa's software Vulkan driver (Debian: apt-get install mesa-vulkan-drivers)"
+    )]
+    NoAdapter { backend: String, reason: String },
+    #[error("could not open a device on {adapter}: {reason}")]
+    Device { adapter: String, reason: String },
+    #[error("the GPU reported an error during {during}: {message}")]
+    Runtime { during: String, message: String },
+}
+
+/// An adapter, its device and queue. Shared (`Arc`) between the renderer and, later, the
+/// editor, so one device serves both.
+pub struct GpuContext {
+    pub adapter: wgpu::Adapter,
+    pub device: wgpu::Device,
+    pub queue: wgpu::Queue,
+    pub info: wgpu::AdapterInfo,
+}
+
+fn instance(backend: Option<Backend>) -> wgpu::Instance {
+    let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+    if let Some(b) = backend {
+        desc.backends = b.backends();
+    }
+    wgpu::Instance::new(desc)
+}
+
+fn backend_text(backend: Option<Backend>) -> String {
+    backend.map_or(String::new(), |b| format!(" for backend {b:?}"))
+}
+
+/// One line describing an adapter: name, API and kind.
+pub fn describe_adapter(info: &wgpu::AdapterInfo) -> String {
+    let driver = if info.driver_info.is_empty() {
+        String::new()
+    } else {
+        format!(", {}", info.driver_info)
+    };
+    format!(
+        "{} ({:?}, {:?}{driver})",
+        info.name, info.backend, info.device_type
+    )
+}
+
+/// Every adapter wgpu can see for the backend filter.
+pub fn list_adapters(backend: Option<Backend>) -> Vec<wgpu::AdapterInfo> {
+    let instance = instance(backend);
+    let backends = backend.map_or(wgpu::Backends::all(), Backend::backends);
+    pollster::block_on(instance.enumerate_adapters(backends))
+        .iter()
+        .map(|a| a.get_info())
+        .collect()
+}
+
+impl GpuContext {
+    /// Opens the adapter wgpu prefers (high performance first), asking for the adapter's
+    /// own limits: the WebGPU defaults are too small for large scenes, and on GL too small
+    /// for compute at all.
+    pub fn new(backend: Option<Backend>) -> Result<Arc<Self>, GpuError> {
+        let instance = instance(backend);
+        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+            power_preference: wgpu::PowerPreference::HighPerformance,
+            force_fallback_adapter: false,
+            compatible_surface: None,
+            apply_limit_buckets: false,
+        }))
+        .map_err(|e| GpuError::NoAdapter {
+            backend: backend_text(backend),
+            reason: e.to_string(),
+        })?;
+        let info = adapter.get_info();
+        let limits = adapter.limits();
+        if !adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+        {
+            return Err(GpuError::NoAdapter {
+                backend: backend_text(backend),
+                reason: format!("{} cannot run compute shaders", describe_adapter(&info)),
+            });
+        }
+        let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
+            label: Some("kiln"),
+            required_features: wgpu::Features::empty(),
+            required_limits: limits,
+            ..Default::default()
+        }))
+        .map_err(|e| GpuError::Device {
+            adapter: describe_adapter(&info),
+            reason: e.to_string(),
+        })?;
+        // Errors are caught with error scopes where they can happen; anything that
+        // escapes is logged instead of wgpu's default panic.
+        device.on_uncaptured_error(Arc::new(|e: wgpu::Error| {
+            tracing::error!("uncaptured wgpu error: {e}");
+        }));
+        Ok(Arc::new(Self {
+            adapter,
+            device,
+            queue,
+            info,
+        }))
+    }
+
+    pub fn describe(&self) -> String {
+        describe_adapter(&self.info)
+    }
+
+    pub fn limits(&self) -> wgpu::Limits {
+        self.device.limits()
+    }
+}

@@ -1,0 +1,402 @@
+//! Scene upload: the meshes, their BVHs, instances, materials and the emissive-triangle
+//! light list, flattened into the storage buffers of `shaders/scene.wgsl`.
+
+use glam::{Vec2, Vec3};
+use thiserror::Error;
+use wgpu::util::DeviceExt;
+
+use super::context::GpuContext;
+use super::gpu_types::{
+    GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle, INSTANCE_HAS_NORMALS, INSTANCE_HAS_UVS,
+};
+use crate::accel::{BvhNode, SceneAccel};
+use crate::scene::{Scene, shapes};
+
+#[derive(Debug, Error)]
+pub enum UploadError {
+    #[error(
+        "the scene's {buffer} need {bytes} bytes, more than this adapter allows in one buffer binding ({limit} bytes)"
+    )]
+    TooLarge {
+        buffer: &'static str,
+        bytes: u64,
+        limit: u64,
+    },
+}
+
+/// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
+pub struct GpuScene {
+    pub tlas_nodes: wgpu::Buffer,
+    pub instances: wgpu::Buffer,
+    pub blas_nodes: wgpu::Buffer,
+    pub triangles: wgpu::Buffer,
+    pub triangle_vertices: wgpu::Buffer,
+    pub vertices: wgpu::Buffer,
+    pub materials: wgpu::Buffer,
+    pub light_triangles: wgpu::Buffer,
+    pub light_cdf: wgpu::Buffer,
+    pub instance_count: u32,
+    pub light_count: u32,
+    /// Sum over emissive triangles of luminance × area.
+    pub light_power: f32,
+    /// Probability that next-event estimation samples the environment.
+    pub environment_pick: f32,
+    pub bytes: u64,
+}
+
+/// CPU-side arrays in upload order; separate from the upload so tests can inspect them.
+#[derive(Default)]
+pub struct SceneArrays {
+    pub tlas_nodes: Vec<BvhNode>,
+    pub instances: Vec<GpuInstance>,
+    pub blas_nodes: Vec<BvhNode>,
+    pub triangles: Vec<GpuTriangle>,
+    pub triangle_vertices: Vec<u32>,
+    pub vertices: Vec<[u32; 4]>,
+    pub materials: Vec<GpuMaterial>,
+    pub light_triangles: Vec<GpuLightTriangle>,
+    pub light_cdf: Vec<f32>,
+    pub light_power: f32,
+}
+
+fn rows(m: glam::Affine3A) -> [[f32; 4]; 3] {
+    let c = glam::Mat4::from(m).transpose().to_cols_array_2d();
+    [c[0], c[1], c[2]]
+}
+
+fn pack_snorm16(v: f32) -> u32 {
+    ((v.clamp(-1.0, 1.0) * 32767.0).round() as i16 as u16) as u32
+}
+
+/// Octahedral encoding into two snorm16s, the inverse of `decode_octahedral` in
+/// `shaders/surface.wgsl` (WGSL `unpack2x16snorm`).
+pub fn encode_octahedral(n: Vec3) -> u32 {
+    let n = n / (n.x.abs() + n.y.abs() + n.z.abs());
+    let sign = |v: f32| if v >= 0.0 { 1.0 } else { -1.0 };
+    let e = if n.z >= 0.0 {
+        Vec2::new(n.x, n.y)
+    } else {
+        Vec2::new((1.0 - n.y.abs()) * sign(n.x), (1.0 - n.x.abs()) * sign(n.y))
+    };
+    pack_snorm16(e.x) | (pack_snorm16(e.y) << 16)
+}
+
+pub fn luminance(c: Vec3) -> f32 {
+    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+impl SceneArrays {
+    pub fn build(scene: &Scene, accel: &SceneAccel) -> Self {
+        let mut a = SceneArrays::default();
+        // Meshes: BLAS nodes, triangles in leaf order, vertex attributes.
+        let mut blas_root = vec![0u32; scene.meshes.len()];
+        let mut mesh_flags = vec![0u32; scene.meshes.len()];
+        for (m, (mesh, bvh)) in scene.meshes.iter().zip(&accel.blas).enumerate() {
+            let Some(bvh) = bvh else { continue };
+            let node_base = a.blas_nodes.len() as u32;
+            let tri_base = a.triangles.len() as u32;
+            let vertex_base = a.vertices.len() as u32;
+            blas_root[m] = node_base;
+            a.blas_nodes.extend(bvh.nodes.iter().map(|n| BvhNode {
+                first: n.first + if n.count == 0 { node_base } else { tri_base },
+                ..*n
+            }));
+            for &t in &bvh.primitive_order {
+                let [p0, p1, p2] = mesh.triangle(t as usize);
+                a.triangles.push(GpuTriangle {
+                    p0: p0.extend(1.0).into(),
+                    p1: p1.extend(1.0).into(),
+                    p2: p2.extend(1.0).into(),
+                });
+                a.triangle_vertices
+                    .extend(mesh.indices[t as usize].map(|i| vertex_base + i));
+            }
+            let mut normals = mesh.normals.clone();
+            if normals.iter().any(|n| n.length_squared() == 0.0) {
+                normals = shapes::compute_vertex_normals(&mesh.positions, &mesh.indices);
+            }
+            for v in 0..mesh.positions.len() {
+                let n = normals.get(v).map_or(0, |&n| encode_octahedral(n));
+                let uv = mesh.uvs.get(v).copied().unwrap_or(Vec2::ZERO);
+                a.vertices.push([n, uv.x.to_bits(), uv.y.to_bits(), 0]);
+            }
+            mesh_flags[m] = if mesh.normals.is_empty() {
+                0
+            } else {
+                INSTANCE_HAS_NORMALS
+            } | if mesh.uvs.is_empty() {
+                0
+            } else {
+                INSTANCE_HAS_UVS
+            };
+        }
+
+        // Instances in TLAS leaf order.
+        if let Some(tlas) = &accel.tlas {
+            a.tlas_nodes = tlas.nodes.clone();
+            a.instances = tlas
+                .primitive_order
+                .iter()
+                .map(|&i| {
+                    let inst = &scene.instances[i as usize];
+                    GpuInstance {
+                        to_world: rows(inst.transform),
+                        to_object: rows(inst.transform.inverse()),
+                        blas_root: blas_root[inst.mesh],
+                        material: inst.material as u32,
+                        flags: mesh_flags[inst.mesh],
+                        _pad: 0,
+                    }
+                })
+                .collect();
+        }
+
+        a.materials = scene
+            .materials
+            .iter()
+            .map(|m| GpuMaterial {
+                base_color: m.base_color.extend(1.0).into(),
+                emission: m.emission.extend(0.0).into(),
+            })
+            .collect();
+
+        a.build_lights(scene);
+        a
+    }
+
+    /// Every front-facing emissive triangle in world space, picked by power.
+    fn build_lights(&mut self, scene: &Scene) {
+        let mut powers = Vec::new();
+        for inst in &scene.instances {
+            let material = &scene.materials[inst.material];
+            if !material.is_emissive() {
+                continue;
+            }
+            let lum = luminance(material.emission);
+            let mesh = &scene.meshes[inst.mesh];
+            // A mirroring transform flips the winding; keep the emitting side where the
+            // kernel's transformed normal says it is.
+            let mirrored = inst.transform.matrix3.determinant() < 0.0;
+            for t in 0..mesh.indices.len() {
+                let [p0, mut p1, mut p2] =
+                    mesh.triangle(t).map(|p| inst.transform.transform_point3(p));
+                if mirrored {
+                    std::mem::swap(&mut p1, &mut p2);
+                }
+                let area = 0.5 * (p1 - p0).cross(p2 - p0).length();
+                let power = lum * area;
+                if !(power > 0.0 && power.is_finite()) {
+                    continue;
+                }
+                powers.push(power as f64);
+                self.light_triangles.push(GpuLightTriangle {
+                    p0: p0.extend(1.0).into(),
+                    p1: p1.extend(1.0).into(),
+                    p2: p2.extend(1.0).into(),
+                    emission: material.emission.extend(0.0).into(),
+                });
+            }
+        }
+        let total: f64 = powers.iter().sum();
+        let mut running = 0.0f64;
+        for (light, power) in self.light_triangles.iter_mut().zip(&powers) {
+            light.emission[3] = (power / total) as f32;
+            running += power;
+            self.light_cdf.push((running / total) as f32);
+        }
+        if let Some(last) = self.light_cdf.last_mut() {
+            *last = 1.0;
+        }
+        self.light_power = total as f32;
+    }
+}
+
+fn storage_buffer<T: bytemuck::Pod + Default>(
+    ctx: &GpuContext,
+    name: &'static str,
+    data: &[T],
+    bytes_total: &mut u64,
+) -> Result<wgpu::Buffer, UploadError> {
+    // Bindings may not be empty: an unused array holds one zeroed element.
+    let placeholder = [T::default()];
+    let data = if data.is_empty() {
+        &placeholder[..]
+    } else {
+        data
+    };
+    let bytes = std::mem::size_of_val(data) as u64;
+    let limits = ctx.limits();
+    let limit = limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size);
+    if bytes > limit {
+        return Err(UploadError::TooLarge {
+            buffer: name,
+            bytes,
+            limit,
+        });
+    }
+    *bytes_total += bytes;
+    Ok(ctx
+        .device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(name),
+            contents: bytemuck::cast_slice(data),
+            usage: wgpu::BufferUsages::STORAGE,
+        }))
+}
+
+impl GpuScene {
+    pub fn upload(
+        ctx: &GpuContext,
+        scene: &Scene,
+        accel: &SceneAccel,
+    ) -> Result<Self, UploadError> {
+        let a = SceneArrays::build(scene, accel);
+        let mut bytes = 0;
+        let environment_pick = if luminance(scene.environment) > 0.0 {
+            if a.light_triangles.is_empty() {
+                1.0
+            } else {
+                0.5
+            }
+        } else {
+            0.0
+        };
+        Ok(Self {
+            tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, &mut bytes)?,
+            instances: storage_buffer(ctx, "instances", &a.instances, &mut bytes)?,
+            blas_nodes: storage_buffer(ctx, "BLAS nodes", &a.blas_nodes, &mut bytes)?,
+            triangles: storage_buffer(ctx, "triangles", &a.triangles, &mut bytes)?,
+            triangle_vertices: storage_buffer(
+                ctx,
+                "triangle vertex indices",
+                &a.triangle_vertices,
+                &mut bytes,
+            )?,
+            vertices: storage_buffer(ctx, "vertex attributes", &a.vertices, &mut bytes)?,
+            materials: storage_buffer(ctx, "materials", &a.materials, &mut bytes)?,
+            light_triangles: storage_buffer(
+                ctx,
+                "emissive triangles",
+                &a.light_triangles,
+                &mut bytes,
+            )?,
+            light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, &mut bytes)?,
+            instance_count: a.instances.len() as u32,
+            light_count: a.light_triangles.len() as u32,
+            light_power: a.light_power,
+            environment_pick,
+            bytes,
+        })
+    }
+}
+
+/// Layout of group 0 (`shaders/scene.wgsl`): params, film, stats, then the scene.
+pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
+    for b in 1..=3 {
+        entries.push(entry(
+            b,
+            wgpu::BufferBindingType::Storage { read_only: false },
+        ));
+    }
+    for b in 4..=12 {
+        entries.push(entry(
+            b,
+            wgpu::BufferBindingType::Storage { read_only: true },
+        ));
+    }
+    device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("scene"),
+        entries: &entries,
+    })
+}
+
+/// The per-render buffers group 0 binds next to the scene.
+pub struct FrameBuffers<'a> {
+    pub params: &'a wgpu::Buffer,
+    pub film_sum: &'a wgpu::Buffer,
+    pub film_compensation: &'a wgpu::Buffer,
+    pub stats: &'a wgpu::Buffer,
+}
+
+impl GpuScene {
+    pub fn bind_group(
+        &self,
+        device: &wgpu::Device,
+        layout: &wgpu::BindGroupLayout,
+        frame: &FrameBuffers,
+    ) -> wgpu::BindGroup {
+        let buffers = [
+            frame.params,
+            frame.film_sum,
+            frame.film_compensation,
+            frame.stats,
+            &self.tlas_nodes,
+            &self.instances,
+            &self.blas_nodes,
+            &self.triangles,
+            &self.triangle_vertices,
+            &self.vertices,
+            &self.materials,
+            &self.light_triangles,
+            &self.light_cdf,
+        ];
+        let entries: Vec<wgpu::BindGroupEntry> = buffers
+            .iter()
+            .enumerate()
+            .map(|(i, b)| wgpu::BindGroupEntry {
+                binding: i as u32,
+                resource: b.as_entire_binding(),
+            })
+            .collect();
+        device.create_bind_group(&wgpu::BindGroupDescriptor {
+            label: Some("scene"),
+            layout,
+            entries: &entries,
+        })
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn decode(packed: u32) -> Vec3 {
+        let x = (packed & 0xffff) as u16 as i16 as f32 / 32767.0;
+        let y = (packed >> 16) as u16 as i16 as f32 / 32767.0;
+        let mut v = Vec3::new(x, y, 1.0 - x.abs() - y.abs());
+        if v.z < 0.0 {
+            let s = |a: f32| if a >= 0.0 { 1.0 } else { -1.0 };
+            v = Vec3::new((1.0 - y.abs()) * s(x), (1.0 - x.abs()) * s(y), v.z);
+        }
+        v.normalize()
+    }
+
+    #[test]
+    fn octahedral_normals_round_trip_within_a_thousandth() {
+        let mut worst = 0.0f32;
+        for i in 0..2000 {
+            let t = i as f32 * 0.618_034;
+            let z = 1.0 - 2.0 * (i as f32 + 0.5) / 2000.0;
+            let r = (1.0 - z * z).sqrt();
+            let n = Vec3::new(r * (t * 6.283).cos(), r * (t * 6.283).sin(), z);
+            worst = worst.max((decode(encode_octahedral(n)) - n).length());
+        }
+        for n in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {
+            worst = worst.max((decode(encode_octahedral(n)) - n).length());
+        }
+        assert!(worst < 1e-3, "worst error {worst}");
+    }
+}

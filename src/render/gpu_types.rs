@@ -1,0 +1,89 @@
+//! Rust mirrors of the structs in `shaders/scene.wgsl`, byte for byte.
+
+use bytemuck::{Pod, Zeroable};
+
+/// `Params.flags`: next-event estimation with MIS on.
+pub const FLAG_LIGHT_SAMPLING: u32 = 1;
+/// `Instance.flags`
+pub const INSTANCE_HAS_NORMALS: u32 = 1;
+pub const INSTANCE_HAS_UVS: u32 = 2;
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuParams {
+    pub film_size: [u32; 2],
+    pub tile_origin: [u32; 2],
+    pub tile_size: [u32; 2],
+    pub sample_start: u32,
+    pub sample_count: u32,
+    pub seed: u32,
+    pub max_bounces: u32,
+    pub flags: u32,
+    pub light_count: u32,
+    pub instance_count: u32,
+    pub _pad: [u32; 3],
+    pub cam_position: [f32; 4],
+    pub cam_right: [f32; 4],
+    pub cam_up: [f32; 4],
+    pub cam_forward: [f32; 4],
+    pub cam_lens: [f32; 4],
+    pub environment: [f32; 4],
+    pub light_totals: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuInstance {
+    pub to_world: [[f32; 4]; 3],
+    pub to_object: [[f32; 4]; 3],
+    pub blas_root: u32,
+    pub material: u32,
+    pub flags: u32,
+    pub _pad: u32,
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuTriangle {
+    pub p0: [f32; 4],
+    pub p1: [f32; 4],
+    pub p2: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuMaterial {
+    pub base_color: [f32; 4],
+    pub emission: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuLightTriangle {
+    pub p0: [f32; 4],
+    pub p1: [f32; 4],
+    pub p2: [f32; 4],
+    pub emission: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuStats {
+    pub rays: u32,
+    pub non_finite: u32,
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn sizes_match_the_wgsl_layout() {
+        assert_eq!(std::mem::size_of::<GpuParams>(), 176);
+        assert_eq!(std::mem::size_of::<GpuInstance>(), 112);
+        assert_eq!(std::mem::size_of::<GpuTriangle>(), 48);
+        assert_eq!(std::mem::size_of::<GpuMaterial>(), 32);
+        assert_eq!(std::mem::size_of::<GpuLightTriangle>(), 64);
+        assert_eq!(std::mem::size_of::<crate::accel::BvhNode>(), 32);
+    }
+}

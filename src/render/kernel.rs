@@ -1,0 +1,222 @@
+//! Kernel assembly: the WGSL files under `shaders/` concatenated in dependency order,
+//! validated by naga (so errors name the file and line they come from, not a wgpu
+//! panic), then compiled into a compute pipeline.
+//!
+//! Every kernel, the renderer's and the small test kernels that check BVH traversal or
+//! sampling, is built from the same [`LIBRARY`] files: tests run the shipped WGSL.
+
+use thiserror::Error;
+
+use super::context::GpuContext;
+
+/// One WGSL file of `shaders/`, embedded in the binary.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderFile {
+    pub path: &'static str,
+    pub source: &'static str,
+}
+
+macro_rules! shader_file {
+    ($path:literal) => {
+        ShaderFile {
+            path: concat!("shaders/", $path),
+            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $path)),
+        }
+    };
+}
+
+/// The shared kernel code, in the order the files depend on each other.
+pub const LIBRARY: &[ShaderFile] = &[
+    shader_file!("scene.wgsl"),
+    shader_file!("rng.wgsl"),
+    shader_file!("sampling.wgsl"),
+    shader_file!("float_error.wgsl"),
+    shader_file!("intersect.wgsl"),
+    shader_file!("traverse.wgsl"),
+    shader_file!("surface.wgsl"),
+    shader_file!("camera.wgsl"),
+    shader_file!("bsdf/lambert.wgsl"),
+    shader_file!("lights/emissive_triangle.wgsl"),
+    shader_file!("lights/environment.wgsl"),
+];
+
+/// The path-tracing entry point `render`.
+pub const PATH_INTEGRATOR: ShaderFile = shader_file!("integrator/path.wgsl");
+
+#[derive(Debug, Error)]
+pub enum KernelError {
+    #[error("WGSL error at {file}:{line}:{column}: {message}\n{detail}")]
+    Wgsl {
+        file: String,
+        line: u32,
+        column: u32,
+        message: String,
+        detail: String,
+    },
+    #[error("the driver rejected kernel \"{kernel}\": {message}")]
+    Pipeline { kernel: String, message: String },
+}
+
+/// Concatenated WGSL with a map from its lines back to the files they came from.
+#[derive(Clone, Debug)]
+pub struct KernelSource {
+    pub name: String,
+    pub text: String,
+    /// (first line in `text`, 1-based; file path) per part.
+    parts: Vec<(u32, String)>,
+}
+
+impl KernelSource {
+    pub fn new(name: &str) -> Self {
+        Self {
+            name: name.to_owned(),
+            text: String::new(),
+            parts: Vec::new(),
+        }
+    }
+
+    pub fn with_library(name: &str) -> Self {
+        let mut source = Self::new(name);
+        for file in LIBRARY {
+            source.push(file.path, file.source);
+        }
+        source
+    }
+
+    pub fn push(&mut self, path: &str, wgsl: &str) {
+        let first_line = self.text.lines().count() as u32 + 1;
+        self.parts.push((first_line, path.to_owned()));
+        self.text.push_str(wgsl);
+        if !wgsl.ends_with('\n') {
+            self.text.push('\n');
+        }
+    }
+
+    /// The file and file-relative line of a line of the assembled text.
+    pub fn locate(&self, line: u32) -> (String, u32) {
+        match self.parts.iter().rev().find(|(first, _)| *first <= line) {
+            Some((first, path)) => (path.clone(), line - first + 1),
+            None => (self.name.clone(), line),
+        }
+    }
+
+    fn wgsl_error(
+        &self,
+        location: Option<naga::SourceLocation>,
+        message: String,
+        detail: String,
+    ) -> KernelError {
+        let (file, line, column) = match location {
+            Some(loc) => {
+                let (file, line) = self.locate(loc.line_number);
+                (file, line, loc.line_position)
+            }
+            None => (self.name.clone(), 0, 0),
+        };
+        KernelError::Wgsl {
+            file,
+            line,
+            column,
+            message,
+            detail,
+        }
+    }
+
+    /// Parses and validates with naga, the same checks wgpu would make, but with errors
+    /// that point into `shaders/`.
+    pub fn validate(&self) -> Result<naga::Module, KernelError> {
+        let module = naga::front::wgsl::parse_str(&self.text).map_err(|e| {
+            self.wgsl_error(
+                e.location(&self.text),
+                e.message().to_owned(),
+                e.emit_to_string(&self.text),
+            )
+        })?;
+        let mut validator = naga::valid::Validator::new(
+            naga::valid::ValidationFlags::all(),
+            naga::valid::Capabilities::default(),
+        );
+        validator.validate(&module).map_err(|e| {
+            self.wgsl_error(
+                e.location(&self.text),
+                e.as_inner().to_string(),
+                e.emit_to_string(&self.text),
+            )
+        })?;
+        Ok(module)
+    }
+
+    /// Validates, then creates the compute pipeline for `entry_point`.
+    pub fn create_pipeline(
+        &self,
+        ctx: &GpuContext,
+        layouts: &[&wgpu::BindGroupLayout],
+        entry_point: &str,
+    ) -> Result<wgpu::ComputePipeline, KernelError> {
+        self.validate()?;
+        let device = &ctx.device;
+        let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
+        let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+            label: Some(&self.name),
+            source: wgpu::ShaderSource::Wgsl(self.text.as_str().into()),
+        });
+        let bind_group_layouts: Vec<Option<&wgpu::BindGroupLayout>> =
+            layouts.iter().map(|l| Some(*l)).collect();
+        let layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+            label: Some(&self.name),
+            bind_group_layouts: &bind_group_layouts,
+            immediate_size: 0,
+        });
+        let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+            label: Some(&self.name),
+            layout: Some(&layout),
+            module: &module,
+            entry_point: Some(entry_point),
+            compilation_options: Default::default(),
+            cache: None,
+        });
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(KernelError::Pipeline {
+                kernel: self.name.clone(),
+                message: e.to_string(),
+            });
+        }
+        Ok(pipeline)
+    }
+}
+
+/// The path-tracing kernel's source.
+pub fn path_tracing_kernel() -> KernelSource {
+    let mut source = KernelSource::with_library("path tracer");
+    source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
+    source
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn path_tracing_kernel_passes_naga_validation() {
+        if let Err(e) = path_tracing_kernel().validate() {
+            panic!("{e}");
+        }
+    }
+
+    #[test]
+    fn errors_point_into_the_file_they_come_from() {
+        let mut source = KernelSource::with_library("broken");
+        source.push(
+            "shaders/tests/broken.wgsl",
+            "fn f() -> f32 {\n    return 1u;\n}\n",
+        );
+        let err = source.validate().unwrap_err();
+        match err {
+            KernelError::Wgsl { file, line, .. } => {
+                assert_eq!(file, "shaders/tests/broken.wgsl");
+                assert_eq!(line, 2);
+            }
+            other => panic!("unexpected {other}"),
+        }
+    }
+}

@@ -1,0 +1,16 @@
+//! The GPU side: device ([`context`]), kernel assembly ([`kernel`]), scene upload
+//! ([`gpu_scene`]), and the progressive [`Renderer`] that accumulates samples into a film.
+//!
+//! What the renderer does not do: decide file formats, print, or own threads. Callers
+//! (the CLI, the editor, benchmarks) drive it in sample ranges and read the film back.
+
+pub mod context;
+pub mod gpu_scene;
+pub mod gpu_types;
+pub mod kernel;
+pub mod probe;
+mod readback;
+mod renderer;
+
+pub use context::{Backend, GpuContext, GpuError};
+pub use renderer::{Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer};

@@ -1,0 +1,123 @@
+//! Kernel probes: run a small compute entry point, written against the shipped shader
+//! library and an uploaded scene, over an input buffer, and read its output back.
+//!
+//! This is how tests check the WGSL itself (BVH traversal, sampling routines) instead of
+//! a CPU copy of it. A probe kernel declares
+//! `@group(1) @binding(0) var<storage, read> probe_in: array<T>;` and
+//! `@group(1) @binding(1) var<storage, read_write> probe_out: array<U>;`
+//! and runs with `@workgroup_size(64)`, one invocation per index.
+
+use wgpu::util::DeviceExt;
+
+use super::context::GpuContext;
+use super::gpu_scene::{FrameBuffers, GpuScene, scene_bind_group_layout};
+use super::kernel::KernelSource;
+use super::readback::read_buffer;
+use super::renderer::{RenderError, RenderSettings, base_params};
+use crate::accel::build_scene_accel;
+use crate::scene::Scene;
+
+pub const PROBE_WORKGROUP_SIZE: u32 = 64;
+
+/// Runs `entry` of `source` (the shader library plus the probe's own code) for
+/// `invocations` indices with `scene` bound as group 0. Returns `output_bytes` of output.
+pub fn run_probe(
+    ctx: &GpuContext,
+    scene: &Scene,
+    settings: &RenderSettings,
+    source: &KernelSource,
+    entry: &str,
+    input: &[u8],
+    output_bytes: u64,
+    invocations: u32,
+) -> Result<Vec<u8>, RenderError> {
+    let device = &ctx.device;
+    let accel = build_scene_accel(scene)?;
+    let gpu_scene = GpuScene::upload(ctx, scene, &accel)?;
+    let scene_layout = scene_bind_group_layout(device);
+    let probe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("probe"),
+        entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {
+            binding,
+            visibility: wgpu::ShaderStages::COMPUTE,
+            ty: wgpu::BindingType::Buffer {
+                ty: wgpu::BufferBindingType::Storage {
+                    read_only: binding == 0,
+                },
+                has_dynamic_offset: false,
+                min_binding_size: None,
+            },
+            count: None,
+        }),
+    });
+    let pipeline = source.create_pipeline(ctx, &[&scene_layout, &probe_layout], entry)?;
+
+    let params = base_params(scene, &gpu_scene, settings);
+    let buffer = |label: &str, contents: &[u8], usage: wgpu::BufferUsages| {
+        device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some(label),
+            contents,
+            usage,
+        })
+    };
+    let storage = wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_SRC;
+    let params_buffer = buffer(
+        "params",
+        bytemuck::bytes_of(&params),
+        wgpu::BufferUsages::UNIFORM,
+    );
+    let film = buffer("film", &[0u8; 16], storage);
+    let compensation = buffer("film compensation", &[0u8; 16], storage);
+    let stats = buffer("stats", &[0u8; 8], storage);
+    let scene_group = gpu_scene.bind_group(
+        device,
+        &scene_layout,
+        &FrameBuffers {
+            params: &params_buffer,
+            film_sum: &film,
+            film_compensation: &compensation,
+            stats: &stats,
+        },
+    );
+    let padded_input = if input.is_empty() {
+        &[0u8; 16][..]
+    } else {
+        input
+    };
+    let input_buffer = buffer("probe input", padded_input, storage);
+    let output_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("probe output"),
+        size: output_bytes.max(16),
+        usage: storage,
+        mapped_at_creation: false,
+    });
+    let probe_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("probe"),
+        layout: &probe_layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: input_buffer.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: output_buffer.as_entire_binding(),
+            },
+        ],
+    });
+    let mut encoder = device.create_command_encoder(&Default::default());
+    {
+        let mut pass = encoder.begin_compute_pass(&Default::default());
+        pass.set_pipeline(&pipeline);
+        pass.set_bind_group(0, &scene_group, &[]);
+        pass.set_bind_group(1, &probe_group, &[]);
+        // Large probes are cut along y so no dimension exceeds the dispatch limit.
+        let groups = invocations.div_ceil(PROBE_WORKGROUP_SIZE);
+        let max = ctx.limits().max_compute_workgroups_per_dimension;
+        pass.dispatch_workgroups(groups.min(max), groups.div_ceil(max).max(1), 1);
+    }
+    ctx.queue.submit([encoder.finish()]);
+    let mut out = read_buffer(ctx, &output_buffer, output_buffer.size())?;
+    out.truncate(output_bytes as usize);
+    Ok(out)
+}

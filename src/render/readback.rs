@@ -1,0 +1,48 @@
+//! Copying a device buffer back to the host, blocking until it arrives.
+
+use super::context::{GpuContext, GpuError};
+
+pub fn read_buffer(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    size: u64,
+) -> Result<Vec<u8>, GpuError> {
+    let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("readback"),
+        size,
+        usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    let mut encoder = ctx.device.create_command_encoder(&Default::default());
+    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    ctx.queue.submit([encoder.finish()]);
+    map_and_read(ctx, &staging)
+}
+
+/// Maps a MAP_READ buffer after the queued work that fills it, and copies it out.
+pub fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
+    let runtime = |message: String| GpuError::Runtime {
+        during: "readback".into(),
+        message,
+    };
+    let (tx, rx) = std::sync::mpsc::channel();
+    staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
+        // The receiver outlives the wait below; a send error cannot happen.
+        let _ = tx.send(r);
+    });
+    ctx.device
+        .poll(wgpu::PollType::wait_indefinitely())
+        .map_err(|e| runtime(e.to_string()))?;
+    rx.recv()
+        .map_err(|e| runtime(e.to_string()))?
+        .map_err(|e| runtime(e.to_string()))?;
+    let data = {
+        let view = staging
+            .slice(..)
+            .get_mapped_range()
+            .map_err(|e| runtime(e.to_string()))?;
+        view.to_vec()
+    };
+    staging.unmap();
+    Ok(data)
+}

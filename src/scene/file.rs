@@ -1,0 +1,542 @@
+//! The `.kiln` scene file: a versioned, human-editable description of a [`Scene`].
+//!
+//! The format is [RON](https://github.com/ron-rs/ron): it has comments, trailing commas
+//! and named enum variants (`Sphere(segments: 64, rings: 32)`), which keeps hand-written
+//! scenes readable, and serde reads it directly. Unknown fields are errors, so a typo
+//! never silently falls back to a default. Relative paths (mesh files) resolve against the
+//! folder of the scene file. `docs/SCENE_FORMAT.md` documents every field.
+//!
+//! ```ron
+//! (
+//!     version: 1,
+//!     render: (width: 512, height: 512, samples_per_pixel: 64, max_bounces: 8),
+//!     camera: (position: (0, 1, 5), look_at: (0, 1, 0), projection: Perspective(fov_y: 40)),
+//!     environment: (0.1, 0.1, 0.1),
+//!     materials: { "red": (base_color: (0.8, 0.1, 0.1)) },
+//!     meshes: { "ball": Sphere(segments: 64, rings: 32) },
+//!     instances: [ (mesh: "ball", material: "red", transform: (translate: (0, 1, 0))) ],
+//! )
+//! ```
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3};
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+use super::{Camera, Material, Mesh, Scene, SceneSettings, shapes};
+
+/// The version this build reads and writes. Older versions are upgraded on load where
+/// possible; newer ones are refused with a message saying so.
+pub const SCENE_FORMAT_VERSION: u32 = 1;
+
+#[derive(Debug, Error)]
+pub enum SceneError {
+    #[error("cannot read scene file {path}: {source}")]
+    Io {
+        path: PathBuf,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{column}: {message}")]
+    Parse {
+        path: PathBuf,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    #[error(
+        "{path}: scene format version {found} is not supported (this build reads version {SCENE_FORMAT_VERSION}{newer})",
+        newer = if *found > SCENE_FORMAT_VERSION { "; the file was written by a newer Kiln" } else { "" }
+    )]
+    Version { path: PathBuf, found: u32 },
+    #[error("{path}: {message}")]
+    Invalid { path: PathBuf, message: String },
+    #[error("{path}: mesh \"{mesh}\": cannot load {file}: {message}")]
+    MeshFile {
+        path: PathBuf,
+        mesh: String,
+        file: PathBuf,
+        message: String,
+    },
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct SceneFile {
+    version: u32,
+    #[serde(default)]
+    render: RenderDesc,
+    camera: CameraDesc,
+    #[serde(default)]
+    environment: [f32; 3],
+    #[serde(default)]
+    materials: BTreeMap<String, MaterialDesc>,
+    #[serde(default)]
+    meshes: BTreeMap<String, MeshDesc>,
+    #[serde(default)]
+    instances: Vec<InstanceDesc>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields, default)]
+struct RenderDesc {
+    width: u32,
+    height: u32,
+    samples_per_pixel: u32,
+    max_bounces: u32,
+}
+
+impl Default for RenderDesc {
+    fn default() -> Self {
+        let s = SceneSettings::default();
+        Self {
+            width: s.width,
+            height: s.height,
+            samples_per_pixel: s.samples_per_pixel,
+            max_bounces: s.max_bounces,
+        }
+    }
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct CameraDesc {
+    position: [f32; 3],
+    look_at: [f32; 3],
+    #[serde(default = "default_up")]
+    up: [f32; 3],
+    projection: Projection,
+}
+
+fn default_up() -> [f32; 3] {
+    [0.0, 1.0, 0.0]
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+enum Projection {
+    Perspective {
+        fov_y: f32,
+    },
+    ThinLens {
+        fov_y: f32,
+        aperture_radius: f32,
+        focus_distance: f32,
+    },
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct MaterialDesc {
+    #[serde(default = "default_base_color")]
+    base_color: [f32; 3],
+    #[serde(default)]
+    emission: [f32; 3],
+    #[serde(default = "one")]
+    emission_strength: f32,
+}
+
+fn default_base_color() -> [f32; 3] {
+    [0.8, 0.8, 0.8]
+}
+
+fn one() -> f32 {
+    1.0
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+enum MeshDesc {
+    /// Vertices listed in the file.
+    Inline {
+        positions: Vec<[f32; 3]>,
+        #[serde(default)]
+        normals: Vec<[f32; 3]>,
+        #[serde(default)]
+        uvs: Vec<[f32; 2]>,
+        indices: Vec<[u32; 3]>,
+    },
+    /// A Wavefront OBJ file, relative to the scene file; all its shapes become one mesh.
+    Obj(String),
+    Quad,
+    Cube,
+    Sphere {
+        #[serde(default = "default_segments")]
+        segments: u32,
+        #[serde(default = "default_rings")]
+        rings: u32,
+        #[serde(default = "yes")]
+        smooth: bool,
+    },
+}
+
+fn default_segments() -> u32 {
+    64
+}
+
+fn default_rings() -> u32 {
+    32
+}
+
+fn yes() -> bool {
+    true
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct InstanceDesc {
+    mesh: String,
+    material: String,
+    #[serde(default)]
+    transform: TransformDesc,
+}
+
+/// Scale, then rotate (Euler angles in degrees, about X, then Y, then Z), then translate;
+/// or a full row-major 4x4 `matrix`, which then must be the only field.
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct TransformDesc {
+    #[serde(default)]
+    translate: [f32; 3],
+    #[serde(default)]
+    rotate: [f32; 3],
+    #[serde(default = "unit_scale")]
+    scale: [f32; 3],
+    #[serde(default)]
+    matrix: Option<[[f32; 4]; 4]>,
+}
+
+fn unit_scale() -> [f32; 3] {
+    [1.0; 3]
+}
+
+impl Default for TransformDesc {
+    fn default() -> Self {
+        Self {
+            translate: [0.0; 3],
+            rotate: [0.0; 3],
+            scale: unit_scale(),
+            matrix: None,
+        }
+    }
+}
+
+impl TransformDesc {
+    fn to_affine(&self) -> Result<Affine3A, String> {
+        if let Some(m) = self.matrix {
+            let trs_given =
+                self.translate != [0.0; 3] || self.rotate != [0.0; 3] || self.scale != unit_scale();
+            if trs_given {
+                return Err("give either matrix or translate/rotate/scale, not both".into());
+            }
+            if m[3] != [0.0, 0.0, 0.0, 1.0] {
+                return Err("matrix: the last row must be (0, 0, 0, 1)".into());
+            }
+            let cols = Mat4::from_cols_array_2d(&m).transpose();
+            return Ok(Affine3A::from_mat4(cols));
+        }
+        let [rx, ry, rz] = self.rotate.map(f32::to_radians);
+        let rotation = glam::Quat::from_euler(EulerRot::ZYX, rz, ry, rx);
+        Ok(Affine3A::from_scale_rotation_translation(
+            Vec3::from(self.scale),
+            rotation,
+            Vec3::from(self.translate),
+        ))
+    }
+}
+
+/// Reads and validates a scene file.
+pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
+    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+        path: path.to_owned(),
+        source,
+    })?;
+    let base = path.parent().unwrap_or(Path::new("."));
+    parse_scene(&text, path, base)
+}
+
+/// Parses scene text. `path` is only used in messages; `base_dir` resolves relative paths.
+pub fn parse_scene(text: &str, path: &Path, base_dir: &Path) -> Result<Scene, SceneError> {
+    let parse_error = |e: ron::error::SpannedError| SceneError::Parse {
+        path: path.to_owned(),
+        line: e.span.start.line,
+        column: e.span.start.col,
+        message: e.code.to_string(),
+    };
+    // Read the version alone first, so an old or new file gets a version message rather
+    // than a confusing complaint about a field that moved.
+    #[derive(Deserialize)]
+    struct VersionOnly {
+        version: u32,
+    }
+    let version = ron::from_str::<VersionOnly>(text)
+        .map_err(parse_error)?
+        .version;
+    if version != SCENE_FORMAT_VERSION {
+        return Err(SceneError::Version {
+            path: path.to_owned(),
+            found: version,
+        });
+    }
+    let file: SceneFile = ron::from_str(text).map_err(parse_error)?;
+    let invalid = |message: String| SceneError::Invalid {
+        path: path.to_owned(),
+        message,
+    };
+    let scene = build_scene(file, path, base_dir, &invalid)?;
+    scene.validate().map_err(invalid)?;
+    Ok(scene)
+}
+
+fn build_scene(
+    file: SceneFile,
+    path: &Path,
+    base_dir: &Path,
+    invalid: &dyn Fn(String) -> SceneError,
+) -> Result<Scene, SceneError> {
+    let (fov_y, aperture_radius, focus_distance) = match file.camera.projection {
+        Projection::Perspective { fov_y } => (fov_y, 0.0, 0.0),
+        Projection::ThinLens {
+            fov_y,
+            aperture_radius,
+            focus_distance,
+        } => (fov_y, aperture_radius, focus_distance),
+    };
+    let camera = Camera {
+        position: file.camera.position.into(),
+        look_at: file.camera.look_at.into(),
+        up: file.camera.up.into(),
+        fov_y_degrees: fov_y,
+        aperture_radius,
+        focus_distance,
+    };
+    let mut scene = Scene::empty(camera);
+    scene.environment = file.environment.into();
+    scene.settings = SceneSettings {
+        width: file.render.width,
+        height: file.render.height,
+        samples_per_pixel: file.render.samples_per_pixel,
+        max_bounces: file.render.max_bounces,
+    };
+
+    let mut material_ids = BTreeMap::new();
+    for (name, m) in &file.materials {
+        let strength = m.emission_strength;
+        if !strength.is_finite() || strength < 0.0 {
+            return Err(invalid(format!(
+                "material \"{name}\": emission_strength {strength} must be finite and non-negative"
+            )));
+        }
+        let id = scene.add_material(Material {
+            name: name.clone(),
+            base_color: m.base_color.into(),
+            emission: Vec3::from(m.emission) * strength,
+        });
+        material_ids.insert(name.as_str(), id);
+    }
+
+    let mut mesh_ids = BTreeMap::new();
+    for (name, desc) in file.meshes {
+        let mut mesh = match desc {
+            MeshDesc::Inline {
+                positions,
+                normals,
+                uvs,
+                indices,
+            } => Mesh {
+                name: String::new(),
+                positions: positions.into_iter().map(Vec3::from).collect(),
+                normals: normals.into_iter().map(Vec3::from).collect(),
+                uvs: uvs.into_iter().map(Vec2::from).collect(),
+                indices,
+            },
+            MeshDesc::Obj(file) => {
+                let file = base_dir.join(file);
+                load_obj(&file).map_err(|message| SceneError::MeshFile {
+                    path: path.to_owned(),
+                    mesh: name.clone(),
+                    file,
+                    message,
+                })?
+            }
+            MeshDesc::Quad => shapes::quad(),
+            MeshDesc::Cube => shapes::cube(),
+            MeshDesc::Sphere {
+                segments,
+                rings,
+                smooth,
+            } => {
+                if segments > 1 << 14 || rings > 1 << 14 {
+                    return Err(invalid(format!(
+                        "mesh \"{name}\": at most 16384 segments and rings"
+                    )));
+                }
+                shapes::uv_sphere(segments, rings, smooth)
+            }
+        };
+        mesh.name = name.clone();
+        let id = scene.add_mesh(mesh);
+        mesh_ids.insert(name, id);
+    }
+
+    for (i, inst) in file.instances.iter().enumerate() {
+        let mesh = *mesh_ids.get(&inst.mesh).ok_or_else(|| {
+            invalid(format!(
+                "instance {i}: unknown mesh \"{}\" (defined: {})",
+                inst.mesh,
+                names(mesh_ids.keys().map(String::as_str))
+            ))
+        })?;
+        let material = *material_ids.get(inst.material.as_str()).ok_or_else(|| {
+            invalid(format!(
+                "instance {i}: unknown material \"{}\" (defined: {})",
+                inst.material,
+                names(material_ids.keys().copied())
+            ))
+        })?;
+        let transform = inst
+            .transform
+            .to_affine()
+            .map_err(|e| invalid(format!("instance {i}: transform: {e}")))?;
+        scene.add_instance(mesh, material, transform);
+    }
+    Ok(scene)
+}
+
+fn names<'a>(names: impl Iterator<Item = &'a str>) -> String {
+    let list: Vec<String> = names.map(|n| format!("\"{n}\"")).collect();
+    if list.is_empty() {
+        "none".into()
+    } else {
+        list.join(", ")
+    }
+}
+
+/// Loads every shape of an OBJ file into one mesh (materials are ignored for now).
+fn load_obj(path: &Path) -> Result<Mesh, String> {
+    let options = tobj::LoadOptions {
+        triangulate: true,
+        single_index: true,
+        ..Default::default()
+    };
+    let (models, _materials) = tobj::load_obj(path, &options).map_err(|e| e.to_string())?;
+    let mut mesh = Mesh::default();
+    let mut all_have_normals = true;
+    let mut all_have_uvs = true;
+    for model in &models {
+        let m = &model.mesh;
+        let base = mesh.positions.len() as u32;
+        let count = m.positions.len() / 3;
+        mesh.positions.extend(
+            m.positions
+                .chunks_exact(3)
+                .map(|p| Vec3::new(p[0], p[1], p[2])),
+        );
+        all_have_normals &= m.normals.len() == count * 3;
+        all_have_uvs &= m.texcoords.len() == count * 2;
+        if all_have_normals {
+            mesh.normals.extend(
+                m.normals
+                    .chunks_exact(3)
+                    .map(|n| Vec3::new(n[0], n[1], n[2])),
+            );
+        }
+        if all_have_uvs {
+            mesh.uvs
+                .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
+        }
+        mesh.indices.extend(
+            m.indices
+                .chunks_exact(3)
+                .map(|t| [base + t[0], base + t[1], base + t[2]]),
+        );
+    }
+    if !all_have_normals {
+        mesh.normals.clear();
+    }
+    if !all_have_uvs {
+        mesh.uvs.clear();
+    }
+    Ok(mesh)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn parse(text: &str) -> Result<Scene, SceneError> {
+        parse_scene(text, Path::new("test.kiln"), Path::new("."))
+    }
+
+    const MINIMAL: &str = r#"(
+        version: 1,
+        camera: (position: (0, 0, 5), look_at: (0, 0, 0), projection: Perspective(fov_y: 40)),
+        materials: { "grey": (base_color: (0.5, 0.5, 0.5)) },
+        meshes: { "ball": Sphere(segments: 8, rings: 4) },
+        instances: [(mesh: "ball", material: "grey", transform: (translate: (1, 2, 3), scale: (2, 2, 2)))],
+    )"#;
+
+    #[test]
+    fn minimal_scene_loads_with_defaults() {
+        let scene = parse(MINIMAL).unwrap();
+        assert_eq!(scene.instances.len(), 1);
+        assert_eq!(scene.settings, SceneSettings::default());
+        let t = scene.instances[0].transform;
+        assert!((t.transform_point3(Vec3::ZERO) - Vec3::new(1.0, 2.0, 3.0)).length() < 1e-6);
+        assert!((t.transform_vector3(Vec3::X) - Vec3::new(2.0, 0.0, 0.0)).length() < 1e-6);
+    }
+
+    #[test]
+    fn syntax_error_names_line_and_column() {
+        let err = parse("(\n  version: 1,\n  camera: (position: (0, 0 0)),\n)").unwrap_err();
+        match err {
+            SceneError::Parse { line, .. } => assert_eq!(line, 3),
+            other => panic!("expected a parse error, got {other}"),
+        }
+    }
+
+    #[test]
+    fn newer_version_is_refused_by_name() {
+        let err = parse(&MINIMAL.replace("version: 1", "version: 7")).unwrap_err();
+        assert!(err.to_string().contains("version 7"), "{err}");
+        assert!(err.to_string().contains("newer"), "{err}");
+    }
+
+    #[test]
+    fn unknown_mesh_lists_the_defined_ones() {
+        let err = parse(&MINIMAL.replace("mesh: \"ball\"", "mesh: \"bal\"")).unwrap_err();
+        let msg = err.to_string();
+        assert!(
+            msg.contains("unknown mesh \"bal\"") && msg.contains("\"ball\""),
+            "{msg}"
+        );
+    }
+
+    #[test]
+    fn misspelt_field_is_an_error() {
+        let err = parse(&MINIMAL.replace("base_color", "base_colour")).unwrap_err();
+        assert!(err.to_string().contains("base_colour"), "{err}");
+    }
+
+    #[test]
+    fn out_of_range_index_is_rejected() {
+        let text = MINIMAL.replace(
+            "Sphere(segments: 8, rings: 4)",
+            "Inline(positions: [(0, 0, 0), (1, 0, 0), (0, 1, 0)], indices: [(0, 1, 3)])",
+        );
+        let err = parse(&text).unwrap_err();
+        assert!(err.to_string().contains("index"), "{err}");
+    }
+
+    #[test]
+    fn matrix_transform_is_row_major() {
+        let text = MINIMAL.replace(
+            "transform: (translate: (1, 2, 3), scale: (2, 2, 2))",
+            "transform: (matrix: ((1, 0, 0, 5), (0, 1, 0, 6), (0, 0, 1, 7), (0, 0, 0, 1)))",
+        );
+        let scene = parse(&text).unwrap();
+        let p = scene.instances[0].transform.transform_point3(Vec3::ZERO);
+        assert_eq!(p, Vec3::new(5.0, 6.0, 7.0));
+    }
+}

@@ -1,0 +1,215 @@
+//! The scene model: meshes, instances, materials, camera and environment, resolved and
+//! validated, independent of any file format or GPU layout.
+//!
+//! A [`Scene`] is what every importer produces and what the renderer consumes. It is
+//! deliberately plain data: the `.kiln` file format lives in [`file`], generated shapes in
+//! [`shapes`], and nothing here knows about BVHs or buffers.
+
+mod camera;
+pub mod file;
+mod mesh;
+pub mod shapes;
+
+pub use camera::Camera;
+pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene};
+pub use mesh::Mesh;
+
+use std::path::Path;
+
+use glam::{Affine3A, Vec3};
+
+/// Where the bundled default scene lives in the source tree.
+pub const DEFAULT_SCENE_PATH: &str = "assets/scenes/cornell-box.kiln";
+const DEFAULT_SCENE_SOURCE: &str = include_str!("../../assets/scenes/cornell-box.kiln");
+
+/// The bundled Cornell box, embedded in the binary so `kiln render` works from any folder.
+pub fn default_scene() -> Result<Scene, SceneError> {
+    let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
+    parse_scene(DEFAULT_SCENE_SOURCE, Path::new(DEFAULT_SCENE_PATH), &base)
+}
+
+/// A surface material. For now a fixed parameter set; the material-graph compiler
+/// replaces it with compiled node graphs.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse reflectance (linear RGB, each channel in [0, 1]).
+    pub base_color: Vec3,
+    /// Emitted radiance (linear RGB, W·sr⁻¹·m⁻², already multiplied by its strength).
+    pub emission: Vec3,
+}
+
+impl Material {
+    pub fn diffuse(name: &str, base_color: Vec3) -> Self {
+        Self {
+            name: name.to_owned(),
+            base_color,
+            emission: Vec3::ZERO,
+        }
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+}
+
+/// One placement of a mesh in the world. Many instances may share a mesh, which is
+/// stored and uploaded once.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Instance {
+    /// Index into [`Scene::meshes`].
+    pub mesh: usize,
+    /// Index into [`Scene::materials`].
+    pub material: usize,
+    pub transform: Affine3A,
+}
+
+/// Render settings a scene file carries as defaults; the command line overrides them.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct SceneSettings {
+    pub width: u32,
+    pub height: u32,
+    pub samples_per_pixel: u32,
+    pub max_bounces: u32,
+}
+
+impl Default for SceneSettings {
+    fn default() -> Self {
+        Self {
+            width: 512,
+            height: 512,
+            samples_per_pixel: 64,
+            max_bounces: 8,
+        }
+    }
+}
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Scene {
+    pub camera: Camera,
+    /// Radiance arriving from every direction no geometry covers (linear RGB).
+    pub environment: Vec3,
+    pub materials: Vec<Material>,
+    pub meshes: Vec<Mesh>,
+    pub instances: Vec<Instance>,
+    pub settings: SceneSettings,
+}
+
+impl Scene {
+    /// A scene with nothing but a camera and a black environment.
+    pub fn empty(camera: Camera) -> Self {
+        Self {
+            camera,
+            environment: Vec3::ZERO,
+            materials: Vec::new(),
+            meshes: Vec::new(),
+            instances: Vec::new(),
+            settings: SceneSettings::default(),
+        }
+    }
+
+    pub fn add_material(&mut self, material: Material) -> usize {
+        self.materials.push(material);
+        self.materials.len() - 1
+    }
+
+    pub fn add_mesh(&mut self, mesh: Mesh) -> usize {
+        self.meshes.push(mesh);
+        self.meshes.len() - 1
+    }
+
+    pub fn add_instance(&mut self, mesh: usize, material: usize, transform: Affine3A) {
+        self.instances.push(Instance {
+            mesh,
+            material,
+            transform,
+        });
+    }
+
+    pub fn triangle_count(&self) -> u64 {
+        self.instances
+            .iter()
+            .map(|i| self.meshes[i.mesh].indices.len() as u64)
+            .sum()
+    }
+
+    /// Returns this scene with every length multiplied by `factor`: geometry, instance
+    /// placements and camera. Radiance is unchanged, so the image should be too.
+    pub fn scaled(&self, factor: f32) -> Self {
+        let mut scene = self.clone();
+        let scale = Affine3A::from_scale(Vec3::splat(factor));
+        for instance in &mut scene.instances {
+            instance.transform = scale * instance.transform;
+        }
+        scene.camera.position *= factor;
+        scene.camera.look_at *= factor;
+        scene.camera.focus_distance *= factor;
+        scene.camera.aperture_radius *= factor;
+        scene
+    }
+
+    /// Checks every invariant the renderer relies on; the message names what is wrong.
+    pub fn validate(&self) -> Result<(), String> {
+        self.camera.validate()?;
+        if !self.environment.is_finite() || self.environment.min_element() < 0.0 {
+            return Err(format!(
+                "environment radiance {} must be finite and non-negative",
+                self.environment
+            ));
+        }
+        for m in &self.materials {
+            if !m.base_color.is_finite()
+                || m.base_color.min_element() < 0.0
+                || m.base_color.max_element() > 1.0
+            {
+                return Err(format!(
+                    "material \"{}\": base_color {} must lie in [0, 1]",
+                    m.name, m.base_color
+                ));
+            }
+            if !m.emission.is_finite() || m.emission.min_element() < 0.0 {
+                return Err(format!(
+                    "material \"{}\": emission {} must be finite and non-negative",
+                    m.name, m.emission
+                ));
+            }
+        }
+        for mesh in &self.meshes {
+            mesh.validate()
+                .map_err(|e| format!("mesh \"{}\": {e}", mesh.name))?;
+        }
+        for (i, inst) in self.instances.iter().enumerate() {
+            if inst.mesh >= self.meshes.len() {
+                return Err(format!(
+                    "instance {i}: mesh index {} out of range",
+                    inst.mesh
+                ));
+            }
+            if inst.material >= self.materials.len() {
+                return Err(format!(
+                    "instance {i}: material index {} out of range",
+                    inst.material
+                ));
+            }
+            let det = inst.transform.matrix3.determinant();
+            if !inst.transform.matrix3.is_finite()
+                || !inst.transform.translation.is_finite()
+                || det == 0.0
+                || !det.is_finite()
+            {
+                return Err(format!(
+                    "instance {i} (mesh \"{}\"): transform is not invertible",
+                    self.meshes[inst.mesh].name
+                ));
+            }
+        }
+        let s = &self.settings;
+        if s.width == 0 || s.height == 0 || s.width > 16384 || s.height > 16384 {
+            return Err(format!(
+                "image size {}x{} must be between 1x1 and 16384x16384",
+                s.width, s.height
+            ));
+        }
+        Ok(())
+    }
+}
