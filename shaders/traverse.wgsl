@@ -6,6 +6,13 @@
 const TLAS_STACK_SIZE: u32 = 48u;
 const BLAS_STACK_SIZE: u32 = 64u;
 
+// Traversal stacks live at module scope: WGSL zero-initialises function-scope arrays at
+// every call, which for a call per instance visited costs more than the traversal itself.
+var<private> blas_stack_node: array<u32, BLAS_STACK_SIZE>;
+var<private> blas_stack_t: array<f32, BLAS_STACK_SIZE>;
+var<private> tlas_stack_node: array<u32, TLAS_STACK_SIZE>;
+var<private> tlas_stack_t: array<f32, TLAS_STACK_SIZE>;
+
 struct SceneHit {
     hit: bool,
     t: f32,
@@ -42,8 +49,6 @@ fn transform_normal(to_object: array<vec4<f32>, 3>, n: vec3<f32>) -> vec3<f32> {
 fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: ptr<function, SceneHit>) -> bool {
     let inv_dir = safe_inverse(ray.dir);
     let rs = ray_shear(ray.dir);
-    var stack_node: array<u32, BLAS_STACK_SIZE>;
-    var stack_t: array<f32, BLAS_STACK_SIZE>;
     var sp = 0u;
     var found = false;
     let root_node = blas_nodes[root];
@@ -73,8 +78,8 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
             let tr = intersect_aabb(ray.origin, inv_dir, (*best).t, right.min, right.max);
             if (tl >= 0.0 && tr >= 0.0) {
                 let left_first = tl <= tr;
-                stack_node[sp] = select(node.first, node.first + 1u, left_first);
-                stack_t[sp] = max(tl, tr);
+                blas_stack_node[sp] = select(node.first, node.first + 1u, left_first);
+                blas_stack_t[sp] = max(tl, tr);
                 sp++;
                 node_index = select(node.first + 1u, node.first, left_first);
                 descend = true;
@@ -91,8 +96,8 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
             var popped = false;
             while (sp > 0u) {
                 sp--;
-                if (stack_t[sp] <= (*best).t) {
-                    node_index = stack_node[sp];
+                if (blas_stack_t[sp] <= (*best).t) {
+                    node_index = blas_stack_node[sp];
                     popped = true;
                     break;
                 }
@@ -111,8 +116,6 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
         return best;
     }
     let inv_dir = safe_inverse(ray.dir);
-    var stack_node: array<u32, TLAS_STACK_SIZE>;
-    var stack_t: array<f32, TLAS_STACK_SIZE>;
     var sp = 0u;
     let root_node = tlas_nodes[0];
     if (intersect_aabb(ray.origin, inv_dir, t_max, root_node.min, root_node.max) < 0.0) {
@@ -138,8 +141,8 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
             let tr = intersect_aabb(ray.origin, inv_dir, best.t, right.min, right.max);
             if (tl >= 0.0 && tr >= 0.0) {
                 let left_first = tl <= tr;
-                stack_node[sp] = select(node.first, node.first + 1u, left_first);
-                stack_t[sp] = max(tl, tr);
+                tlas_stack_node[sp] = select(node.first, node.first + 1u, left_first);
+                tlas_stack_t[sp] = max(tl, tr);
                 sp++;
                 node_index = select(node.first + 1u, node.first, left_first);
                 descend = true;
@@ -155,8 +158,8 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
             var popped = false;
             while (sp > 0u) {
                 sp--;
-                if (stack_t[sp] <= best.t) {
-                    node_index = stack_node[sp];
+                if (tlas_stack_t[sp] <= best.t) {
+                    node_index = tlas_stack_node[sp];
                     popped = true;
                     break;
                 }

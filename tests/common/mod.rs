@@ -1,0 +1,62 @@
+//! Helpers shared by the integration tests: the GPU context and small scenes.
+#![allow(dead_code)]
+
+use std::sync::Arc;
+
+use glam::{Affine3A, Vec3};
+use kiln::film::Film;
+use kiln::render::{GpuContext, RenderControl, RenderSettings, Renderer};
+use kiln::scene::{Camera, Material, Scene, shapes};
+
+/// The test adapter: whatever wgpu picks (lavapipe in CI).
+pub fn gpu() -> Arc<GpuContext> {
+    GpuContext::new(None).unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
+}
+
+pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
+    RenderSettings {
+        width,
+        height,
+        samples_per_pixel: spp,
+        max_bounces: 64,
+        seed: 1,
+        light_sampling: true,
+    }
+}
+
+/// Renders samples `0..spp` and returns the film.
+pub fn render(ctx: &Arc<GpuContext>, scene: &Scene, settings: RenderSettings) -> Film {
+    let mut r = Renderer::new(Arc::clone(ctx), scene, settings).expect("renderer");
+    let stats = r
+        .render(0..settings.samples_per_pixel, RenderControl::default())
+        .expect("render");
+    assert!(stats.completed);
+    assert_eq!(stats.non_finite, 0, "non-finite samples");
+    r.read_film().expect("film")
+}
+
+/// A unit sphere of the given albedo at the origin, filling most of the view, inside a
+/// uniform environment. Faceted, so the geometric normal is the shading normal and the
+/// convex sphere never sees itself.
+pub fn furnace_scene(albedo: f32, environment: f32) -> Scene {
+    let mut scene = Scene::empty(Camera::look_at(Vec3::new(0.0, 0.0, 3.0), Vec3::ZERO, 45.0));
+    scene.environment = Vec3::splat(environment);
+    let m = scene.add_material(Material::diffuse("albedo", Vec3::splat(albedo)));
+    let sphere = scene.add_mesh(shapes::uv_sphere(48, 24, false));
+    scene.add_instance(sphere, m, Affine3A::IDENTITY);
+    scene
+}
+
+pub fn mean(values: &[Vec3]) -> Vec3 {
+    values.iter().copied().sum::<Vec3>() / values.len() as f32
+}
+
+/// Root-mean-square difference over all channels.
+pub fn rmse(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(x, y)| (*x - *y).length_squared() as f64)
+        .sum();
+    (sum / (3 * a.len()) as f64).sqrt()
+}
