@@ -85,6 +85,11 @@ fn intersect_triangle(
     }
     let inv_det = 1.0 / det;
     let t = t_scaled * inv_det;
+    // The t_max test above compares rounded scaled values; repeat it on t itself so a hit
+    // never replaces a nearer one (the closest hit must not depend on the visiting order).
+    if (t >= t_max) {
+        return miss;
+    }
 
     // Reject hits whose t is not certainly positive given the rounding error (pbrt-v4 §6.8.4).
     let max_zt = max(abs(p0t.z), max(abs(p1t.z), abs(p2t.z)));
@@ -102,6 +107,9 @@ fn intersect_triangle(
     return TriangleHit(true, t, e1 * inv_det, e2 * inv_det);
 }
 
+// 1 + 2 gamma(3): the relative error bound of a slab distance.
+const BOX_T_SLACK: f32 = 1.0000004;
+
 // Entry distance of the ray into the box, or a negative value when it misses within
 // [0, t_max]. `inv_dir` may hold infinities for axis-parallel rays.
 fn intersect_aabb(origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32, lo: vec3<f32>, hi: vec3<f32>) -> f32 {
@@ -109,10 +117,12 @@ fn intersect_aabb(origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32, lo: vec3<f3
     let t1 = (hi - origin) * inv_dir;
     let t_near = min(t0, t1);
     // Widened by the rounding error of the slab computations (pbrt-v4 Bounds3::IntersectP).
-    let t_far = max(t0, t1) * (1.0 + 2.0 * gamma(3.0));
-    // max/min written out so NaN from 0 * inf drops out rather than poisoning the result.
+    let t_far = max(t0, t1) * BOX_T_SLACK;
     let enter = max(max(t_near.x, t_near.y), max(t_near.z, 0.0));
-    let leave = min(min(t_far.x, t_far.y), min(t_far.z, t_max));
+    // The entry distance carries the same rounding error, so it is compared with a widened
+    // t_max too: otherwise a box holding a triangle hit an ulp nearer than the current
+    // best can be culled.
+    let leave = min(min(t_far.x, t_far.y), min(t_far.z, t_max * BOX_T_SLACK));
     if (enter <= leave) {
         return enter;
     }

@@ -96,7 +96,7 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
             var popped = false;
             while (sp > 0u) {
                 sp--;
-                if (blas_stack_t[sp] <= (*best).t) {
+                if (blas_stack_t[sp] <= (*best).t * BOX_T_SLACK) {
                     node_index = blas_stack_node[sp];
                     popped = true;
                     break;
@@ -158,7 +158,7 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
             var popped = false;
             while (sp > 0u) {
                 sp--;
-                if (tlas_stack_t[sp] <= best.t) {
+                if (tlas_stack_t[sp] <= best.t * BOX_T_SLACK) {
                     node_index = tlas_stack_node[sp];
                     popped = true;
                     break;
