@@ -19,7 +19,10 @@ struct Params {
     flags: u32,
     light_count: u32,
     instance_count: u32,
-    _pad0: u32,
+    // Always 1.0. Multiplying by a value the compiler cannot see keeps it from
+    // simplifying Kahan summation's (sum + y) - sum to y (Mesa does, under SPIR-V's
+    // default float semantics), which would silently turn it into plain summation.
+    opaque_one: f32,
     _pad1: u32,
     _pad2: u32,
     // Camera: position, orthonormal frame, and the thin lens (aperture 0 = pinhole).

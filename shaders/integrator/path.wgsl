@@ -143,7 +143,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         // Kahan summation; w counts samples.
         let y = vec4<f32>(l, 1.0) - compensation;
         let t = sum + y;
-        compensation = (t - sum) - y;
+        compensation = (t * params.opaque_one - sum) - y;
         sum = t;
     }
     film_sum[pixel] = sum;

@@ -21,7 +21,9 @@ pub struct GpuParams {
     pub flags: u32,
     pub light_count: u32,
     pub instance_count: u32,
-    pub _pad: [u32; 3],
+    /// Always 1.0; see `opaque_one` in `shaders/scene.wgsl`.
+    pub opaque_one: f32,
+    pub _pad: [u32; 2],
     pub cam_position: [f32; 4],
     pub cam_right: [f32; 4],
     pub cam_up: [f32; 4],
