@@ -73,6 +73,8 @@ fn intersect_triangle(
     if (det == 0.0) {
         return miss;
     }
+    // The largest |z| in object units, before z is scaled into t units below.
+    let max_z_object = max(abs(p0t.z), max(abs(p1t.z), abs(p2t.z)));
     p0t.z *= rs.shear.z;
     p1t.z *= rs.shear.z;
     p2t.z *= rs.shear.z;
@@ -92,12 +94,16 @@ fn intersect_triangle(
     }
 
     // Reject hits whose t is not certainly positive given the rounding error (pbrt-v4 §6.8.4).
+    // pbrt bounds the error of the sheared x and y with the z magnitude after scaling by
+    // 1/d.z, which is only commensurate for unit-length directions; instance rays are not
+    // renormalised (a mesh scaled by 10^6 has |d| ~ 10^-6 in object space), so x and y use
+    // z in object units and only t uses the scaled z.
     let max_zt = max(abs(p0t.z), max(abs(p1t.z), abs(p2t.z)));
     let delta_z = gamma(3.0) * max_zt;
     let max_xt = max(abs(p0t.x), max(abs(p1t.x), abs(p2t.x)));
     let max_yt = max(abs(p0t.y), max(abs(p1t.y), abs(p2t.y)));
-    let delta_x = gamma(5.0) * (max_xt + max_zt);
-    let delta_y = gamma(5.0) * (max_yt + max_zt);
+    let delta_x = gamma(5.0) * (max_xt + max_z_object);
+    let delta_y = gamma(5.0) * (max_yt + max_z_object);
     let delta_e = 2.0 * (gamma(2.0) * max_xt * max_yt + delta_y * max_xt + delta_x * max_yt);
     let max_e = max(abs(e0), max(abs(e1), abs(e2)));
     let delta_t = 3.0 * (gamma(3.0) * max_e * max_zt + delta_e * max_zt + delta_z * max_e) * abs(inv_det);

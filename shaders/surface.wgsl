@@ -45,11 +45,11 @@ fn surface_at(hit: SceneHit) -> Surface {
     let v2 = vertices[triangle_vertices[base + 2u]];
     if ((inst.flags & INSTANCE_HAS_NORMALS) != 0u) {
         let n_object = b0 * decode_octahedral(v0.x) + hit.b1 * decode_octahedral(v1.x) + hit.b2 * decode_octahedral(v2.x);
-        let n = transform_normal(inst.to_object, n_object);
-        let len = length(n);
-        // Opposing vertex normals can cancel: keep the geometric normal then.
-        if (len > 1e-12) {
-            ns = n / len;
+        let len = length(n_object);
+        // Opposing vertex normals can cancel: keep the geometric normal then. The test is
+        // on unit-scale object-space normals, so it holds at any instance scale.
+        if (len > 1e-6) {
+            ns = normalize(transform_normal(inst.to_object, n_object / len));
             if (dot(ns, ng) < 0.0) {
                 ns = -ns;
             }

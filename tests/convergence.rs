@@ -1,0 +1,82 @@
+//! Convergence and scale invariance on the bundled Cornell box.
+//!
+//! - Error against a high-sample reference falls as 1/sqrt(spp): the log-log slope of
+//!   RMSE over spp is -0.5 within 0.1.
+//! - Scaling the whole scene by 1e-3 or 1e4 changes nothing but noise: ray offsets scale
+//!   with the geometry, so there is no self-intersection acne at any scale.
+
+mod common;
+
+use common::{gpu, mean, render, rmse, settings};
+use kiln::scene::{self, Scene};
+
+const SIZE: u32 = 16;
+
+fn cornell() -> Scene {
+    let mut scene = scene::default_scene().expect("bundled scene");
+    scene.settings.max_bounces = 4;
+    scene
+}
+
+fn image(scene: &Scene, spp: u32, seed: u32) -> Vec<glam::Vec3> {
+    let ctx = gpu();
+    let mut s = settings(SIZE, SIZE, spp);
+    s.seed = seed;
+    s.max_bounces = 4;
+    render(&ctx, scene, s).radiance()
+}
+
+const SEEDS: u32 = 4;
+
+#[test]
+fn error_falls_as_inverse_square_root_of_samples() {
+    let scene = cornell();
+    let reference = image(&scene, 16384, 1000);
+    // The light and the pixels straddling its edge have a variance a hundred times that of
+    // the rest; with 256 pixels they would make the error estimate itself too noisy to
+    // fit a slope to. The rate is measured on the diffusely lit pixels.
+    let lit: Vec<bool> = reference.iter().map(|p| p.max_element() < 1.0).collect();
+    let keep = |img: &[glam::Vec3]| -> Vec<glam::Vec3> {
+        img.iter().zip(&lit).filter(|(_, k)| **k).map(|(p, _)| *p).collect()
+    };
+    let spps = [16u32, 64, 256, 1024];
+    let errors: Vec<f64> = spps
+        .iter()
+        .map(|&spp| {
+            // Averaged over seeds so the slope is not at the mercy of one noise pattern.
+            let e2: f64 = (0..SEEDS)
+                .map(|seed| rmse(&keep(&image(&scene, spp, seed)), &keep(&reference)).powi(2))
+                .sum::<f64>()
+                / SEEDS as f64;
+            e2.sqrt()
+        })
+        .collect();
+    // Least-squares slope of log(error) over log(spp).
+    let xs: Vec<f64> = spps.iter().map(|&s| (s as f64).ln()).collect();
+    let ys: Vec<f64> = errors.iter().map(|e| e.ln()).collect();
+    let n = xs.len() as f64;
+    let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
+    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+        / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
+    assert!((slope + 0.5).abs() < 0.1, "slope {slope:.3}, errors {errors:?}");
+}
+
+#[test]
+fn scene_scaled_by_1e_minus_3_and_1e4_renders_the_same_image() {
+    let base = cornell();
+    let spp = 256;
+    let a = image(&base, spp, 1);
+    let noise = rmse(&a, &image(&base, spp, 2));
+    let m = mean(&a);
+    for factor in [1e-3f32, 1e4] {
+        // Same seed, so the same random numbers: the paths agree until a rounding
+        // difference sends one elsewhere. The difference must stay well under the noise
+        // between two seeds, and the mean within 1%: acne or rays slipping through
+        // geometry would darken or brighten the image systematically.
+        let scaled = image(&base.scaled(factor), spp, 1);
+        let diff = rmse(&a, &scaled);
+        assert!(diff < 0.5 * noise, "scale {factor}: rmse {diff} vs noise {noise}");
+        let ms = mean(&scaled);
+        assert!(((ms - m) / m).abs().max_element() < 0.01, "scale {factor}: mean {ms} vs {m}");
+    }
+}
