@@ -85,14 +85,26 @@ impl GpuContext {
     /// Opens the adapter wgpu prefers (high performance first), asking for the adapter's
     /// own limits: the WebGPU defaults are too small for large scenes, and on GL too small
     /// for compute at all.
+    ///
+    /// Without an explicit backend, the native APIs (Vulkan, Metal, DX12) are tried first
+    /// and GL only when none of them has an adapter: initialising GL where Vulkan works
+    /// costs time and fills the terminal with EGL warnings.
     pub fn new(backend: Option<Backend>) -> Result<Arc<Self>, GpuError> {
-        let instance = instance(backend);
-        let adapter = pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
-            power_preference: wgpu::PowerPreference::HighPerformance,
-            force_fallback_adapter: false,
-            compatible_surface: None,
-            apply_limit_buckets: false,
-        }))
+        let request = |backends: wgpu::Backends| {
+            let mut desc = wgpu::InstanceDescriptor::new_without_display_handle_from_env();
+            desc.backends = backends;
+            let instance = wgpu::Instance::new(desc);
+            pollster::block_on(instance.request_adapter(&wgpu::RequestAdapterOptions {
+                power_preference: wgpu::PowerPreference::HighPerformance,
+                force_fallback_adapter: false,
+                compatible_surface: None,
+                apply_limit_buckets: false,
+            }))
+        };
+        let adapter = match backend {
+            Some(b) => request(b.backends()),
+            None => request(wgpu::Backends::PRIMARY).or_else(|_| request(wgpu::Backends::GL)),
+        }
         .map_err(|e| GpuError::NoAdapter {
             backend: backend_text(backend),
             reason: e.to_string(),

@@ -1,0 +1,92 @@
+//! The `kiln` command line: bad input gives one clear message and a non-zero exit code,
+//! good input writes the image.
+
+use std::process::Command;
+
+use assert_cmd::cargo::CommandCargoExt;
+
+fn kiln() -> Command {
+    Command::cargo_bin("kiln").expect("the kiln binary is built for tests")
+}
+
+fn run(args: &[&str]) -> (i32, String) {
+    let out = kiln().args(args).output().expect("kiln runs");
+    let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
+    (out.status.code().unwrap_or(-1), stderr)
+}
+
+fn assert_clean_error(code: i32, stderr: &str, expected_code: i32, needle: &str) {
+    assert_eq!(code, expected_code, "exit code; stderr:\n{stderr}");
+    assert!(stderr.contains(needle), "stderr lacks \"{needle}\":\n{stderr}");
+    assert!(!stderr.contains("panicked"), "panic on bad input:\n{stderr}");
+    assert!(!stderr.contains("RUST_BACKTRACE"), "backtrace hint on bad input:\n{stderr}");
+}
+
+#[test]
+fn wrong_flag_is_a_usage_error() {
+    let (code, err) = run(&["render", "--spp-typo", "4"]);
+    assert_clean_error(code, &err, 2, "--spp-typo");
+}
+
+#[test]
+fn malformed_size_is_a_usage_error() {
+    let (code, err) = run(&["render", "--size", "64by64"]);
+    assert_clean_error(code, &err, 2, "WIDTHxHEIGHT");
+}
+
+#[test]
+fn missing_scene_file_names_the_file() {
+    let (code, err) = run(&["render", "no/such/scene.kiln", "-o", "x.png"]);
+    assert_clean_error(code, &err, 1, "no/such/scene.kiln");
+}
+
+#[test]
+fn malformed_scene_names_line_and_column() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("broken.kiln");
+    std::fs::write(&path, "(\n  version: 1,\n  camera: (position: (0, 0 0)),\n)\n").unwrap();
+    let (code, err) = run(&["render", path.to_str().unwrap(), "-o", "x.png"]);
+    assert_clean_error(code, &err, 1, "broken.kiln:3:");
+}
+
+#[test]
+fn unknown_output_format_is_refused_before_rendering() {
+    let (code, err) = run(&["render", "-o", "out.tiff"]);
+    assert_clean_error(code, &err, 1, ".png");
+}
+
+#[test]
+fn render_writes_a_png_of_the_requested_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("cornell.png");
+    let (code, err) = run(&[
+        "render", "--size", "40x30", "--spp", "2", "--tonemap", "pbr-neutral", "--exposure", "-0.5", "-q", "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "stderr:\n{err}");
+    assert!(err.contains("adapter:"), "the adapter is not reported:\n{err}");
+    let img = image::open(&out).unwrap();
+    assert_eq!((img.width(), img.height()), (40, 30));
+    // Only the image is in the folder: the temporary file was renamed, not left behind.
+    assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+}
+
+#[test]
+fn time_limit_stops_early_and_still_writes() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("partial.exr");
+    let (code, err) = run(&[
+        "render", "--size", "64x64", "--spp", "100000", "--time-limit", "1", "-q", "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "stderr:\n{err}");
+    assert!(err.contains("time limit reached"), "{err}");
+    assert!(out.exists());
+}
+
+#[test]
+fn info_lists_the_chosen_adapter() {
+    let out = kiln().arg("info").output().unwrap();
+    assert!(out.status.success());
+    assert!(String::from_utf8_lossy(&out.stdout).contains("would use:"));
+}
