@@ -9,7 +9,7 @@ use common::{gpu, settings};
 use glam::{Affine3A, Quat, Vec3};
 use kiln::accel::build_scene_accel;
 use kiln::render::kernel::KernelSource;
-use kiln::render::probe::run_probe;
+use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Material, Mesh, Scene};
 
 const RAYS: u32 = 100_000;
@@ -33,7 +33,10 @@ impl Rng {
 }
 
 fn soup(rng: &mut Rng, count: usize, extent: f32, size: f32) -> Mesh {
-    let mut mesh = Mesh { name: "random soup".into(), ..Mesh::default() };
+    let mut mesh = Mesh {
+        name: "random soup".into(),
+        ..Mesh::default()
+    };
     for i in 0..count as u32 {
         let c = rng.vec(extent);
         for _ in 0..3 {
@@ -47,8 +50,11 @@ fn soup(rng: &mut Rng, count: usize, extent: f32, size: f32) -> Mesh {
 /// Zero-area triangles (repeated vertices, collinear points), axis-aligned triangles and
 /// stacks of coplanar, overlapping triangles, mixed with ordinary ones.
 fn degenerate(rng: &mut Rng) -> Mesh {
-    let mut mesh = Mesh { name: "degenerate".into(), ..Mesh::default() };
-    let mut push = |mesh: &mut Mesh, p: [Vec3; 3]| {
+    let mut mesh = Mesh {
+        name: "degenerate".into(),
+        ..Mesh::default()
+    };
+    let push = |mesh: &mut Mesh, p: [Vec3; 3]| {
         let base = mesh.positions.len() as u32;
         mesh.positions.extend(p);
         mesh.indices.push([base, base + 1, base + 2]);
@@ -80,7 +86,10 @@ fn degenerate(rng: &mut Rng) -> Mesh {
     }
     for _ in 0..300 {
         let c = rng.vec(1.0);
-        push(&mut mesh, [c + rng.vec(0.1), c + rng.vec(0.1), c + rng.vec(0.1)]);
+        push(
+            &mut mesh,
+            [c + rng.vec(0.1), c + rng.vec(0.1), c + rng.vec(0.1)],
+        );
     }
     mesh
 }
@@ -102,7 +111,12 @@ fn test_scene(rng: &mut Rng) -> Scene {
     );
     scene.add_instance(b, m, Affine3A::from_translation(Vec3::new(-1.2, 0.4, -0.3)));
     // A mirroring transform.
-    scene.add_instance(b, m, Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0)) * Affine3A::from_translation(Vec3::new(-1.0, 0.0, 0.5)));
+    scene.add_instance(
+        b,
+        m,
+        Affine3A::from_scale(Vec3::new(-1.0, 1.0, 1.0))
+            * Affine3A::from_translation(Vec3::new(-1.0, 0.0, 0.5)),
+    );
     scene
 }
 
@@ -138,21 +152,43 @@ fn bvh_closest_hit_matches_brute_force_for_random_and_degenerate_meshes() {
             d[axis] = -origin[axis].signum();
             dir = d;
         }
-        input.push(origin.to_array().map(f32::to_bits).into_iter().chain([0]).collect::<Vec<_>>().try_into().unwrap());
-        input.push(dir.to_array().map(f32::to_bits).into_iter().chain([0]).collect::<Vec<_>>().try_into().unwrap());
+        input.push(
+            origin
+                .to_array()
+                .map(f32::to_bits)
+                .into_iter()
+                .chain([0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap(),
+        );
+        input.push(
+            dir.to_array()
+                .map(f32::to_bits)
+                .into_iter()
+                .chain([0])
+                .collect::<Vec<_>>()
+                .try_into()
+                .unwrap(),
+        );
     }
 
     let mut source = KernelSource::with_library("bvh probe");
-    source.push("shaders/tests/bvh_probe.wgsl", include_str!("../shaders/tests/bvh_probe.wgsl"));
+    source.push(
+        "shaders/tests/bvh_probe.wgsl",
+        include_str!("../shaders/tests/bvh_probe.wgsl"),
+    );
     let out = run_probe(
         &ctx,
         &scene,
         &settings(1, 1, 1),
-        &source,
-        "bvh_probe",
-        bytemuck::cast_slice(&input),
-        RAYS as u64 * 16,
-        RAYS,
+        &Probe {
+            source: &source,
+            entry: "bvh_probe",
+            input: bytemuck::cast_slice(&input),
+            output_bytes: RAYS as u64 * 16,
+            invocations: RAYS,
+        },
     )
     .unwrap_or_else(|e| panic!("{e}"));
     let out: &[[u32; 4]] = bytemuck::cast_slice(&out);
@@ -165,9 +201,23 @@ fn bvh_closest_hit_matches_brute_force_for_random_and_degenerate_meshes() {
         }
         // Equal t is enough where coplanar triangles tie.
         if bvh_t != brute_t {
-            mismatches.push((i, f32::from_bits(bvh_t), bvh_tri, f32::from_bits(brute_t), brute_tri));
+            mismatches.push((
+                i,
+                f32::from_bits(bvh_t),
+                bvh_tri,
+                f32::from_bits(brute_t),
+                brute_tri,
+            ));
         }
     }
-    assert!(mismatches.is_empty(), "{} of {RAYS} rays differ, e.g. {:?}", mismatches.len(), &mismatches[..mismatches.len().min(5)]);
-    assert!(hits > RAYS / 4 && hits < RAYS, "only {hits} of {RAYS} rays hit: the test would prove little");
+    assert!(
+        mismatches.is_empty(),
+        "{} of {RAYS} rays differ, e.g. {:?}",
+        mismatches.len(),
+        &mismatches[..mismatches.len().min(5)]
+    );
+    assert!(
+        hits > RAYS / 4 && hits < RAYS,
+        "only {hits} of {RAYS} rays hit: the test would prove little"
+    );
 }

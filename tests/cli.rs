@@ -17,9 +17,18 @@ fn run(args: &[&str]) -> (i32, String) {
 
 fn assert_clean_error(code: i32, stderr: &str, expected_code: i32, needle: &str) {
     assert_eq!(code, expected_code, "exit code; stderr:\n{stderr}");
-    assert!(stderr.contains(needle), "stderr lacks \"{needle}\":\n{stderr}");
-    assert!(!stderr.contains("panicked"), "panic on bad input:\n{stderr}");
-    assert!(!stderr.contains("RUST_BACKTRACE"), "backtrace hint on bad input:\n{stderr}");
+    assert!(
+        stderr.contains(needle),
+        "stderr lacks \"{needle}\":\n{stderr}"
+    );
+    assert!(
+        !stderr.contains("panicked"),
+        "panic on bad input:\n{stderr}"
+    );
+    assert!(
+        !stderr.contains("RUST_BACKTRACE"),
+        "backtrace hint on bad input:\n{stderr}"
+    );
 }
 
 #[test]
@@ -44,7 +53,11 @@ fn missing_scene_file_names_the_file() {
 fn malformed_scene_names_line_and_column() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("broken.kiln");
-    std::fs::write(&path, "(\n  version: 1,\n  camera: (position: (0, 0 0)),\n)\n").unwrap();
+    std::fs::write(
+        &path,
+        "(\n  version: 1,\n  camera: (position: (0, 0 0)),\n)\n",
+    )
+    .unwrap();
     let (code, err) = run(&["render", path.to_str().unwrap(), "-o", "x.png"]);
     assert_clean_error(code, &err, 1, "broken.kiln:3:");
 }
@@ -60,11 +73,24 @@ fn render_writes_a_png_of_the_requested_size() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("cornell.png");
     let (code, err) = run(&[
-        "render", "--size", "40x30", "--spp", "2", "--tonemap", "pbr-neutral", "--exposure", "-0.5", "-q", "-o",
+        "render",
+        "--size",
+        "40x30",
+        "--spp",
+        "2",
+        "--tonemap",
+        "pbr-neutral",
+        "--exposure",
+        "-0.5",
+        "-q",
+        "-o",
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "stderr:\n{err}");
-    assert!(err.contains("adapter:"), "the adapter is not reported:\n{err}");
+    assert!(
+        err.contains("adapter:"),
+        "the adapter is not reported:\n{err}"
+    );
     let img = image::open(&out).unwrap();
     assert_eq!((img.width(), img.height()), (40, 30));
     // Only the image is in the folder: the temporary file was renamed, not left behind.
@@ -76,7 +102,15 @@ fn time_limit_stops_early_and_still_writes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("partial.exr");
     let (code, err) = run(&[
-        "render", "--size", "64x64", "--spp", "100000", "--time-limit", "1", "-q", "-o",
+        "render",
+        "--size",
+        "64x64",
+        "--spp",
+        "100000",
+        "--time-limit",
+        "1",
+        "-q",
+        "-o",
         out.to_str().unwrap(),
     ]);
     assert_eq!(code, 0, "stderr:\n{err}");

@@ -37,7 +37,11 @@ fn error_falls_as_inverse_square_root_of_samples() {
     // fit a slope to. The rate is measured on the diffusely lit pixels.
     let lit: Vec<bool> = reference.iter().map(|p| p.max_element() < 1.0).collect();
     let keep = |img: &[glam::Vec3]| -> Vec<glam::Vec3> {
-        img.iter().zip(&lit).filter(|(_, k)| **k).map(|(p, _)| *p).collect()
+        img.iter()
+            .zip(&lit)
+            .filter(|(_, k)| **k)
+            .map(|(p, _)| *p)
+            .collect()
     };
     let spps = [16u32, 64, 256, 1024];
     let errors: Vec<f64> = spps
@@ -56,9 +60,16 @@ fn error_falls_as_inverse_square_root_of_samples() {
     let ys: Vec<f64> = errors.iter().map(|e| e.ln()).collect();
     let n = xs.len() as f64;
     let (mx, my) = (xs.iter().sum::<f64>() / n, ys.iter().sum::<f64>() / n);
-    let slope = xs.iter().zip(&ys).map(|(x, y)| (x - mx) * (y - my)).sum::<f64>()
+    let slope = xs
+        .iter()
+        .zip(&ys)
+        .map(|(x, y)| (x - mx) * (y - my))
+        .sum::<f64>()
         / xs.iter().map(|x| (x - mx).powi(2)).sum::<f64>();
-    assert!((slope + 0.5).abs() < 0.1, "slope {slope:.3}, errors {errors:?}");
+    assert!(
+        (slope + 0.5).abs() < 0.1,
+        "slope {slope:.3}, errors {errors:?}"
+    );
 }
 
 #[test]
@@ -75,8 +86,14 @@ fn scene_scaled_by_1e_minus_3_and_1e4_renders_the_same_image() {
         // geometry would darken or brighten the image systematically.
         let scaled = image(&base.scaled(factor), spp, 1);
         let diff = rmse(&a, &scaled);
-        assert!(diff < 0.5 * noise, "scale {factor}: rmse {diff} vs noise {noise}");
+        assert!(
+            diff < 0.5 * noise,
+            "scale {factor}: rmse {diff} vs noise {noise}"
+        );
         let ms = mean(&scaled);
-        assert!(((ms - m) / m).abs().max_element() < 0.01, "scale {factor}: mean {ms} vs {m}");
+        assert!(
+            ((ms - m) / m).abs().max_element() < 0.01,
+            "scale {factor}: mean {ms} vs {m}"
+        );
     }
 }

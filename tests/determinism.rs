@@ -24,7 +24,10 @@ fn same_seed_renders_are_bit_identical() {
     assert!(a == b, "two renders with the same seed differ");
     let mut other = s;
     other.seed = 2;
-    assert!(render(&ctx, &cornell(), other) != a, "the seed has no effect");
+    assert!(
+        render(&ctx, &cornell(), other) != a,
+        "the seed has no effect"
+    );
 }
 
 #[test]
@@ -38,7 +41,10 @@ fn split_sample_ranges_merge_into_the_whole() {
     let mut r = Renderer::new(Arc::clone(&ctx), &cornell(), s).unwrap();
     r.render(0..7, RenderControl::default()).unwrap();
     r.render(7..24, RenderControl::default()).unwrap();
-    assert!(r.read_film().unwrap() == whole, "continuing a render changed its result");
+    assert!(
+        r.read_film().unwrap() == whole,
+        "continuing a render changed its result"
+    );
 
     // Separate renderers (as on two machines), merged: equal up to float rounding.
     let mut first = Renderer::new(Arc::clone(&ctx), &cornell(), s).unwrap();
@@ -51,7 +57,12 @@ fn split_sample_ranges_merge_into_the_whole() {
         assert_eq!(m[3], w[3], "sample counts differ");
         for c in 0..3 {
             let tolerance = 1e-5 * w[c].abs().max(1e-3);
-            assert!((m[c] - w[c]).abs() <= tolerance, "merged {} vs whole {}", m[c], w[c]);
+            assert!(
+                (m[c] - w[c]).abs() <= tolerance,
+                "merged {} vs whole {}",
+                m[c],
+                w[c]
+            );
         }
     }
 }
@@ -68,7 +79,9 @@ fn film_does_not_drift_over_100000_samples() {
         for x in 0..4 {
             assert_eq!(film.sample_count(x, y), 100_000);
             let p = film.pixel(x, y);
-            let rel = ((p - scene.environment) / scene.environment).abs().max_element();
+            let rel = ((p - scene.environment) / scene.environment)
+                .abs()
+                .max_element();
             assert!(rel < 1e-6, "pixel ({x}, {y}) = {p}, relative error {rel}");
         }
     }

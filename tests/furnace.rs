@@ -17,7 +17,10 @@ fn check_albedo_one(light_sampling: bool, spp: u32, pixel_tolerance: f32) {
     let film = render(&ctx, &furnace_scene(1.0, 1.0), s);
     let px = film.radiance();
     let m = mean(&px);
-    assert!((m - Vec3::ONE).abs().max_element() < 0.005, "mean {m}, expected 1");
+    assert!(
+        (m - Vec3::ONE).abs().max_element() < 0.005,
+        "mean {m}, expected 1"
+    );
     for (i, p) in px.iter().enumerate() {
         assert!(
             (*p - Vec3::ONE).abs().max_element() < pixel_tolerance,
@@ -51,15 +54,24 @@ fn check_albedo_half(light_sampling: bool, spp: u32, pixel_tolerance: f32) {
         let coverage = 1.0 - b.x;
         let expected = 1.0 - 0.5 * coverage;
         let err = (*h - Vec3::splat(expected)).abs().max_element();
-        assert!(err < pixel_tolerance, "pixel {i} = {h}, expected {expected} ± {pixel_tolerance}");
+        assert!(
+            err < pixel_tolerance,
+            "pixel {i} = {h}, expected {expected} ± {pixel_tolerance}"
+        );
         sum_error += *h - Vec3::splat(expected);
         if coverage > 0.999 {
             covered += 1;
         }
     }
     let mean_error = sum_error / half.len() as f32;
-    assert!(mean_error.abs().max_element() < 0.003, "mean error {mean_error}");
-    assert!(covered > (SIZE * SIZE / 3) as usize, "the sphere covers only {covered} pixels");
+    assert!(
+        mean_error.abs().max_element() < 0.003,
+        "mean error {mean_error}"
+    );
+    assert!(
+        covered > (SIZE * SIZE / 3) as usize,
+        "the sphere covers only {covered} pixels"
+    );
 }
 
 #[test]
@@ -100,9 +112,15 @@ fn emissive_enclosure_furnace_is_one_with_triangle_light_sampling() {
         s.light_sampling = light_sampling;
         let px = render(&ctx, &scene, s).radiance();
         let m = mean(&px);
-        assert!((m - Vec3::ONE).abs().max_element() < 0.01, "light sampling {light_sampling}: mean {m}");
+        assert!(
+            (m - Vec3::ONE).abs().max_element() < 0.01,
+            "light sampling {light_sampling}: mean {m}"
+        );
         for (i, p) in px.iter().enumerate() {
-            assert!((*p - Vec3::ONE).abs().max_element() < 0.1, "light sampling {light_sampling}: pixel {i} = {p}");
+            assert!(
+                (*p - Vec3::ONE).abs().max_element() < 0.1,
+                "light sampling {light_sampling}: pixel {i} = {p}"
+            );
         }
     }
 }

@@ -1,10 +1,8 @@
 //! Acceleration structures, built on the CPU: one BVH per mesh (BLAS) and one over the
 //! instances (TLAS), laid out as the kernel's `shaders/traverse.wgsl` walks them.
 //!
-//! The trees are built with [`obvhs`] (PLOC, Meister & Bittner 2018, then reinsertion and
-//! SAH-driven leaf collapsing), which is fast enough for million-triangle meshes on two
-//! cores; this module only converts its binary BVH into the flat GPU node layout and
-//! checks that no tree is deeper than the kernel's traversal stacks.
+//! Trees are built top-down with binned SAH ([`bvh`]) straight into the flat GPU node
+//! layout, and checked against the depth of the kernel's traversal stacks.
 
 mod bvh;
 mod two_level;

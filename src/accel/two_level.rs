@@ -9,7 +9,7 @@ use thiserror::Error;
 use super::{BLAS_STACK_SIZE, Bvh, TLAS_STACK_SIZE, build_bvh};
 use crate::scene::Scene;
 
-/// Triangles per BLAS leaf at most; obvhs' collapse picks fewer where SAH says so.
+/// Triangles per BLAS leaf at most; SAH makes smaller leaves where they pay.
 const BLAS_MAX_LEAF_SIZE: u32 = 4;
 const TLAS_MAX_LEAF_SIZE: u32 = 1;
 

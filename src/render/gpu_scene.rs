@@ -391,7 +391,11 @@ mod tests {
             let t = i as f32 * 0.618_034;
             let z = 1.0 - 2.0 * (i as f32 + 0.5) / 2000.0;
             let r = (1.0 - z * z).sqrt();
-            let n = Vec3::new(r * (t * 6.283).cos(), r * (t * 6.283).sin(), z);
+            let n = Vec3::new(
+                r * (t * std::f32::consts::TAU).cos(),
+                r * (t * std::f32::consts::TAU).sin(),
+                z,
+            );
             worst = worst.max((decode(encode_octahedral(n)) - n).length());
         }
         for n in [Vec3::X, -Vec3::X, Vec3::Y, -Vec3::Y, Vec3::Z, -Vec3::Z] {

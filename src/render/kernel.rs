@@ -208,14 +208,23 @@ mod tests {
         let mut source = KernelSource::with_library("broken");
         source.push(
             "shaders/tests/broken.wgsl",
-            "fn f() -> f32 {\n    return 1u;\n}\n",
+            "fn f() -> f32 {\n    let a = 1.0\n    return a;\n}\n",
         );
-        let err = source.validate().unwrap_err();
-        match err {
+        match source.validate().unwrap_err() {
             KernelError::Wgsl { file, line, .. } => {
                 assert_eq!(file, "shaders/tests/broken.wgsl");
-                assert_eq!(line, 2);
+                assert_eq!(line, 3, "the statement after the missing semicolon");
             }
+            other => panic!("unexpected {other}"),
+        }
+        // A type error found by validation rather than parsing still names the file.
+        let mut source = KernelSource::with_library("ill-typed");
+        source.push(
+            "shaders/tests/ill_typed.wgsl",
+            "fn g() -> f32 {\n    return 1u;\n}\n",
+        );
+        match source.validate().unwrap_err() {
+            KernelError::Wgsl { file, .. } => assert_eq!(file, "shaders/tests/ill_typed.wgsl"),
             other => panic!("unexpected {other}"),
         }
     }

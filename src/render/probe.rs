@@ -19,18 +19,30 @@ use crate::scene::Scene;
 
 pub const PROBE_WORKGROUP_SIZE: u32 = 64;
 
-/// Runs `entry` of `source` (the shader library plus the probe's own code) for
-/// `invocations` indices with `scene` bound as group 0. Returns `output_bytes` of output.
+/// One probe run: `entry` of `source` (the shader library plus the probe's own code), for
+/// `invocations` indices, reading `input` and returning `output_bytes` of output.
+pub struct Probe<'a> {
+    pub source: &'a KernelSource,
+    pub entry: &'a str,
+    pub input: &'a [u8],
+    pub output_bytes: u64,
+    pub invocations: u32,
+}
+
+/// Runs a probe with `scene` bound as group 0.
 pub fn run_probe(
     ctx: &GpuContext,
     scene: &Scene,
     settings: &RenderSettings,
-    source: &KernelSource,
-    entry: &str,
-    input: &[u8],
-    output_bytes: u64,
-    invocations: u32,
+    probe: &Probe,
 ) -> Result<Vec<u8>, RenderError> {
+    let Probe {
+        source,
+        entry,
+        input,
+        output_bytes,
+        invocations,
+    } = *probe;
     let device = &ctx.device;
     let accel = build_scene_accel(scene)?;
     let gpu_scene = GpuScene::upload(ctx, scene, &accel)?;

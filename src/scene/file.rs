@@ -270,7 +270,11 @@ pub fn parse_scene(text: &str, path: &Path, base_dir: &Path) -> Result<Scene, Sc
     struct VersionOnly {
         version: u32,
     }
-    let version = ron::from_str::<VersionOnly>(text)
+    // `matrix: (...)` rather than `matrix: Some((...))` for optional fields.
+    let ron =
+        ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME);
+    let version = ron
+        .from_str::<VersionOnly>(text)
         .map_err(parse_error)?
         .version;
     if version != SCENE_FORMAT_VERSION {
@@ -279,7 +283,7 @@ pub fn parse_scene(text: &str, path: &Path, base_dir: &Path) -> Result<Scene, Sc
             found: version,
         });
     }
-    let file: SceneFile = ron::from_str(text).map_err(parse_error)?;
+    let file: SceneFile = ron.from_str(text).map_err(parse_error)?;
     let invalid = |message: String| SceneError::Invalid {
         path: path.to_owned(),
         message,
