@@ -23,8 +23,9 @@ struct Params {
     // simplifying Kahan summation's (sum + y) - sum to y (Mesa does, under SPIR-V's
     // default float semantics), which would silently turn it into plain summation.
     opaque_one: f32,
-    _pad1: u32,
-    _pad2: u32,
+    // Elements per page of the paged arrays below, as powers of two.
+    triangle_page_shift: u32,
+    node_page_shift: u32,
     // Camera: position, orthonormal frame, and the thin lens (aperture 0 = pinhole).
     cam_position: vec4<f32>,
     cam_right: vec4<f32>,
@@ -93,8 +94,17 @@ struct Stats {
 @group(0) @binding(3) var<storage, read_write> stats: Stats;
 @group(0) @binding(4) var<storage, read> tlas_nodes: array<BvhNode>;
 @group(0) @binding(5) var<storage, read> instances: array<Instance>;
-@group(0) @binding(6) var<storage, read> blas_nodes: array<BvhNode>;
-@group(0) @binding(7) var<storage, read> triangles: array<Triangle>;
+// The two largest arrays are split into up to four pages, each its own binding, so a
+// scene is not limited by the per-binding size (128 MiB on lavapipe). Read them through
+// fetch_blas_node and fetch_triangle.
+@group(0) @binding(6) var<storage, read> blas_nodes_0: array<BvhNode>;
+@group(0) @binding(13) var<storage, read> blas_nodes_1: array<BvhNode>;
+@group(0) @binding(14) var<storage, read> blas_nodes_2: array<BvhNode>;
+@group(0) @binding(15) var<storage, read> blas_nodes_3: array<BvhNode>;
+@group(0) @binding(7) var<storage, read> triangles_0: array<Triangle>;
+@group(0) @binding(16) var<storage, read> triangles_1: array<Triangle>;
+@group(0) @binding(17) var<storage, read> triangles_2: array<Triangle>;
+@group(0) @binding(18) var<storage, read> triangles_3: array<Triangle>;
 // Three global vertex indices per triangle, in the same order as `triangles`.
 @group(0) @binding(8) var<storage, read> triangle_vertices: array<u32>;
 // Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w unused.
@@ -103,3 +113,23 @@ struct Stats {
 @group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;
 // Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
 @group(0) @binding(12) var<storage, read> light_cdf: array<f32>;
+
+fn fetch_blas_node(i: u32) -> BvhNode {
+    let j = i & ((1u << params.node_page_shift) - 1u);
+    switch (i >> params.node_page_shift) {
+        case 0u: { return blas_nodes_0[j]; }
+        case 1u: { return blas_nodes_1[j]; }
+        case 2u: { return blas_nodes_2[j]; }
+        default: { return blas_nodes_3[j]; }
+    }
+}
+
+fn fetch_triangle(i: u32) -> Triangle {
+    let j = i & ((1u << params.triangle_page_shift) - 1u);
+    switch (i >> params.triangle_page_shift) {
+        case 0u: { return triangles_0[j]; }
+        case 1u: { return triangles_1[j]; }
+        case 2u: { return triangles_2[j]; }
+        default: { return triangles_3[j]; }
+    }
+}

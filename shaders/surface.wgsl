@@ -25,7 +25,7 @@ fn decode_octahedral(packed: u32) -> vec3<f32> {
 
 fn surface_at(hit: SceneHit) -> Surface {
     let inst = instances[hit.instance];
-    let tri = triangles[hit.triangle];
+    let tri = fetch_triangle(hit.triangle);
     let b0 = 1.0 - hit.b1 - hit.b2;
     let p0 = tri.p0.xyz;
     let p1 = tri.p1.xyz;

@@ -51,17 +51,17 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
     let rs = ray_shear(ray.dir);
     var sp = 0u;
     var found = false;
-    let root_node = blas_nodes[root];
+    let root_node = fetch_blas_node(root);
     if (intersect_aabb(ray.origin, inv_dir, (*best).t, root_node.min, root_node.max) < 0.0) {
         return false;
     }
     var node_index = root;
     loop {
-        let node = blas_nodes[node_index];
+        let node = fetch_blas_node(node_index);
         var descend = false;
         if (node.count > 0u) {
             for (var i = node.first; i < node.first + node.count; i++) {
-                let tri = triangles[i];
+                let tri = fetch_triangle(i);
                 let h = intersect_triangle(ray, rs, (*best).t, tri.p0.xyz, tri.p1.xyz, tri.p2.xyz);
                 if (h.hit) {
                     *best = SceneHit(true, h.t, instance_index, i, h.b1, h.b2);
@@ -72,8 +72,8 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
                 }
             }
         } else {
-            let left = blas_nodes[node.first];
-            let right = blas_nodes[node.first + 1u];
+            let left = fetch_blas_node(node.first);
+            let right = fetch_blas_node(node.first + 1u);
             let tl = intersect_aabb(ray.origin, inv_dir, (*best).t, left.min, left.max);
             let tr = intersect_aabb(ray.origin, inv_dir, (*best).t, right.min, right.max);
             if (tl >= 0.0 && tr >= 0.0) {

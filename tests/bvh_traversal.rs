@@ -122,6 +122,33 @@ fn test_scene(rng: &mut Rng) -> Scene {
 
 #[test]
 fn bvh_closest_hit_matches_brute_force_for_random_and_degenerate_meshes() {
+    check_against_brute_force(None);
+}
+
+/// The same with 100 kB pages: triangles and BVH nodes are then split over several
+/// pages, and traversal crosses page boundaries.
+#[test]
+fn paged_scene_buffers_give_the_same_hits() {
+    check_against_brute_force(Some(100_000));
+}
+
+#[test]
+fn scene_too_large_for_the_pages_is_a_clear_error() {
+    let ctx = gpu();
+    let scene = test_scene(&mut Rng(7));
+    let mut s = settings(4, 4, 1);
+    s.page_bytes = Some(4096);
+    let err = match kiln::render::Renderer::new(ctx, &scene, s) {
+        Err(e) => e.to_string(),
+        Ok(_) => panic!("a scene four times the binding limit was accepted"),
+    };
+    assert!(
+        err.contains("BLAS nodes") || err.contains("triangles"),
+        "{err}"
+    );
+}
+
+fn check_against_brute_force(page_bytes: Option<u64>) {
     let ctx = gpu();
     let mut rng = Rng(7);
     let scene = test_scene(&mut rng);
@@ -178,10 +205,12 @@ fn bvh_closest_hit_matches_brute_force_for_random_and_degenerate_meshes() {
         "shaders/tests/bvh_probe.wgsl",
         include_str!("../shaders/tests/bvh_probe.wgsl"),
     );
+    let mut probe_settings = settings(1, 1, 1);
+    probe_settings.page_bytes = page_bytes;
     let out = run_probe(
         &ctx,
         &scene,
-        &settings(1, 1, 1),
+        &probe_settings,
         &Probe {
             source: &source,
             entry: "bvh_probe",

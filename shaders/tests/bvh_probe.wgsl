@@ -20,7 +20,7 @@ fn brute_force(ray: Ray) -> SceneHit {
         let local = Ray(transform_point(inst.to_object, ray.origin), transform_vector(inst.to_object, ray.dir));
         let rs = ray_shear(local.dir);
         for (var t = range.x; t < range.x + range.y; t++) {
-            let tri = triangles[t];
+            let tri = fetch_triangle(t);
             let h = intersect_triangle(local, rs, best.t, tri.p0.xyz, tri.p1.xyz, tri.p2.xyz);
             if (h.hit) {
                 best = SceneHit(true, h.t, i, t, h.b1, h.b2);

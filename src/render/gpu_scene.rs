@@ -24,12 +24,19 @@ pub enum UploadError {
     },
 }
 
+/// Pages of the paged arrays (`blas_nodes_*`, `triangles_*` in `shaders/scene.wgsl`).
+pub const PAGES: usize = 4;
+
 /// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
 pub struct GpuScene {
     pub tlas_nodes: wgpu::Buffer,
     pub instances: wgpu::Buffer,
-    pub blas_nodes: wgpu::Buffer,
-    pub triangles: wgpu::Buffer,
+    /// `PAGES` buffers; unused pages hold one element.
+    pub blas_nodes: Vec<wgpu::Buffer>,
+    pub triangles: Vec<wgpu::Buffer>,
+    /// log2 of the elements per page.
+    pub node_page_shift: u32,
+    pub triangle_page_shift: u32,
     pub triangle_vertices: wgpu::Buffer,
     pub vertices: wgpu::Buffer,
     pub materials: wgpu::Buffer,
@@ -211,10 +218,19 @@ impl SceneArrays {
     }
 }
 
+/// The largest storage binding the adapter allows.
+fn binding_limit(ctx: &GpuContext) -> u64 {
+    let limits = ctx.limits();
+    limits
+        .max_storage_buffer_binding_size
+        .min(limits.max_buffer_size)
+}
+
 fn storage_buffer<T: bytemuck::Pod + Default>(
     ctx: &GpuContext,
     name: &'static str,
     data: &[T],
+    limit: u64,
     bytes_total: &mut u64,
 ) -> Result<wgpu::Buffer, UploadError> {
     // Bindings may not be empty: an unused array holds one zeroed element.
@@ -225,10 +241,6 @@ fn storage_buffer<T: bytemuck::Pod + Default>(
         data
     };
     let bytes = std::mem::size_of_val(data) as u64;
-    let limits = ctx.limits();
-    let limit = limits
-        .max_storage_buffer_binding_size
-        .min(limits.max_buffer_size);
     if bytes > limit {
         return Err(UploadError::TooLarge {
             buffer: name,
@@ -246,13 +258,49 @@ fn storage_buffer<T: bytemuck::Pod + Default>(
         }))
 }
 
+/// Splits `data` into `PAGES` buffers of a power-of-two element count each, the largest
+/// that fits a binding. Returns the buffers and log2 of the page length.
+fn paged_buffers<T: bytemuck::Pod + Default>(
+    ctx: &GpuContext,
+    name: &'static str,
+    data: &[T],
+    limit: u64,
+    bytes_total: &mut u64,
+) -> Result<(Vec<wgpu::Buffer>, u32), UploadError> {
+    let element = std::mem::size_of::<T>() as u64;
+    let per_page = (limit / element).clamp(1, 1 << 31);
+    let shift = 63 - per_page.leading_zeros();
+    let page_len = 1usize << shift;
+    let total = std::mem::size_of_val(data) as u64;
+    if data.len().div_ceil(page_len) > PAGES {
+        return Err(UploadError::TooLarge {
+            buffer: name,
+            bytes: total,
+            limit: (page_len as u64 * element) * PAGES as u64,
+        });
+    }
+    let mut pages: Vec<wgpu::Buffer> = Vec::with_capacity(PAGES);
+    for chunk in data.chunks(page_len) {
+        pages.push(storage_buffer(ctx, name, chunk, limit, bytes_total)?);
+    }
+    while pages.len() < PAGES {
+        pages.push(storage_buffer::<T>(ctx, name, &[], limit, bytes_total)?);
+    }
+    Ok((pages, shift))
+}
+
 impl GpuScene {
+    /// Uploads the scene. `page_bytes` sets the page size of the paged arrays below the
+    /// adapter's binding limit (tests use it to exercise paging with small scenes).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
         accel: &SceneAccel,
+        page_bytes: Option<u64>,
     ) -> Result<Self, UploadError> {
         let a = SceneArrays::build(scene, accel);
+        let limit = binding_limit(ctx);
+        let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
         let mut bytes = 0;
         let environment_pick = if luminance(scene.environment) > 0.0 {
             if a.light_triangles.is_empty() {
@@ -263,26 +311,34 @@ impl GpuScene {
         } else {
             0.0
         };
+        let (blas_nodes, node_page_shift) =
+            paged_buffers(ctx, "BLAS nodes", &a.blas_nodes, page_limit, &mut bytes)?;
+        let (triangles, triangle_page_shift) =
+            paged_buffers(ctx, "triangles", &a.triangles, page_limit, &mut bytes)?;
         Ok(Self {
-            tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, &mut bytes)?,
-            instances: storage_buffer(ctx, "instances", &a.instances, &mut bytes)?,
-            blas_nodes: storage_buffer(ctx, "BLAS nodes", &a.blas_nodes, &mut bytes)?,
-            triangles: storage_buffer(ctx, "triangles", &a.triangles, &mut bytes)?,
+            tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, limit, &mut bytes)?,
+            instances: storage_buffer(ctx, "instances", &a.instances, limit, &mut bytes)?,
+            blas_nodes,
+            triangles,
+            node_page_shift,
+            triangle_page_shift,
             triangle_vertices: storage_buffer(
                 ctx,
                 "triangle vertex indices",
                 &a.triangle_vertices,
+                limit,
                 &mut bytes,
             )?,
-            vertices: storage_buffer(ctx, "vertex attributes", &a.vertices, &mut bytes)?,
-            materials: storage_buffer(ctx, "materials", &a.materials, &mut bytes)?,
+            vertices: storage_buffer(ctx, "vertex attributes", &a.vertices, limit, &mut bytes)?,
+            materials: storage_buffer(ctx, "materials", &a.materials, limit, &mut bytes)?,
             light_triangles: storage_buffer(
                 ctx,
                 "emissive triangles",
                 &a.light_triangles,
+                limit,
                 &mut bytes,
             )?,
-            light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, &mut bytes)?,
+            light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, limit, &mut bytes)?,
             instance_count: a.instances.len() as u32,
             light_count: a.light_triangles.len() as u32,
             light_power: a.light_power,
@@ -311,7 +367,7 @@ pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
-    for b in 4..=12 {
+    for b in 4..=18 {
         entries.push(entry(
             b,
             wgpu::BufferBindingType::Storage { read_only: true },
@@ -338,26 +394,28 @@ impl GpuScene {
         layout: &wgpu::BindGroupLayout,
         frame: &FrameBuffers,
     ) -> wgpu::BindGroup {
-        let buffers = [
-            frame.params,
-            frame.film_sum,
-            frame.film_compensation,
-            frame.stats,
-            &self.tlas_nodes,
-            &self.instances,
-            &self.blas_nodes,
-            &self.triangles,
-            &self.triangle_vertices,
-            &self.vertices,
-            &self.materials,
-            &self.light_triangles,
-            &self.light_cdf,
+        let mut buffers: Vec<(u32, &wgpu::Buffer)> = vec![
+            (0, frame.params),
+            (1, frame.film_sum),
+            (2, frame.film_compensation),
+            (3, frame.stats),
+            (4, &self.tlas_nodes),
+            (5, &self.instances),
+            (8, &self.triangle_vertices),
+            (9, &self.vertices),
+            (10, &self.materials),
+            (11, &self.light_triangles),
+            (12, &self.light_cdf),
         ];
+        // Page 0 of each paged array keeps its original binding; pages 1..4 follow 12.
+        let node_bindings = [6, 13, 14, 15];
+        let triangle_bindings = [7, 16, 17, 18];
+        buffers.extend(node_bindings.into_iter().zip(&self.blas_nodes));
+        buffers.extend(triangle_bindings.into_iter().zip(&self.triangles));
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
-            .enumerate()
-            .map(|(i, b)| wgpu::BindGroupEntry {
-                binding: i as u32,
+            .map(|(binding, b)| wgpu::BindGroupEntry {
+                binding: *binding,
                 resource: b.as_entire_binding(),
             })
             .collect();

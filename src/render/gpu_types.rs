@@ -23,7 +23,8 @@ pub struct GpuParams {
     pub instance_count: u32,
     /// Always 1.0; see `opaque_one` in `shaders/scene.wgsl`.
     pub opaque_one: f32,
-    pub _pad: [u32; 2],
+    pub triangle_page_shift: u32,
+    pub node_page_shift: u32,
     pub cam_position: [f32; 4],
     pub cam_right: [f32; 4],
     pub cam_up: [f32; 4],

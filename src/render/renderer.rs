@@ -57,6 +57,9 @@ pub struct RenderSettings {
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
     pub light_sampling: bool,
+    /// Page size in bytes of the paged scene arrays (BVH nodes, triangles); default: the
+    /// largest binding the adapter allows. Tests lower it to exercise paging.
+    pub page_bytes: Option<u64>,
 }
 
 impl RenderSettings {
@@ -68,6 +71,7 @@ impl RenderSettings {
             max_bounces: scene.settings.max_bounces,
             seed: 0,
             light_sampling: true,
+            page_bytes: None,
         }
     }
 }
@@ -145,6 +149,8 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         light_count: gpu.light_count,
         instance_count: gpu.instance_count,
         opaque_one: 1.0,
+        triangle_page_shift: gpu.triangle_page_shift,
+        node_page_shift: gpu.node_page_shift,
         cam_position: cam.position.extend(1.0).into(),
         cam_right: right.extend(0.0).into(),
         cam_up: up.extend(0.0).into(),
@@ -175,7 +181,7 @@ impl Renderer {
 
         let accel = build_scene_accel(scene)?;
         let upload_start = Instant::now();
-        let gpu_scene = GpuScene::upload(&ctx, scene, &accel)?;
+        let gpu_scene = GpuScene::upload(&ctx, scene, &accel, settings.page_bytes)?;
         let upload = upload_start.elapsed();
 
         let kernel_start = Instant::now();

@@ -21,6 +21,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         max_bounces: 64,
         seed: 1,
         light_sampling: true,
+        page_bytes: None,
     }
 }
 
