@@ -98,8 +98,26 @@ pub fn write_image(path: &Path, film: &Film, view: ViewSettings) -> Result<(), O
         writer.flush().map_err(|e| fail(e.to_string()))?;
     }
     temp.as_file().sync_all().map_err(|e| fail(e.to_string()))?;
+    // Temporary files are private (0600 on Unix); the image should be as readable as any
+    // other file the user writes, or keep the permissions of the file it replaces.
+    if let Some(permissions) = final_permissions(path) {
+        std::fs::set_permissions(temp.path(), permissions).map_err(|e| fail(e.to_string()))?;
+    }
     temp.persist(path).map_err(|e| fail(e.error.to_string()))?;
     Ok(())
+}
+
+fn final_permissions(path: &Path) -> Option<std::fs::Permissions> {
+    if let Ok(existing) = std::fs::metadata(path) {
+        return Some(existing.permissions());
+    }
+    #[cfg(unix)]
+    {
+        use std::os::unix::fs::PermissionsExt;
+        Some(std::fs::Permissions::from_mode(0o644))
+    }
+    #[cfg(not(unix))]
+    None
 }
 
 #[cfg(test)]
@@ -126,6 +144,16 @@ mod tests {
         assert_eq!(read, to_srgb_image(&film, view));
         // Only the image is left behind: no temporary files.
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
+        #[cfg(unix)]
+        {
+            use std::os::unix::fs::PermissionsExt;
+            let mode = std::fs::metadata(&path).unwrap().permissions().mode();
+            assert_eq!(
+                mode & 0o777,
+                0o644,
+                "a new image is readable like other files"
+            );
+        }
     }
 
     #[test]
@@ -154,7 +182,7 @@ mod tests {
     }
 
     #[test]
-    fn failed_write_keeps_the_previous_file() {
+    fn write_into_a_missing_folder_fails_with_the_path() {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("no such folder").join("out.png");
         assert!(write_image(&missing, &gradient_film(), ViewSettings::default()).is_err());
