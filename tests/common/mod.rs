@@ -1,5 +1,6 @@
 //! Helpers shared by the integration tests: the GPU context and small scenes.
 #![allow(dead_code)]
+pub mod chi2;
 
 use std::sync::Arc;
 
