@@ -96,7 +96,8 @@ struct Stats {
 @group(0) @binding(5) var<storage, read> instances: array<Instance>;
 // The two largest arrays are split into up to four pages, each its own binding, so a
 // scene is not limited by the per-binding size (128 MiB on lavapipe). Read them through
-// fetch_blas_node and fetch_triangle.
+// fetch_blas_node and fetch_triangle, which kernel assembly generates for the number of
+// pages the scene uses (src/render/kernel.rs, `paging_wgsl`).
 @group(0) @binding(6) var<storage, read> blas_nodes_0: array<BvhNode>;
 @group(0) @binding(13) var<storage, read> blas_nodes_1: array<BvhNode>;
 @group(0) @binding(14) var<storage, read> blas_nodes_2: array<BvhNode>;
@@ -113,23 +114,3 @@ struct Stats {
 @group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;
 // Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
 @group(0) @binding(12) var<storage, read> light_cdf: array<f32>;
-
-fn fetch_blas_node(i: u32) -> BvhNode {
-    let j = i & ((1u << params.node_page_shift) - 1u);
-    switch (i >> params.node_page_shift) {
-        case 0u: { return blas_nodes_0[j]; }
-        case 1u: { return blas_nodes_1[j]; }
-        case 2u: { return blas_nodes_2[j]; }
-        default: { return blas_nodes_3[j]; }
-    }
-}
-
-fn fetch_triangle(i: u32) -> Triangle {
-    let j = i & ((1u << params.triangle_page_shift) - 1u);
-    switch (i >> params.triangle_page_shift) {
-        case 0u: { return triangles_0[j]; }
-        case 1u: { return triangles_1[j]; }
-        case 2u: { return triangles_2[j]; }
-        default: { return triangles_3[j]; }
-    }
-}

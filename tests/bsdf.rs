@@ -17,7 +17,6 @@ use std::sync::OnceLock;
 use common::chi2::{SphereBins, chi2_test, sidak_alpha};
 use common::{gpu, settings};
 use glam::Vec3;
-use kiln::render::kernel::KernelSource;
 use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Scene};
 
@@ -155,13 +154,6 @@ fn empty_scene() -> Scene {
     Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0))
 }
 
-fn source(name: &str, kernel: &str) -> KernelSource {
-    let mut s = KernelSource::with_library(name);
-    s.push("shaders/tests/lobe_dispatch.wgsl", DISPATCH);
-    s.push(&format!("shaders/tests/{name}.wgsl"), kernel);
-    s
-}
-
 struct SampleStats {
     samples: u32,
     histogram: Vec<u64>,
@@ -191,16 +183,19 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
     let cells = bins.cell_count();
     let invocations = lobes.len() as u32 * (samples / SAMPLES_PER_INVOCATION);
     let words = lobes.len() * cells + 8 * invocations as usize;
-    let source = source(
-        "bsdf_sample",
-        include_str!("../shaders/tests/bsdf_sample.wgsl"),
-    );
     let out = run_probe(
         &ctx,
         &empty_scene(),
         &settings(1, 1, 1),
         &Probe {
-            source: &source,
+            name: "bsdf_sample",
+            parts: &[
+                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
+                (
+                    "shaders/tests/bsdf_sample.wgsl",
+                    include_str!("../shaders/tests/bsdf_sample.wgsl"),
+                ),
+            ],
             entry: "bsdf_sample",
             input: bytemuck::cast_slice(&input),
             output_bytes: 4 * words as u64,
@@ -259,13 +254,19 @@ fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins) -> Vec<Vec<f64>> {
     }
     let cells = bins.cell_count();
     let n = (lobes.len() * cells) as u32;
-    let source = source("bsdf_pdf", include_str!("../shaders/tests/bsdf_pdf.wgsl"));
     let out = run_probe(
         &ctx,
         &empty_scene(),
         &settings(1, 1, 1),
         &Probe {
-            source: &source,
+            name: "bsdf_pdf",
+            parts: &[
+                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
+                (
+                    "shaders/tests/bsdf_pdf.wgsl",
+                    include_str!("../shaders/tests/bsdf_pdf.wgsl"),
+                ),
+            ],
             entry: "bsdf_pdf",
             input: bytemuck::cast_slice(&input),
             output_bytes: 4 * n as u64,
@@ -483,17 +484,20 @@ fn monte_carlo_albedo_never_exceeds_one() {
 fn no_nan_or_inf_at_random_and_extreme_inputs() {
     let ctx = gpu();
     let n = 1u32 << 20;
-    let source = source(
-        "bsdf_extremes",
-        include_str!("../shaders/tests/bsdf_extremes.wgsl"),
-    );
     let input = [[n, 5u32, 0, 0]];
     let out = run_probe(
         &ctx,
         &empty_scene(),
         &settings(1, 1, 1),
         &Probe {
-            source: &source,
+            name: "bsdf_extremes",
+            parts: &[
+                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
+                (
+                    "shaders/tests/bsdf_extremes.wgsl",
+                    include_str!("../shaders/tests/bsdf_extremes.wgsl"),
+                ),
+            ],
             entry: "bsdf_extremes",
             input: bytemuck::cast_slice(&input),
             output_bytes: 16 * n as u64,
@@ -528,13 +532,19 @@ fn raw_samples(lobe: &Lobe, count: u32, seed: u32) -> Vec<RawSample> {
     let ctx = gpu();
     let mut input = vec![[count, seed, 0, 0], [0; 4]];
     input.extend(lobe.encode());
-    let source = source("bsdf_raw", include_str!("../shaders/tests/bsdf_raw.wgsl"));
     let out = run_probe(
         &ctx,
         &empty_scene(),
         &settings(1, 1, 1),
         &Probe {
-            source: &source,
+            name: "bsdf_raw",
+            parts: &[
+                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
+                (
+                    "shaders/tests/bsdf_raw.wgsl",
+                    include_str!("../shaders/tests/bsdf_raw.wgsl"),
+                ),
+            ],
             entry: "bsdf_raw",
             input: bytemuck::cast_slice(&input),
             output_bytes: 48 * count as u64,

@@ -8,7 +8,6 @@ mod common;
 use common::{gpu, settings};
 use glam::{Affine3A, Quat, Vec3};
 use kiln::accel::build_scene_accel;
-use kiln::render::kernel::KernelSource;
 use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Material, Mesh, Scene};
 
@@ -200,11 +199,6 @@ fn check_against_brute_force(page_bytes: Option<u64>) {
         );
     }
 
-    let mut source = KernelSource::with_library("bvh probe");
-    source.push(
-        "shaders/tests/bvh_probe.wgsl",
-        include_str!("../shaders/tests/bvh_probe.wgsl"),
-    );
     let mut probe_settings = settings(1, 1, 1);
     probe_settings.page_bytes = page_bytes;
     let out = run_probe(
@@ -212,7 +206,11 @@ fn check_against_brute_force(page_bytes: Option<u64>) {
         &scene,
         &probe_settings,
         &Probe {
-            source: &source,
+            name: "bvh probe",
+            parts: &[(
+                "shaders/tests/bvh_probe.wgsl",
+                include_str!("../shaders/tests/bvh_probe.wgsl"),
+            )],
             entry: "bvh_probe",
             input: bytemuck::cast_slice(&input),
             output_bytes: RAYS as u64 * 16,

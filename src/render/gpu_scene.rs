@@ -37,6 +37,9 @@ pub struct GpuScene {
     /// log2 of the elements per page.
     pub node_page_shift: u32,
     pub triangle_page_shift: u32,
+    /// Pages holding data (the rest are one-element placeholders).
+    pub node_pages: u32,
+    pub triangle_pages: u32,
     pub triangle_vertices: wgpu::Buffer,
     pub vertices: wgpu::Buffer,
     pub materials: wgpu::Buffer,
@@ -259,14 +262,14 @@ fn storage_buffer<T: bytemuck::Pod + Default>(
 }
 
 /// Splits `data` into `PAGES` buffers of a power-of-two element count each, the largest
-/// that fits a binding. Returns the buffers and log2 of the page length.
+/// that fits a binding. Returns the buffers, log2 of the page length and the pages used.
 fn paged_buffers<T: bytemuck::Pod + Default>(
     ctx: &GpuContext,
     name: &'static str,
     data: &[T],
     limit: u64,
     bytes_total: &mut u64,
-) -> Result<(Vec<wgpu::Buffer>, u32), UploadError> {
+) -> Result<(Vec<wgpu::Buffer>, u32, u32), UploadError> {
     let element = std::mem::size_of::<T>() as u64;
     let per_page = (limit / element).clamp(1, 1 << 31);
     let shift = 63 - per_page.leading_zeros();
@@ -283,10 +286,11 @@ fn paged_buffers<T: bytemuck::Pod + Default>(
     for chunk in data.chunks(page_len) {
         pages.push(storage_buffer(ctx, name, chunk, limit, bytes_total)?);
     }
+    let used = pages.len().max(1) as u32;
     while pages.len() < PAGES {
         pages.push(storage_buffer::<T>(ctx, name, &[], limit, bytes_total)?);
     }
-    Ok((pages, shift))
+    Ok((pages, shift, used))
 }
 
 impl GpuScene {
@@ -311,9 +315,9 @@ impl GpuScene {
         } else {
             0.0
         };
-        let (blas_nodes, node_page_shift) =
+        let (blas_nodes, node_page_shift, node_pages) =
             paged_buffers(ctx, "BLAS nodes", &a.blas_nodes, page_limit, &mut bytes)?;
-        let (triangles, triangle_page_shift) =
+        let (triangles, triangle_page_shift, triangle_pages) =
             paged_buffers(ctx, "triangles", &a.triangles, page_limit, &mut bytes)?;
         Ok(Self {
             tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, limit, &mut bytes)?,
@@ -322,6 +326,8 @@ impl GpuScene {
             triangles,
             node_page_shift,
             triangle_page_shift,
+            node_pages,
+            triangle_pages,
             triangle_vertices: storage_buffer(
                 ctx,
                 "triangle vertex indices",
@@ -388,6 +394,14 @@ pub struct FrameBuffers<'a> {
 }
 
 impl GpuScene {
+    /// The kernel features this scene needs.
+    pub fn features(&self) -> crate::render::kernel::KernelFeatures {
+        crate::render::kernel::KernelFeatures {
+            node_pages: self.node_pages,
+            triangle_pages: self.triangle_pages,
+        }
+    }
+
     pub fn bind_group(
         &self,
         device: &wgpu::Device,

@@ -79,10 +79,15 @@ impl KernelSource {
         }
     }
 
-    pub fn with_library(name: &str) -> Self {
+    /// The shader library, specialised for `features`.
+    pub fn with_library(name: &str, features: &KernelFeatures) -> Self {
         let mut source = Self::new(name);
-        for file in LIBRARY {
+        for (i, file) in LIBRARY.iter().enumerate() {
             source.push(file.path, file.source);
+            if i == 0 {
+                // Right after scene.wgsl, which declares what the accessors read.
+                source.push("generated: paged array accessors", &paging_wgsl(features));
+            }
         }
         source
     }
@@ -189,9 +194,67 @@ impl KernelSource {
     }
 }
 
+/// What a kernel is specialised for; only what a scene uses is compiled in.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub struct KernelFeatures {
+    /// Pages in use of the paged arrays (1 to `gpu_scene::PAGES`).
+    pub node_pages: u32,
+    pub triangle_pages: u32,
+}
+
+impl Default for KernelFeatures {
+    fn default() -> Self {
+        Self {
+            node_pages: 1,
+            triangle_pages: 1,
+        }
+    }
+}
+
+/// `fetch_blas_node` and `fetch_triangle` for the pages a scene uses. With one page the
+/// accessor is a plain load: on lavapipe even an untaken branch to the other pages slows
+/// traversal by 40%.
+pub fn paging_wgsl(features: &KernelFeatures) -> String {
+    fn accessor(name: &str, ty: &str, array: &str, shift: &str, pages: u32) -> String {
+        let mut body = String::new();
+        if pages <= 1 {
+            body.push_str(&format!("    return {array}_0[i];\n"));
+        } else {
+            body.push_str(&format!("    let page = i >> params.{shift};\n"));
+            body.push_str(&format!("    let j = i & ((1u << params.{shift}) - 1u);\n"));
+            for p in 0..pages - 1 {
+                body.push_str(&format!(
+                    "    if (page == {p}u) {{\n        return {array}_{p}[j];\n    }}\n"
+                ));
+            }
+            body.push_str(&format!("    return {array}_{}[j];\n", pages - 1));
+        }
+        format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n")
+    }
+    format!(
+        "// Generated for {} node page(s) and {} triangle page(s).\n{}\n{}",
+        features.node_pages,
+        features.triangle_pages,
+        accessor(
+            "fetch_blas_node",
+            "BvhNode",
+            "blas_nodes",
+            "node_page_shift",
+            features.node_pages
+        ),
+        accessor(
+            "fetch_triangle",
+            "Triangle",
+            "triangles",
+            "triangle_page_shift",
+            features.triangle_pages
+        ),
+    )
+}
+
 /// The path-tracing kernel's source.
-pub fn path_tracing_kernel() -> KernelSource {
-    let mut source = KernelSource::with_library("path tracer");
+pub fn path_tracing_kernel(features: &KernelFeatures) -> KernelSource {
+    let mut source = KernelSource::with_library("path tracer", features);
     source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
     source
 }
@@ -202,14 +265,20 @@ mod tests {
 
     #[test]
     fn path_tracing_kernel_passes_naga_validation() {
-        if let Err(e) = path_tracing_kernel().validate() {
-            panic!("{e}");
+        for pages in 1..=4 {
+            let features = KernelFeatures {
+                node_pages: pages,
+                triangle_pages: 5 - pages,
+            };
+            if let Err(e) = path_tracing_kernel(&features).validate() {
+                panic!("{e}");
+            }
         }
     }
 
     #[test]
     fn errors_point_into_the_file_they_come_from() {
-        let mut source = KernelSource::with_library("broken");
+        let mut source = KernelSource::with_library("broken", &KernelFeatures::default());
         source.push(
             "shaders/tests/broken.wgsl",
             "fn f() -> f32 {\n    let a = 1.0\n    return a;\n}\n",
@@ -222,7 +291,7 @@ mod tests {
             other => panic!("unexpected {other}"),
         }
         // A type error found by validation rather than parsing still names the file.
-        let mut source = KernelSource::with_library("ill-typed");
+        let mut source = KernelSource::with_library("ill-typed", &KernelFeatures::default());
         source.push(
             "shaders/tests/ill_typed.wgsl",
             "fn g() -> f32 {\n    return 1u;\n}\n",

@@ -19,10 +19,12 @@ use crate::scene::Scene;
 
 pub const PROBE_WORKGROUP_SIZE: u32 = 64;
 
-/// One probe run: `entry` of `source` (the shader library plus the probe's own code), for
-/// `invocations` indices, reading `input` and returning `output_bytes` of output.
+/// One probe run: `entry` of the shader library (specialised for the scene) followed by
+/// the probe's own WGSL `parts` (path, source), for `invocations` indices, reading `input`
+/// and returning `output_bytes` of output.
 pub struct Probe<'a> {
-    pub source: &'a KernelSource,
+    pub name: &'a str,
+    pub parts: &'a [(&'a str, &'a str)],
     pub entry: &'a str,
     pub input: &'a [u8],
     pub output_bytes: u64,
@@ -37,7 +39,8 @@ pub fn run_probe(
     probe: &Probe,
 ) -> Result<Vec<u8>, RenderError> {
     let Probe {
-        source,
+        name,
+        parts,
         entry,
         input,
         output_bytes,
@@ -62,6 +65,10 @@ pub fn run_probe(
             count: None,
         }),
     });
+    let mut source = KernelSource::with_library(name, &gpu_scene.features());
+    for (path, wgsl) in parts {
+        source.push(path, wgsl);
+    }
     let pipeline = source.create_pipeline(ctx, &[&scene_layout, &probe_layout], entry)?;
 
     let params = base_params(scene, &gpu_scene, settings);

@@ -187,7 +187,11 @@ impl Renderer {
         let kernel_start = Instant::now();
         let device = &ctx.device;
         let layout = scene_bind_group_layout(device);
-        let pipeline = path_tracing_kernel().create_pipeline(&ctx, &[&layout], "render")?;
+        let pipeline = path_tracing_kernel(&gpu_scene.features()).create_pipeline(
+            &ctx,
+            &[&layout],
+            "render",
+        )?;
 
         let pixels = settings.width as u64 * settings.height as u64;
         let film_bytes = pixels * 16;
