@@ -24,6 +24,35 @@ const SAMPLES: u32 = 1 << 20;
 const SAMPLES_PER_INVOCATION: u32 = 256;
 const DISPATCH: &str = include_str!("../shaders/tests/lobe_dispatch.wgsl");
 
+/// The principled surface's parameters, packed as `principled_unpack` in
+/// shaders/bsdf/principled.wgsl reads them.
+#[derive(Clone, Debug)]
+struct Principled {
+    base_color: Vec3,
+    metallic: f32,
+    specular_weight: f32,
+    transmission_weight: f32,
+    coat_weight: f32,
+    coat_roughness: f32,
+    sheen_weight: f32,
+    sheen_roughness: f32,
+}
+
+impl Principled {
+    fn plastic() -> Self {
+        Self {
+            base_color: Vec3::new(0.8, 0.2, 0.1),
+            metallic: 0.0,
+            specular_weight: 1.0,
+            transmission_weight: 0.0,
+            coat_weight: 0.0,
+            coat_roughness: 0.05,
+            sheen_weight: 0.0,
+            sheen_roughness: 0.3,
+        }
+    }
+}
+
 #[derive(Clone, Debug)]
 struct Lobe {
     label: String,
@@ -35,6 +64,7 @@ struct Lobe {
     f0: Vec3,
     tint: Vec3,
     wo: Vec3,
+    principled: Option<Principled>,
 }
 
 impl Lobe {
@@ -45,15 +75,38 @@ impl Lobe {
         [a / k, a * k]
     }
 
-    fn encode(&self) -> [[u32; 4]; 5] {
-        let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0];
+    fn encode(&self) -> [[u32; 4]; 12] {
+        let bits = |v: Vec3, w: f32| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), w.to_bits()];
         let [ax, ay] = self.alpha();
+        let p = self.principled.clone().unwrap_or_else(Principled::plastic);
         [
-            [self.kind, self.thin as u32, 0, 0],
+            // The principled mixture costs several lobes per evaluation: lower quadrature
+            // orders keep each GPU invocation short (see tests/bsdf_pdf.wgsl).
+            match self.kind {
+                5 => [self.kind, self.thin as u32, 40, 8],
+                _ => [self.kind, self.thin as u32, 0, 0],
+            },
             [ax.to_bits(), ay.to_bits(), self.eta.to_bits(), 0],
-            bits(self.f0),
-            bits(self.tint),
-            bits(self.wo),
+            bits(self.f0, 0.0),
+            bits(self.tint, 0.0),
+            bits(self.wo, 0.0),
+            bits(p.base_color, 1.0),
+            bits(Vec3::ONE, p.specular_weight),
+            bits(self.tint, p.transmission_weight),
+            bits(Vec3::new(0.9, 0.95, 1.0), p.coat_weight),
+            bits(Vec3::new(1.0, 0.9, 0.8), p.sheen_weight),
+            [
+                p.metallic.to_bits(),
+                self.roughness.to_bits(),
+                self.anisotropy.to_bits(),
+                self.eta.to_bits(),
+            ],
+            [
+                p.coat_roughness.to_bits(),
+                1.5f32.to_bits(),
+                p.sheen_roughness.to_bits(),
+                0,
+            ],
         ]
     }
 }
@@ -88,6 +141,7 @@ fn rough_lobes() -> Vec<Lobe> {
         f0: Vec3::new(0.9, 0.6, 0.3),
         tint: Vec3::ONE,
         wo,
+        principled: None,
     };
     for angle in ANGLES {
         for inside in [false, true] {
@@ -144,6 +198,84 @@ fn rough_lobes() -> Vec<Lobe> {
                         direction(angle, inside),
                     )
                 });
+            }
+        }
+    }
+    lobes
+}
+
+/// Representative principled materials: every layer alone and a mixture of all of them.
+fn principled_lobes() -> Vec<Lobe> {
+    let mut lobes = Vec::new();
+    let base = |label: String, wo: Vec3, principled: Principled| Lobe {
+        label,
+        kind: 5,
+        thin: false,
+        roughness: 0.5,
+        anisotropy: 0.0,
+        eta: 1.5,
+        f0: Vec3::ONE,
+        tint: Vec3::new(0.9, 0.8, 0.7),
+        wo,
+        principled: Some(principled),
+    };
+    let materials = [
+        ("plastic", Principled::plastic()),
+        (
+            "rough gold",
+            Principled {
+                base_color: Vec3::new(1.0, 0.78, 0.34),
+                metallic: 1.0,
+                ..Principled::plastic()
+            },
+        ),
+        (
+            "coated paint",
+            Principled {
+                coat_weight: 1.0,
+                coat_roughness: 0.3,
+                ..Principled::plastic()
+            },
+        ),
+        (
+            "velvet",
+            Principled {
+                sheen_weight: 1.0,
+                sheen_roughness: 0.5,
+                specular_weight: 0.0,
+                ..Principled::plastic()
+            },
+        ),
+        (
+            "rough glass",
+            Principled {
+                transmission_weight: 1.0,
+                ..Principled::plastic()
+            },
+        ),
+        (
+            "half metal, coat and sheen",
+            Principled {
+                metallic: 0.5,
+                coat_weight: 0.5,
+                coat_roughness: 0.4,
+                sheen_weight: 0.5,
+                ..Principled::plastic()
+            },
+        ),
+    ];
+    for (name, material) in materials {
+        let transmissive = material.transmission_weight > 0.0;
+        for angle in [0.0, 45.0, 80.0] {
+            for inside in [false, true] {
+                if inside && !transmissive {
+                    continue;
+                }
+                lobes.push(base(
+                    format!("principled {name} at {angle}° inside={inside}"),
+                    direction(angle, inside),
+                    material.clone(),
+                ));
             }
         }
     }
@@ -281,28 +413,37 @@ fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins) -> Vec<Vec<f64>> {
         .collect()
 }
 
-struct RoughRun {
+struct ChiSquareRun {
     lobes: Vec<Lobe>,
-    bins: SphereBins,
+    samples: u32,
     stats: Vec<SampleStats>,
     expected: Vec<Vec<f64>>,
 }
 
-/// Sampling every rough configuration is the expensive part; the tests below share it.
-fn rough_run() -> &'static RoughRun {
-    static RUN: OnceLock<RoughRun> = OnceLock::new();
-    RUN.get_or_init(|| {
-        let lobes = rough_lobes();
-        let bins = SphereBins::for_sample_count(SAMPLES as usize);
-        let stats = sample_lobes(&lobes, bins, SAMPLES, 11);
+impl ChiSquareRun {
+    fn new(lobes: Vec<Lobe>, samples: u32, seed: u32) -> Self {
+        let bins = SphereBins::for_sample_count(samples as usize);
+        let stats = sample_lobes(&lobes, bins, samples, seed);
         let expected = integrate_pdfs(&lobes, bins);
-        RoughRun {
+        Self {
             lobes,
-            bins,
+            samples,
             stats,
             expected,
         }
-    })
+    }
+}
+
+/// Sampling every configuration is the expensive part; the tests below share it.
+fn rough_run() -> &'static ChiSquareRun {
+    static RUN: OnceLock<ChiSquareRun> = OnceLock::new();
+    RUN.get_or_init(|| ChiSquareRun::new(rough_lobes(), SAMPLES, 11))
+}
+
+/// The principled mixture costs several lobes per evaluation, so it gets 2^18 samples.
+fn principled_run() -> &'static ChiSquareRun {
+    static RUN: OnceLock<ChiSquareRun> = OnceLock::new();
+    RUN.get_or_init(|| ChiSquareRun::new(principled_lobes(), 1 << 18, 13))
 }
 
 /// Probability mass the pdf quadrature may misplace (measured: up to 3e-3 for roughness 0.2
@@ -370,25 +511,26 @@ fn check_lobe(
 
 #[test]
 fn every_rough_lobe_passes_chi_square_against_its_pdf() {
-    let run = rough_run();
-    let alpha = sidak_alpha(0.01, run.lobes.len());
+    let runs = [rough_run(), principled_run()];
+    let count: usize = runs.iter().map(|r| r.lobes.len()).sum();
+    let alpha = sidak_alpha(0.01, count);
     let mut failures = Vec::new();
-    for ((lobe, stats), expected) in run.lobes.iter().zip(&run.stats).zip(&run.expected) {
-        assert_eq!(
-            stats.delta, 0,
-            "{}: a rough lobe produced delta samples",
-            lobe.label
-        );
-        if let Err(e) = check_lobe(lobe, stats, expected, SAMPLES as u64, alpha) {
-            failures.push(e);
+    for run in runs {
+        for ((lobe, stats), expected) in run.lobes.iter().zip(&run.stats).zip(&run.expected) {
+            assert_eq!(
+                stats.delta, 0,
+                "{}: a rough lobe produced delta samples",
+                lobe.label
+            );
+            if let Err(e) = check_lobe(lobe, stats, expected, run.samples as u64, alpha) {
+                failures.push(e);
+            }
         }
     }
     assert!(
         failures.is_empty(),
-        "{} of {} configurations fail (alpha {alpha:.2e}, {} cells):\n{}",
+        "{} of {count} configurations fail (alpha {alpha:.2e}):\n{}",
         failures.len(),
-        run.lobes.len(),
-        run.bins.cell_count(),
         failures.join("\n")
     );
 }
@@ -511,7 +653,17 @@ fn no_nan_or_inf_at_random_and_extreme_inputs() {
         bad, 0.0,
         "{bad} non-finite or negative outputs in {n} inputs"
     );
-    let worst = values.iter().map(|v| v[1]).fold(0.0f32, f32::max);
+    let worst_at = values
+        .iter()
+        .max_by(|a, b| a[1].total_cmp(&b[1]))
+        .copied()
+        .unwrap_or_default();
+    let worst = worst_at[1];
+    assert!(
+        worst < RECIPROCITY_TOLERANCE,
+        "reflection is not reciprocal: relative error {worst} for lobe kind {}",
+        worst_at[2]
+    );
     assert!(
         worst < RECIPROCITY_TOLERANCE,
         "reflection is not reciprocal: relative error {worst}"
@@ -528,10 +680,14 @@ struct RawSample {
     eval_pdf: f32,
 }
 
-fn raw_samples(lobe: &Lobe, count: u32, seed: u32) -> Vec<RawSample> {
+/// `count` samples of each lobe, all in one dispatch; returned lobe by lobe.
+fn raw_samples(lobes: &[Lobe], count: u32, seed: u32) -> Vec<Vec<RawSample>> {
     let ctx = gpu();
-    let mut input = vec![[count, seed, 0, 0], [0; 4]];
-    input.extend(lobe.encode());
+    let mut input = vec![[count, seed, lobes.len() as u32, 0], [0; 4]];
+    for l in lobes {
+        input.extend(l.encode());
+    }
+    let total = count * lobes.len() as u32;
     let out = run_probe(
         &ctx,
         &empty_scene(),
@@ -547,13 +703,14 @@ fn raw_samples(lobe: &Lobe, count: u32, seed: u32) -> Vec<RawSample> {
             ],
             entry: "bsdf_raw",
             input: bytemuck::cast_slice(&input),
-            output_bytes: 48 * count as u64,
-            invocations: count,
+            output_bytes: 48 * total as u64,
+            invocations: total,
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));
     let v: &[[f32; 4]] = bytemuck::cast_slice(&out);
-    v.chunks(3)
+    let samples: Vec<RawSample> = v
+        .chunks(3)
         .map(|c| RawSample {
             wi: Vec3::new(c[0][0], c[0][1], c[0][2]),
             pdf: c[0][3],
@@ -563,7 +720,13 @@ fn raw_samples(lobe: &Lobe, count: u32, seed: u32) -> Vec<RawSample> {
             eval: Vec3::new(c[2][0], c[2][1], c[2][2]),
             eval_pdf: c[2][3],
         })
-        .collect()
+        .collect();
+    let mut per_lobe = Vec::new();
+    let mut rest = samples.into_iter();
+    for _ in lobes {
+        per_lobe.push(rest.by_ref().take(count as usize).collect());
+    }
+    per_lobe
 }
 
 /// Reflection about the normal.
@@ -590,16 +753,14 @@ fn fresnel(cos_i: f64, eta: f64) -> f64 {
 
 #[test]
 fn smooth_lobes_obey_reflection_and_refraction_laws_with_fresnel_odds() {
-    let n = 1 << 16;
+    let n = 1 << 14;
+    let mut lobes = Vec::new();
     for roughness in [0.0, 0.001, 0.01] {
         for eta in [1.0f32, 1.0001, 1.33, 1.5, 2.4, 4.0] {
             for angle in [0.0f32, 30.0, 60.0, 89.9] {
                 for inside in [false, true] {
-                    let wo = direction(angle, inside);
-                    let lobe = Lobe {
-                        label: format!(
-                            "smooth dielectric roughness {roughness} IOR {eta} at {angle}° inside={inside}"
-                        ),
+                    lobes.push(Lobe {
+                        label: format!("smooth dielectric roughness {roughness} IOR {eta} at {angle}° inside={inside}"),
                         kind: 2,
                         thin: false,
                         roughness,
@@ -607,88 +768,91 @@ fn smooth_lobes_obey_reflection_and_refraction_laws_with_fresnel_odds() {
                         eta,
                         f0: Vec3::ONE,
                         tint: Vec3::ONE,
-                        wo,
-                    };
-                    let samples = raw_samples(&lobe, n, 17);
-                    let expected_r = if eta == 1.0 {
-                        0.0
-                    } else {
-                        fresnel(wo.z as f64, eta as f64)
-                    };
-                    let mut reflected = 0u32;
-                    for s in &samples {
-                        assert!(s.valid && s.delta, "{}: not a delta sample", lobe.label);
-                        assert_eq!(
-                            s.eval,
-                            Vec3::ZERO,
-                            "{}: a delta lobe evaluates to non-zero",
-                            lobe.label
-                        );
-                        assert_eq!(
-                            s.eval_pdf, 0.0,
-                            "{}: a delta lobe has a density",
-                            lobe.label
-                        );
-                        // A delta sample's pdf is the probability of the choice made.
-                        let choice = if s.wi.z * wo.z > 0.0 {
-                            expected_r
-                        } else {
-                            1.0 - expected_r
-                        };
-                        assert!(
-                            (s.pdf as f64 - choice).abs() < 1e-4,
-                            "{}: choice probability {}",
-                            lobe.label,
-                            s.pdf
-                        );
-                        if s.wi.z * wo.z > 0.0 {
-                            reflected += 1;
-                            assert!(
-                                (s.wi - mirror(wo)).length() < 1e-5,
-                                "{}: reflected to {}",
-                                lobe.label,
-                                s.wi
-                            );
-                            assert!(
-                                (s.weight - Vec3::ONE).abs().max_element() < 1e-5,
-                                "{}: weight {}",
-                                lobe.label,
-                                s.weight
-                            );
-                        } else {
-                            // Snell: eta_o sin θo = eta_i sin θi, in the plane of incidence.
-                            let (eta_o, eta_i) = if wo.z > 0.0 { (1.0, eta) } else { (eta, 1.0) };
-                            let sin_o = (1.0 - wo.z * wo.z).max(0.0).sqrt();
-                            let sin_i = (1.0 - s.wi.z * s.wi.z).max(0.0).sqrt();
-                            assert!(
-                                (eta_o * sin_o - eta_i * sin_i).abs() < 1e-4,
-                                "{}: Snell violated by {}",
-                                lobe.label,
-                                s.wi
-                            );
-                            assert!(
-                                s.wi.truncate().dot(wo.truncate()) <= 1e-6,
-                                "{}: refraction left the plane",
-                                lobe.label
-                            );
-                            let expected_weight = (eta_o / eta_i).powi(2);
-                            assert!(
-                                (s.weight.x - expected_weight).abs() < 1e-4 * expected_weight,
-                                "{}: weight {}",
-                                lobe.label,
-                                s.weight
-                            );
-                        }
-                    }
-                    let fraction = reflected as f64 / n as f64;
-                    let sigma = (expected_r * (1.0 - expected_r) / n as f64).sqrt();
-                    assert!(
-                        (fraction - expected_r).abs() <= 5.0 * sigma + 1e-4,
-                        "{}: reflected {fraction:.4}, Fresnel says {expected_r:.4}",
-                        lobe.label
-                    );
+                        wo: direction(angle, inside),
+                        principled: None,
+                    });
                 }
             }
         }
+    }
+    for (lobe, samples) in lobes.iter().zip(raw_samples(&lobes, n, 17)) {
+        let (wo, eta) = (lobe.wo, lobe.eta);
+        let expected_r = if eta == 1.0 {
+            0.0
+        } else {
+            fresnel(wo.z as f64, eta as f64)
+        };
+        let mut reflected = 0u32;
+        for s in &samples {
+            assert!(s.valid && s.delta, "{}: not a delta sample", lobe.label);
+            assert_eq!(
+                s.eval,
+                Vec3::ZERO,
+                "{}: a delta lobe evaluates to non-zero",
+                lobe.label
+            );
+            assert_eq!(
+                s.eval_pdf, 0.0,
+                "{}: a delta lobe has a density",
+                lobe.label
+            );
+            // A delta sample's pdf is the probability of the choice made.
+            let choice = if s.wi.z * wo.z > 0.0 {
+                expected_r
+            } else {
+                1.0 - expected_r
+            };
+            assert!(
+                (s.pdf as f64 - choice).abs() < 1e-4,
+                "{}: choice probability {}",
+                lobe.label,
+                s.pdf
+            );
+            if s.wi.z * wo.z > 0.0 {
+                reflected += 1;
+                assert!(
+                    (s.wi - mirror(wo)).length() < 1e-5,
+                    "{}: reflected to {}",
+                    lobe.label,
+                    s.wi
+                );
+                assert!(
+                    (s.weight - Vec3::ONE).abs().max_element() < 1e-5,
+                    "{}: weight {}",
+                    lobe.label,
+                    s.weight
+                );
+            } else {
+                // Snell: eta_o sin θo = eta_i sin θi, in the plane of incidence.
+                let (eta_o, eta_i) = if wo.z > 0.0 { (1.0, eta) } else { (eta, 1.0) };
+                let sin_o = (1.0 - wo.z * wo.z).max(0.0).sqrt();
+                let sin_i = (1.0 - s.wi.z * s.wi.z).max(0.0).sqrt();
+                assert!(
+                    (eta_o * sin_o - eta_i * sin_i).abs() < 1e-4,
+                    "{}: Snell violated by {}",
+                    lobe.label,
+                    s.wi
+                );
+                assert!(
+                    s.wi.truncate().dot(wo.truncate()) <= 1e-6,
+                    "{}: refraction left the plane",
+                    lobe.label
+                );
+                let expected_weight = (eta_o / eta_i).powi(2);
+                assert!(
+                    (s.weight.x - expected_weight).abs() < 1e-4 * expected_weight,
+                    "{}: weight {}",
+                    lobe.label,
+                    s.weight
+                );
+            }
+        }
+        let fraction = reflected as f64 / n as f64;
+        let sigma = (expected_r * (1.0 - expected_r) / n as f64).sqrt();
+        assert!(
+            (fraction - expected_r).abs() <= 5.0 * sigma + 1e-4,
+            "{}: reflected {fraction:.4}, Fresnel says {expected_r:.4}",
+            lobe.label
+        );
     }
 }

@@ -177,3 +177,50 @@ fn dielectric_sample(wo: vec3<f32>, alpha: vec2<f32>, eta: f32, tint: vec3<f32>,
         * abs(dot(wi, m) * dot(wo, m) / (denom * denom * wo.z)) / (rf.etap * rf.etap);
     return BsdfSample(wi, tint * (ft / pdf), pdf, false, pdf > 0.0);
 }
+
+// Reflection off a dielectric interface alone (the specular layer over an opaque base,
+// and coats): the reflection part of the rough dielectric, always sampled, scaled by
+// `scale` (specular weight × colour). Seen from below, the frame is mirrored up: an opaque
+// base is two-sided.
+fn dielectric_reflection_eval(wo: vec3<f32>, wi: vec3<f32>, alpha: vec2<f32>, eta: f32, scale: vec3<f32>) -> vec3<f32> {
+    if (wo.z * wi.z <= 0.0 || ggx_is_smooth(alpha)) {
+        return vec3<f32>(0.0);
+    }
+    let s = select(-1.0, 1.0, wo.z > 0.0);
+    let o = vec3<f32>(wo.xy, wo.z * s);
+    let i = vec3<f32>(wi.xy, wi.z * s);
+    let m = normalize(o + i);
+    let f = fresnel_dielectric(dot(o, m), eta);
+    return scale * (f * ggx_d(m, alpha) * ggx_g2(o, i, alpha) / (4.0 * o.z));
+}
+
+fn dielectric_reflection_pdf(wo: vec3<f32>, wi: vec3<f32>, alpha: vec2<f32>) -> f32 {
+    if (wo.z * wi.z <= 0.0 || ggx_is_smooth(alpha)) {
+        return 0.0;
+    }
+    let s = select(-1.0, 1.0, wo.z > 0.0);
+    let o = vec3<f32>(wo.xy, wo.z * s);
+    let i = vec3<f32>(wi.xy, wi.z * s);
+    let m = normalize(o + i);
+    return ggx_vndf_pdf(o, m, alpha) / (4.0 * dot(o, m));
+}
+
+fn dielectric_reflection_sample(wo: vec3<f32>, alpha: vec2<f32>, eta: f32, scale: vec3<f32>, u: vec2<f32>) -> BsdfSample {
+    if (wo.z == 0.0) {
+        return no_sample();
+    }
+    let s = select(-1.0, 1.0, wo.z > 0.0);
+    let o = vec3<f32>(wo.xy, wo.z * s);
+    if (ggx_is_smooth(alpha)) {
+        let f = fresnel_dielectric(o.z, eta);
+        return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), scale * f, 1.0, true, true);
+    }
+    let m = ggx_sample_vndf(o, alpha, u);
+    let i = reflect(-o, m);
+    if (i.z <= 0.0) {
+        return no_sample();
+    }
+    let pdf = ggx_vndf_pdf(o, m, alpha) / (4.0 * dot(o, m));
+    let weight = scale * (fresnel_dielectric(dot(o, m), eta) * ggx_g2(o, i, alpha) / ggx_g1(o, alpha));
+    return BsdfSample(vec3<f32>(i.xy, i.z * s), weight, pdf, false, pdf > 0.0);
+}

@@ -5,7 +5,7 @@
 // reciprocity of reflection: f(wo, wi) = f(wi, wo).
 //
 // probe_in: [0] = (invocations, seed, 0, 0). probe_out per invocation (f32):
-// (non-finite count, max relative reciprocity error, 0, 0).
+// (non-finite count, relative reciprocity error, lobe kind, roughness).
 
 @group(1) @binding(0) var<storage, read> probe_in: array<vec4<u32>>;
 @group(1) @binding(1) var<storage, read_write> probe_out: array<vec4<f32>>;
@@ -26,6 +26,21 @@ fn extreme_direction(k: u32, u: vec2<f32>) -> vec3<f32> {
     }
 }
 
+fn extreme_principled(bits: u32, roughness: f32, anisotropy: f32, colour: f32) -> Principled {
+    let h = pcg_hash(bits);
+    let w = COLOURS[h % 5u];
+    let v = COLOURS[(h >> 3u) % 5u];
+    return Principled(
+        vec3<f32>(colour, v, 0.5), w,
+        COLOURS[(h >> 6u) % 5u], roughness, anisotropy,
+        v, vec3<f32>(1.0, colour, w), IORS[(h >> 9u) & 7u],
+        COLOURS[(h >> 12u) % 5u], vec3<f32>(w, colour, 1.0), select(0.0, 0.5, ((h >> 15u) & 1u) != 0u),
+        COLOURS[(h >> 16u) % 5u], ROUGHNESS[(h >> 19u) & 7u], IORS[(h >> 22u) & 7u], vec3<f32>(v, 1.0, colour),
+        COLOURS[(h >> 25u) % 5u], vec3<f32>(1.0, w, colour), ROUGHNESS[(h >> 28u) & 7u],
+        ((h >> 31u) & 1u) != 0u,
+    );
+}
+
 @compute @workgroup_size(64)
 fn bsdf_extremes(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let index = gid.x + gid.y * groups.x * 64u;
@@ -38,13 +53,14 @@ fn bsdf_extremes(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     let anisotropy = select(0.0, 0.9, ((bits >> 3u) & 1u) != 0u);
     let colour = COLOURS[((bits >> 4u) & 7u) % 5u];
     let p = LobeParams(
-        (bits >> 7u) % 3u,
+        select((bits >> 7u) % 5u, 5u, ((bits >> 20u) & 3u) == 0u),
         ggx_alpha(roughness, anisotropy),
         IORS[(bits >> 9u) & 7u],
         ((bits >> 12u) & 1u) != 0u,
         vec3<f32>(colour, 1.0, 0.25),
         vec3<f32>(1.0, colour, 0.5),
         extreme_direction((bits >> 13u) % 10u, rand2()),
+        extreme_principled(bits, roughness, anisotropy, colour),
     );
     let wi = extreme_direction((bits >> 17u) % 10u, rand2());
     var bad = 0.0;
@@ -59,13 +75,16 @@ fn bsdf_extremes(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_wor
     }
     // Reciprocity of reflection: f(wo, wi) |cos o| ... written with eval = f |cos i|.
     var reciprocity = 0.0;
-    if (p.wo.z * wi.z > 1e-4 && p.kind != 2u) {
+    // Reflection lobes only: glass and the principled surface scale their layers by
+    // albedos seen from wo, which is not reciprocal.
+    if (p.wo.z * wi.z > 1e-4 && p.kind != 2u && p.kind != 5u) {
         let a = f / abs(wi.z);
-        let b = lobe_eval(LobeParams(p.kind, p.alpha, p.eta, p.thin, p.f0, p.tint, wi), p.wo) / abs(p.wo.z);
-        let scale = max(max(a.x, b.x), 1e-30);
+        let b = lobe_eval(LobeParams(p.kind, p.alpha, p.eta, p.thin, p.f0, p.tint, wi, p.principled), p.wo) / abs(p.wo.z);
+        // Values below 1e-6 are rounding noise (e.g. Fresnel at IOR 1 is 0 or 1e-16).
+        let scale = max(max(a.x, b.x), 1e-6);
         if (scale < 1e30) {
             reciprocity = abs(a.x - b.x) / scale;
         }
     }
-    probe_out[index] = vec4<f32>(bad, reciprocity, 0.0, 0.0);
+    probe_out[index] = vec4<f32>(bad, reciprocity, f32(p.kind), roughness);
 }

@@ -8,8 +8,8 @@
 // are integrated again with a FINE × FINE midpoint rule in (θ, φ) weighted by sin θ:
 // near the poles uniform steps in θ resolve narrow lobes that steps in cos θ cannot.
 //
-// probe_in: [0] = (configs, 0, theta bins, phi bins), [1] = (0, 0, k, fine), then five
-// vec4 per configuration, whose first vec4's z may raise `fine` for that configuration. probe_out: configs × cells probabilities (f32).
+// probe_in: [0] = (configs, 0, theta bins, phi bins), [1] = (0, 0, k, fine), then CONFIG_STRIDE
+// vec4s per configuration, whose first vec4's z and w, when not 0, set `fine` and `k` for it. probe_out: configs × cells probabilities (f32).
 
 @group(1) @binding(0) var<storage, read> probe_in: array<vec4<u32>>;
 @group(1) @binding(1) var<storage, read_write> probe_out: array<f32>;
@@ -81,16 +81,19 @@ fn bsdf_pdf(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     }
     let config = index / cells;
     let cell = index % cells;
-    let p = lobe_params(2u + 5u * config);
+    let p = lobe_params(2u + CONFIG_STRIDE * config);
     let dz = 2.0 / f32(header.z);
     let dphi = 2.0 * PI / f32(header.w);
     let z_top = 1.0 - f32(cell / header.w) * dz;
     let f0 = f32(cell % header.w) * dphi;
-    let coarse = integrate_coarse(p, z_top, dz, f0, dphi, probe_in[1].z);
+    // A configuration may set its own orders (expensive mixtures use lower ones: lavapipe
+    // returns wrong results from invocations that run for too long).
+    let own = probe_in[2u + CONFIG_STRIDE * config];
+    let k = select(probe_in[1].z, own.w, own.w != 0u);
+    let fine = select(probe_in[1].w, own.z, own.z != 0u);
+    let coarse = integrate_coarse(p, z_top, dz, f0, dphi, k);
     var total = coarse.x;
     if (coarse.y > 2.0) {
-        // A configuration may ask for a finer rule than the default (narrow lobes).
-        let fine = max(probe_in[1].w, probe_in[2u + 5u * config].z);
         total = integrate_fine(p, z_top, dz, f0, dphi, fine);
     }
     probe_out[index] = total;

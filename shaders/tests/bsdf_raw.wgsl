@@ -9,10 +9,10 @@
 @compute @workgroup_size(64)
 fn bsdf_raw(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgroups) groups: vec3<u32>) {
     let index = gid.x + gid.y * groups.x * 64u;
-    if (index >= probe_in[0].x) {
+    if (index >= probe_in[0].x * probe_in[0].z) {
         return;
     }
-    let p = lobe_params(2u);
+    let p = lobe_params(2u + CONFIG_STRIDE * (index / probe_in[0].x));
     rng_seed(index, 0u, probe_in[0].y);
     let s = lobe_sample(p);
     let flags = select(0u, 1u, s.valid) | select(0u, 2u, s.delta);

@@ -3,7 +3,7 @@
 // configuration's histogram (atomics), and writes its partial sums.
 //
 // probe_in: [0] = (configs, samples per config, theta bins, phi bins), [1] = (seed, 0, 0, 0),
-// then five vec4 per configuration (tests/lobe_dispatch.wgsl).
+// then CONFIG_STRIDE vec4s per configuration (tests/lobe_dispatch.wgsl).
 // probe_out (u32): configs × cells histogram counts, then per invocation 8 words:
 // valid, delta, non-finite, weight sum r, g, b (f32 bits),
 // samples whose weight or pdf disagrees with eval / pdf(wi) by over 1e-2 relative, and the
@@ -33,7 +33,7 @@ fn bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     }
     let config = index / per_config;
     let cells = header.z * header.w;
-    let p = lobe_params(2u + 5u * config);
+    let p = lobe_params(2u + CONFIG_STRIDE * config);
     var valid = 0u;
     var delta = 0u;
     var non_finite = 0u;
@@ -54,8 +54,13 @@ fn bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         // Energy, not radiance: undo the 1/etap² radiance scaling of refraction, which
         // legitimately makes radiance weights exceed 1 when leaving a dense medium.
         var energy = s.weight;
-        if (p.kind == 2u && !p.thin && s.wi.z * p.wo.z < 0.0 && !dielectric_index_matched(p.eta)) {
-            let etap = select(1.0 / p.eta, p.eta, p.wo.z > 0.0);
+        var eta = p.eta;
+        if (p.kind == 5u) {
+            eta = p.principled.ior;
+        }
+        let transmissive = p.kind == 2u || (p.kind == 5u && p.principled.transmission_weight > 0.0);
+        if (transmissive && !p.thin && s.wi.z * p.wo.z < 0.0 && eta != 1.0) {
+            let etap = select(1.0 / eta, eta, p.wo.z > 0.0);
             energy *= etap * etap;
         }
         weight_sum += energy;

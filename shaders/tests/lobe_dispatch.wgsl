@@ -2,9 +2,13 @@
 // dispatch to that lobe's shipped sample / eval / pdf. No bindings of its own: the kernel
 // including it declares `probe_in: array<vec4<u32>>`.
 //
-// A lobe configuration is five vec4s starting at `base`: (kind, thin, 0, 0),
-// (alpha.x, alpha.y, eta, 0) as f32 bits, f0 or albedo, tint, wo.
-// Kinds: 0 diffuse, 1 conductor, 2 dielectric.
+// A lobe configuration is CONFIG_STRIDE vec4s starting at `base`: (kind, thin, 0, 0),
+// (alpha.x, alpha.y, eta, 0) as f32 bits, f0 or albedo, tint, wo, then for the principled
+// surface its seven packed vec4s (principled_unpack).
+// Kinds: 0 diffuse, 1 conductor, 2 dielectric, 3 sheen (roughness in alpha.x), 4 dielectric
+// reflection only (scale in tint), 5 the principled surface.
+
+const CONFIG_STRIDE: u32 = 12u;
 
 struct LobeParams {
     kind: u32,
@@ -14,6 +18,7 @@ struct LobeParams {
     f0: vec3<f32>,
     tint: vec3<f32>,
     wo: vec3<f32>,
+    principled: Principled,
 };
 
 fn lobe_params(base: u32) -> LobeParams {
@@ -26,6 +31,16 @@ fn lobe_params(base: u32) -> LobeParams {
         bitcast<vec3<f32>>(probe_in[base + 2u].xyz),
         bitcast<vec3<f32>>(probe_in[base + 3u].xyz),
         bitcast<vec3<f32>>(probe_in[base + 4u].xyz),
+        principled_unpack(
+            bitcast<vec4<f32>>(probe_in[base + 5u]),
+            bitcast<vec4<f32>>(probe_in[base + 6u]),
+            bitcast<vec4<f32>>(probe_in[base + 7u]),
+            bitcast<vec4<f32>>(probe_in[base + 8u]),
+            bitcast<vec4<f32>>(probe_in[base + 9u]),
+            bitcast<vec4<f32>>(probe_in[base + 10u]),
+            bitcast<vec4<f32>>(probe_in[base + 11u]),
+            probe_in[base].y != 0u,
+        ),
     );
 }
 
@@ -33,6 +48,9 @@ fn lobe_eval(p: LobeParams, wi: vec3<f32>) -> vec3<f32> {
     switch (p.kind) {
         case 0u: { return diffuse_eval(p.wo, wi, p.f0); }
         case 1u: { return conductor_eval(p.wo, wi, p.alpha, p.f0, p.tint); }
+        case 3u: { return sheen_eval(p.wo, wi, p.alpha.x, p.f0); }
+        case 4u: { return dielectric_reflection_eval(p.wo, wi, p.alpha, p.eta, p.tint); }
+        case 5u: { return principled_eval(p.principled, p.wo, wi).value; }
         default: { return dielectric_eval(p.wo, wi, p.alpha, p.eta, p.tint, p.thin); }
     }
 }
@@ -41,6 +59,9 @@ fn lobe_pdf(p: LobeParams, wi: vec3<f32>) -> f32 {
     switch (p.kind) {
         case 0u: { return diffuse_pdf(p.wo, wi); }
         case 1u: { return conductor_pdf(p.wo, wi, p.alpha); }
+        case 3u: { return sheen_pdf(p.wo, wi); }
+        case 4u: { return dielectric_reflection_pdf(p.wo, wi, p.alpha); }
+        case 5u: { return principled_eval(p.principled, p.wo, wi).pdf; }
         default: { return dielectric_pdf(p.wo, wi, p.alpha, p.eta, p.thin); }
     }
 }
@@ -54,6 +75,9 @@ fn lobe_sample(p: LobeParams) -> BsdfSample {
             return BsdfSample(d.wi, d.weight, d.pdf, false, d.pdf > 0.0);
         }
         case 1u: { return conductor_sample(p.wo, p.alpha, p.f0, p.tint, u); }
+        case 3u: { return sheen_sample(p.wo, p.alpha.x, p.f0, u); }
+        case 4u: { return dielectric_reflection_sample(p.wo, p.alpha, p.eta, p.tint, u); }
+        case 5u: { return principled_sample(p.principled, p.wo, uc, rand(), u); }
         default: { return dielectric_sample(p.wo, p.alpha, p.eta, p.tint, p.thin, uc, u); }
     }
 }

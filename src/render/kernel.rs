@@ -40,6 +40,9 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("bsdf/conductor.wgsl"),
     shader_file!("bsdf/dielectric.wgsl"),
     shader_file!("bsdf/lambert.wgsl"),
+    shader_file!("bsdf/sheen_table.wgsl"),
+    shader_file!("bsdf/sheen.wgsl"),
+    shader_file!("bsdf/principled.wgsl"),
     shader_file!("lights/emissive_triangle.wgsl"),
     shader_file!("lights/environment.wgsl"),
 ];

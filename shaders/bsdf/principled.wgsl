@@ -1,0 +1,255 @@
+// The principled surface: Blender's Principled BSDF / OpenPBR Surface parameters over the
+// lobes of this folder, layered by albedo scaling (each layer takes its estimated
+// directional albedo off the energy of the layers beneath):
+//
+//   coat (dielectric reflection, tinting what passes through it)
+//   └ sheen (Charlie microfibers)
+//     └ metal (GGX, F82 tint)                               weight metallic
+//       └ dielectric base                                   weight 1 - metallic
+//         ├ glass (rough or smooth, thin or solid)         weight transmission
+//         └ specular reflection over diffuse               weight 1 - transmission
+//
+// A sample picks one lobe with probability proportional to its estimated albedo toward wo;
+// the pdf for MIS is the mixture of every non-delta lobe's pdf, so any direction any lobe
+// can produce gets one consistent density. Local frame, z = shading normal; for
+// transmissive or thin-walled materials z is the outside (front) of the surface, for
+// opaque ones the caller turns it toward wo.
+//
+// Not yet: multiple-scattering energy compensation for rough GGX (rough white metal
+// darkens with roughness, as in pbrt-v4), and coat/base layering beyond albedo scaling.
+
+struct Principled {
+    base_color: vec3<f32>,
+    base_weight: f32,
+    metallic: f32,
+    roughness: f32,
+    anisotropy: f32,
+    specular_weight: f32,
+    specular_color: vec3<f32>,
+    ior: f32,
+    transmission_weight: f32,
+    transmission_color: vec3<f32>,
+    // > 0: the colour is reached at this depth inside (Beer–Lambert) and the surface
+    // itself is untinted.
+    transmission_depth: f32,
+    coat_weight: f32,
+    coat_roughness: f32,
+    coat_ior: f32,
+    coat_color: vec3<f32>,
+    sheen_weight: f32,
+    sheen_color: vec3<f32>,
+    sheen_roughness: f32,
+    thin_walled: bool,
+};
+
+const LOBE_COAT: u32 = 0u;
+const LOBE_SHEEN: u32 = 1u;
+const LOBE_METAL: u32 = 2u;
+const LOBE_GLASS: u32 = 3u;
+const LOBE_SPECULAR: u32 = 4u;
+const LOBE_DIFFUSE: u32 = 5u;
+const LOBE_COUNT: u32 = 6u;
+
+// Per-lobe colour scale (layering) and selection probability for one wo.
+struct LobeWeights {
+    scale: array<vec3<f32>, 6>,
+    probability: array<f32, 6>,
+};
+
+fn principled_glass_tint(p: Principled) -> vec3<f32> {
+    if (p.transmission_depth > 0.0 && !p.thin_walled) {
+        return vec3<f32>(1.0);
+    }
+    return p.transmission_color;
+}
+
+fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
+    var w: LobeWeights;
+    let cos_o = abs(wo.z);
+    // Coat: its Fresnel reflectance stands in for its albedo (exact when smooth).
+    let coat = clamp(p.coat_weight, 0.0, 1.0);
+    let coat_albedo = fresnel_dielectric(cos_o, max(p.coat_ior, 1.0));
+    w.scale[LOBE_COAT] = vec3<f32>(coat);
+    var below = (1.0 - coat * coat_albedo) * mix(vec3<f32>(1.0), p.coat_color, coat);
+    // Sheen: normalised where the Charlie lobe would reflect more than it receives.
+    let sheen = clamp(p.sheen_weight, 0.0, 1.0);
+    let sheen_e = sheen_albedo(cos_o, p.sheen_roughness);
+    w.scale[LOBE_SHEEN] = below * sheen * p.sheen_color / max(sheen_e, 1.0);
+    below *= 1.0 - sheen * min(sheen_e, 1.0) * max(p.sheen_color.r, max(p.sheen_color.g, p.sheen_color.b));
+    let metal = clamp(p.metallic, 0.0, 1.0);
+    w.scale[LOBE_METAL] = below * metal;
+    let dielectric = below * (1.0 - metal);
+    let glass = clamp(p.transmission_weight, 0.0, 1.0);
+    w.scale[LOBE_GLASS] = dielectric * glass;
+    let opaque = dielectric * (1.0 - glass);
+    let spec = max(p.specular_weight, 0.0) * p.specular_color;
+    w.scale[LOBE_SPECULAR] = opaque * spec;
+    let spec_albedo = fresnel_dielectric(cos_o, max(p.ior, 1.0)) * min(max(spec.r, max(spec.g, spec.b)), 1.0);
+    w.scale[LOBE_DIFFUSE] = opaque * (1.0 - spec_albedo) * p.base_color * clamp(p.base_weight, 0.0, 1.0);
+
+    // Selection by estimated albedo toward wo.
+    var e: array<f32, 6>;
+    e[LOBE_COAT] = luminance(w.scale[LOBE_COAT]) * coat_albedo;
+    e[LOBE_SHEEN] = luminance(w.scale[LOBE_SHEEN]) * min(sheen_e, 1.0);
+    let f82 = fresnel_f82(cos_o, p.base_color * p.base_weight, p.specular_color);
+    e[LOBE_METAL] = luminance(w.scale[LOBE_METAL] * f82);
+    e[LOBE_GLASS] = luminance(w.scale[LOBE_GLASS] * max(principled_glass_tint(p), vec3<f32>(0.05)));
+    e[LOBE_SPECULAR] = luminance(w.scale[LOBE_SPECULAR]) * fresnel_dielectric(cos_o, max(p.ior, 1.0));
+    e[LOBE_DIFFUSE] = luminance(w.scale[LOBE_DIFFUSE]);
+    var total = 0.0;
+    for (var i = 0u; i < LOBE_COUNT; i++) {
+        // Every lobe with any weight keeps some probability, so its pdf is never 0 where
+        // its eval is not.
+        if (any(w.scale[i] > vec3<f32>(0.0))) {
+            e[i] = max(e[i], 1e-3);
+        } else {
+            e[i] = 0.0;
+        }
+        total += e[i];
+    }
+    for (var i = 0u; i < LOBE_COUNT; i++) {
+        w.probability[i] = select(0.0, e[i] / total, total > 0.0);
+    }
+    return w;
+}
+
+fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    let alpha = ggx_alpha(p.roughness, p.anisotropy);
+    switch (lobe) {
+        case LOBE_COAT: {
+            return dielectric_reflection_eval(wo, wi, ggx_alpha(p.coat_roughness, 0.0), p.coat_ior, vec3<f32>(1.0));
+        }
+        case LOBE_SHEEN: { return sheen_eval(wo, wi, p.sheen_roughness, vec3<f32>(1.0)); }
+        case LOBE_METAL: { return conductor_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha, p.base_color * p.base_weight, p.specular_color); }
+        case LOBE_GLASS: { return dielectric_eval(wo, wi, alpha, p.ior, principled_glass_tint(p), p.thin_walled); }
+        case LOBE_SPECULAR: { return dielectric_reflection_eval(wo, wi, alpha, p.ior, vec3<f32>(1.0)); }
+        default: { return diffuse_eval(wo, wi, vec3<f32>(1.0)); }
+    }
+}
+
+fn principled_lobe_pdf(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    let alpha = ggx_alpha(p.roughness, p.anisotropy);
+    switch (lobe) {
+        case LOBE_COAT: { return dielectric_reflection_pdf(wo, wi, ggx_alpha(p.coat_roughness, 0.0)); }
+        case LOBE_SHEEN: { return sheen_pdf(wo, wi); }
+        case LOBE_METAL: { return conductor_pdf(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha); }
+        case LOBE_GLASS: { return dielectric_pdf(wo, wi, alpha, p.ior, p.thin_walled); }
+        case LOBE_SPECULAR: { return dielectric_reflection_pdf(wo, wi, alpha); }
+        default: { return diffuse_pdf(wo, wi); }
+    }
+}
+
+struct PrincipledEval {
+    // f · |cos θi|
+    value: vec3<f32>,
+    pdf: f32,
+};
+
+// Sum over the non-delta lobes (delta lobes are 0 for every direction given).
+fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEval {
+    let w = principled_weights(p, wo);
+    var value = vec3<f32>(0.0);
+    var pdf = 0.0;
+    for (var i = 0u; i < LOBE_COUNT; i++) {
+        if (w.probability[i] > 0.0) {
+            value += w.scale[i] * principled_lobe_eval(p, i, wo, wi);
+            pdf += w.probability[i] * principled_lobe_pdf(p, i, wo, wi);
+        }
+    }
+    return PrincipledEval(value, pdf);
+}
+
+fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32>) -> BsdfSample {
+    let w = principled_weights(p, wo);
+    // Pick a lobe by its probability.
+    var lobe = LOBE_DIFFUSE;
+    var acc = 0.0;
+    var found = false;
+    for (var i = 0u; i < LOBE_COUNT; i++) {
+        acc += w.probability[i];
+        if (!found && w.probability[i] > 0.0 && uc < acc) {
+            lobe = i;
+            found = true;
+        }
+    }
+    if (!found) {
+        // Rounding left uc above the last partial sum: take the last lobe in use.
+        for (var i = 0u; i < LOBE_COUNT; i++) {
+            if (w.probability[i] > 0.0) {
+                lobe = i;
+                found = true;
+            }
+        }
+    }
+    if (!found) {
+        return no_sample();
+    }
+    let alpha = ggx_alpha(p.roughness, p.anisotropy);
+    var s: BsdfSample;
+    switch (lobe) {
+        case LOBE_COAT: {
+            s = dielectric_reflection_sample(wo, ggx_alpha(p.coat_roughness, 0.0), p.coat_ior, vec3<f32>(1.0), u);
+        }
+        case LOBE_SHEEN: { s = sheen_sample(wo, p.sheen_roughness, vec3<f32>(1.0), u); }
+        case LOBE_METAL: {
+            let side = select(-1.0, 1.0, wo.z >= 0.0);
+            s = conductor_sample(vec3<f32>(wo.xy, abs(wo.z)), alpha, p.base_color * p.base_weight, p.specular_color, u);
+            s.wi.z *= side;
+        }
+        case LOBE_GLASS: { s = dielectric_sample(wo, alpha, p.ior, principled_glass_tint(p), p.thin_walled, ul, u); }
+        case LOBE_SPECULAR: { s = dielectric_reflection_sample(wo, alpha, p.ior, vec3<f32>(1.0), u); }
+        default: {
+            let d = diffuse_sample(wo, vec3<f32>(1.0), u);
+            s = BsdfSample(d.wi, d.weight, d.pdf, false, d.pdf > 0.0);
+        }
+    }
+    if (!s.valid) {
+        return s;
+    }
+    if (s.delta) {
+        // Only this lobe can produce this direction: its weight over its choice odds.
+        s.weight = w.scale[lobe] * s.weight / w.probability[lobe];
+        s.pdf *= w.probability[lobe];
+        return s;
+    }
+    // A direction several lobes can produce: the mixture's value over its density.
+    let e = principled_eval(p, wo, s.wi);
+    if (e.pdf <= 0.0) {
+        return no_sample();
+    }
+    return BsdfSample(s.wi, e.value / e.pdf, e.pdf, false, true);
+}
+
+// Beer–Lambert extinction coefficient inside a transmissive principled material.
+fn principled_extinction(p: Principled) -> vec3<f32> {
+    if (p.transmission_depth <= 0.0 || p.thin_walled) {
+        return vec3<f32>(0.0);
+    }
+    return -log(clamp(p.transmission_color, vec3<f32>(1e-6), vec3<f32>(1.0))) / p.transmission_depth;
+}
+
+// The packed form materials are stored in (see `Material` in scene.wgsl):
+// (base colour, base weight), (specular colour, specular weight), (transmission colour,
+// transmission weight), (coat colour, coat weight), (sheen colour, sheen weight),
+// (metallic, roughness, anisotropy, IOR), (coat roughness, coat IOR, sheen roughness,
+// transmission depth).
+fn principled_unpack(
+    base: vec4<f32>,
+    specular: vec4<f32>,
+    transmission: vec4<f32>,
+    coat: vec4<f32>,
+    sheen: vec4<f32>,
+    params: vec4<f32>,
+    layers: vec4<f32>,
+    thin_walled: bool,
+) -> Principled {
+    return Principled(
+        base.rgb, base.w,
+        params.x, params.y, params.z,
+        specular.w, specular.rgb, params.w,
+        transmission.w, transmission.rgb, layers.w,
+        coat.w, layers.x, layers.y, coat.rgb,
+        sheen.w, sheen.rgb, layers.z,
+        thin_walled,
+    );
+}
