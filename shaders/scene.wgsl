@@ -69,9 +69,12 @@ struct Instance {
 const INSTANCE_HAS_NORMALS: u32 = 1u;
 const INSTANCE_HAS_UVS: u32 = 2u;
 
+// A principled material: the seven vec4s of `principled_unpack`, emission (+ opacity in
+// w), and flags (x: thin-walled, y: transmissive).
 struct Material {
-    base_color: vec4<f32>,
+    principled: array<vec4<f32>, 7>,
     emission: vec4<f32>,
+    flags: vec4<u32>,
 };
 
 // An emissive triangle in world space, for next-event estimation.

@@ -35,11 +35,7 @@ pub fn large_scene(triangles: u32) -> Scene {
     scene.environment = Vec3::splat(0.2);
     let grey = scene.add_material(Material::diffuse("grey", Vec3::splat(0.6)));
     let orange = scene.add_material(Material::diffuse("orange", Vec3::new(0.8, 0.4, 0.1)));
-    let light = scene.add_material(Material {
-        name: "light".into(),
-        base_color: Vec3::ZERO,
-        emission: Vec3::splat(8.0),
-    });
+    let light = scene.add_material(Material::emitter("light", Vec3::splat(8.0)));
     let sphere = scene.add_mesh(shapes::displaced_sphere(triangles));
     let quad = scene.add_mesh(shapes::quad());
     scene.add_instance(

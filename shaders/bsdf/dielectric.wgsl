@@ -124,7 +124,8 @@ fn dielectric_sample(wo: vec3<f32>, alpha: vec2<f32>, eta: f32, tint: vec3<f32>,
     if (dielectric_index_matched(eta) || ggx_is_smooth(alpha)) {
         var r = fresnel_dielectric(wo.z, eta);
         if (thin) {
-            r = thin_slab_reflectance(r);
+            // A thin wall has no inside: both faces see air on the far side.
+            r = thin_slab_reflectance(fresnel_dielectric(abs(wo.z), eta));
         }
         if (uc < r) {
             return BsdfSample(vec3<f32>(-wo.x, -wo.y, wo.z), vec3<f32>(1.0), r, true, true);

@@ -1,5 +1,7 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling
-// (Veach 1997, ch. 9; the structure of Mitsuba 3's path.cpp and pbrt-v4's PathIntegrator).
+// (Veach 1997, ch. 9; the structure of Mitsuba 3's path.cpp and pbrt-v4's PathIntegrator)
+// over the principled surface (shaders/bsdf/principled.wgsl), with alpha cut-outs and
+// Beer–Lambert absorption inside transmissive objects.
 // Each invocation owns one pixel of the current tile and renders `sample_count` samples
 // into it, adding them to the film with Kahan summation so that sums over 10^5 samples do
 // not drift.
@@ -18,8 +20,24 @@ fn is_finite3(v: vec3<f32>) -> bool {
 
 var<private> rays_traced: u32;
 
-// Next-event estimation: one light sample, weighted against BSDF sampling.
-fn sample_direct(s: Surface, n: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
+// Surfaces a path may pass through (alpha cut-outs) before it counts as lost.
+const MAX_PASS_THROUGH: u32 = 64u;
+
+fn material_principled(m: Material) -> Principled {
+    return principled_unpack(
+        m.principled[0], m.principled[1], m.principled[2], m.principled[3],
+        m.principled[4], m.principled[5], m.principled[6],
+        m.flags.x != 0u,
+    );
+}
+
+fn to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n));
+}
+
+// Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
+// geometric normal on the side the shading frame's z points to.
+fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled) -> vec3<f32> {
     let p_env = params.environment.w;
     let u_pick = rand();
     let u = rand2();
@@ -37,21 +55,25 @@ fn sample_direct(s: Surface, n: vec3<f32>, albedo: vec3<f32>) -> vec3<f32> {
     if (ls.pdf <= 0.0) {
         return vec3<f32>(0.0);
     }
-    let f = lambert_eval(albedo, n, ls.wi);
-    let cos_i = dot(n, ls.wi);
-    // Light from below the geometric surface cannot arrive, whatever the shading normal says.
-    if (cos_i <= 0.0 || dot(ls.wi, s.ng) * dot(n, s.ng) <= 0.0 || all(f == vec3<f32>(0.0))) {
+    let wi = to_local(f, ls.wi);
+    // The shading and geometric normals must agree on which side the light is, or light
+    // would leak through the surface.
+    if (dot(ls.wi, ng) * wi.z <= 0.0) {
         return vec3<f32>(0.0);
     }
-    let origin = offset_ray_origin(s.pe, s.ng, ls.wi);
+    let e = principled_eval(p, wo, wi);
+    if (all(e.value == vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    let origin = offset_ray_origin(s.pe, ng, ls.wi);
     // Stop short of the light by its own rounding error: the light must not shadow itself.
     let t_max = ls.dist * (1.0 - 1e-4);
     rays_traced++;
     if (occluded(Ray(origin, ls.wi), t_max)) {
         return vec3<f32>(0.0);
     }
-    let w = power_heuristic(ls.pdf, lambert_pdf(n, ls.wi));
-    return f * cos_i * ls.radiance * (w / ls.pdf);
+    let w = power_heuristic(ls.pdf, e.pdf);
+    return e.value * ls.radiance * (w / ls.pdf);
 }
 
 fn trace_path(primary: Ray) -> vec3<f32> {
@@ -59,13 +81,23 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     var radiance = vec3<f32>(0.0);
     var throughput = vec3<f32>(1.0);
     var prev_bsdf_pdf = 0.0;
+    // The camera, like a delta lobe, could not have been sampled by light sampling.
+    var prev_delta = true;
+    // Extinction of the medium the path is in (inside a transmissive object).
+    var extinction = vec3<f32>(0.0);
     let nee = light_sampling_enabled();
-    for (var depth = 0u; ; depth++) {
+    var depth = 0u;
+    var passes = 0u;
+    loop {
         rays_traced++;
         let hit = intersect_scene(ray);
+        if (any(extinction > vec3<f32>(0.0))) {
+            // Beer–Lambert over the segment; a medium without an exit absorbs everything.
+            throughput *= exp(-extinction * select(3.0e38, hit.t, hit.hit));
+        }
         if (!hit.hit) {
             var w = 1.0;
-            if (nee && depth > 0u && params.environment.w > 0.0) {
+            if (nee && !prev_delta && params.environment.w > 0.0) {
                 w = power_heuristic(prev_bsdf_pdf, params.environment.w * environment_pdf(ray.dir));
             }
             radiance += throughput * environment_radiance(ray.dir) * w;
@@ -75,10 +107,21 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let material = materials[s.material];
         let front = dot(ray.dir, s.ng) < 0.0;
 
+        // Alpha cut-out: the path continues through the surface without scattering.
+        let opacity = material.emission.w;
+        if (opacity < 1.0 && rand() >= opacity) {
+            passes++;
+            if (passes > MAX_PASS_THROUGH) {
+                break;
+            }
+            ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
+            continue;
+        }
+
         let emission = material.emission.rgb;
         if (front && any(emission > vec3<f32>(0.0))) {
             var w = 1.0;
-            if (nee && depth > 0u) {
+            if (nee && !prev_delta) {
                 let light_pdf = (1.0 - params.environment.w) * light_triangle_pdf(emission, hit.t, -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
@@ -88,23 +131,37 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             break;
         }
 
-        // Two-sided surface: face the normals toward the incoming ray.
-        let ng = select(-s.ng, s.ng, front);
-        let ns = select(-s.ns, s.ns, front);
-        let oriented = Surface(s.pe, ng, ns, s.uv, s.material);
-        let albedo = material.base_color.rgb;
+        // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
+        // Surfaces light passes through keep their front, so inside and outside differ.
+        let transmissive = material.flags.y != 0u;
+        let flip = !transmissive && !front;
+        let ng = select(s.ng, -s.ng, flip);
+        let ns = select(s.ns, -s.ns, flip);
+        let frame = frame_from_normal(ns);
+        let wo = to_local(frame, -ray.dir);
+        let p = material_principled(material);
 
         if (nee) {
-            radiance += throughput * sample_direct(oriented, ns, albedo);
+            radiance += throughput * sample_direct(s, ng, frame, wo, p);
         }
 
-        let bs = lambert_sample(albedo, ns, rand2());
-        // A direction under the geometric surface would pass through it: the path ends.
-        if (bs.pdf <= 0.0 || dot(bs.wi, ng) <= 0.0) {
+        let bs = principled_sample(p, wo, rand(), rand(), rand2());
+        if (!bs.valid) {
+            break;
+        }
+        let wi = normalize(frame_to_world(frame, bs.wi));
+        // A direction the shading frame calls reflection but the geometry calls
+        // transmission (or the reverse) would pass through the surface: the path ends.
+        if (dot(wi, ng) * bs.wi.z <= 0.0) {
             break;
         }
         throughput *= bs.weight;
         prev_bsdf_pdf = bs.pdf;
+        prev_delta = bs.delta;
+        if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
+            // Crossed the surface: entering through the front, or leaving through it.
+            extinction = select(vec3<f32>(0.0), principled_extinction(p), dot(wi, s.ng) < 0.0);
+        }
 
         if (depth >= RR_START_DEPTH) {
             let q = max(0.05, 1.0 - max(throughput.r, max(throughput.g, throughput.b)));
@@ -113,7 +170,8 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             }
             throughput /= 1.0 - q;
         }
-        ray = Ray(offset_ray_origin(oriented.pe, ng, bs.wi), bs.wi);
+        ray = Ray(offset_ray_origin(s.pe, ng, wi), wi);
+        depth++;
     }
     return radiance;
 }

@@ -95,6 +95,29 @@ pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
 }
 
+/// The GPU form of a material (`Material` in shaders/scene.wgsl).
+pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
+    let v = |c: Vec3, w: f32| [c.x, c.y, c.z, w];
+    GpuMaterial {
+        principled: [
+            v(m.base_color, m.base_weight),
+            v(m.specular_color, m.specular_weight),
+            v(m.transmission_color, m.transmission_weight),
+            v(m.coat_color, m.coat_weight),
+            v(m.sheen_color, m.sheen_weight),
+            [m.metallic, m.roughness, m.anisotropy, m.ior],
+            [
+                m.coat_roughness,
+                m.coat_ior,
+                m.sheen_roughness,
+                m.transmission_depth,
+            ],
+        ],
+        emission: v(m.emission, m.opacity),
+        flags: [m.thin_walled as u32, m.is_transmissive() as u32, 0, 0],
+    }
+}
+
 impl SceneArrays {
     pub fn build(scene: &Scene, accel: &SceneAccel) -> Self {
         let mut a = SceneArrays::default();
@@ -161,14 +184,7 @@ impl SceneArrays {
                 .collect();
         }
 
-        a.materials = scene
-            .materials
-            .iter()
-            .map(|m| GpuMaterial {
-                base_color: m.base_color.extend(1.0).into(),
-                emission: m.emission.extend(0.0).into(),
-            })
-            .collect();
+        a.materials = scene.materials.iter().map(pack_material).collect();
 
         a.build_lights(scene);
         a

@@ -56,8 +56,12 @@ pub struct GpuTriangle {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuMaterial {
-    pub base_color: [f32; 4],
+    /// The seven vec4s `principled_unpack` reads (shaders/bsdf/principled.wgsl).
+    pub principled: [[f32; 4]; 7],
+    /// rgb: emitted radiance; w: opacity.
     pub emission: [f32; 4],
+    /// x: 1 if thin-walled; y: 1 if light passes through (keeps geometric orientation).
+    pub flags: [u32; 4],
 }
 
 #[repr(C)]
@@ -85,7 +89,7 @@ mod tests {
         assert_eq!(std::mem::size_of::<GpuParams>(), 176);
         assert_eq!(std::mem::size_of::<GpuInstance>(), 112);
         assert_eq!(std::mem::size_of::<GpuTriangle>(), 48);
-        assert_eq!(std::mem::size_of::<GpuMaterial>(), 32);
+        assert_eq!(std::mem::size_of::<GpuMaterial>(), 144);
         assert_eq!(std::mem::size_of::<GpuLightTriangle>(), 64);
         assert_eq!(std::mem::size_of::<crate::accel::BvhNode>(), 32);
     }

@@ -126,23 +126,100 @@ enum Projection {
     },
 }
 
+/// The principled material's parameters (docs/SCENE_FORMAT.md lists them); any left out
+/// take Blender's defaults.
 #[derive(Debug, Serialize, Deserialize)]
-#[serde(deny_unknown_fields)]
+#[serde(deny_unknown_fields, default)]
 struct MaterialDesc {
-    #[serde(default = "default_base_color")]
     base_color: [f32; 3],
-    #[serde(default)]
+    base_weight: f32,
+    metallic: f32,
+    roughness: f32,
+    anisotropy: f32,
+    specular_weight: f32,
+    specular_color: [f32; 3],
+    ior: f32,
+    transmission_weight: f32,
+    transmission_color: [f32; 3],
+    transmission_depth: f32,
+    coat_weight: f32,
+    coat_roughness: f32,
+    coat_ior: f32,
+    coat_color: [f32; 3],
+    sheen_weight: f32,
+    sheen_color: [f32; 3],
+    sheen_roughness: f32,
     emission: [f32; 3],
-    #[serde(default = "one")]
     emission_strength: f32,
+    opacity: f32,
+    thin_walled: bool,
 }
 
-fn default_base_color() -> [f32; 3] {
-    [0.8, 0.8, 0.8]
+impl Default for MaterialDesc {
+    fn default() -> Self {
+        let m = Material::default();
+        Self {
+            base_color: m.base_color.into(),
+            base_weight: m.base_weight,
+            metallic: m.metallic,
+            roughness: m.roughness,
+            anisotropy: m.anisotropy,
+            specular_weight: m.specular_weight,
+            specular_color: m.specular_color.into(),
+            ior: m.ior,
+            transmission_weight: m.transmission_weight,
+            transmission_color: m.transmission_color.into(),
+            transmission_depth: m.transmission_depth,
+            coat_weight: m.coat_weight,
+            coat_roughness: m.coat_roughness,
+            coat_ior: m.coat_ior,
+            coat_color: m.coat_color.into(),
+            sheen_weight: m.sheen_weight,
+            sheen_color: m.sheen_color.into(),
+            sheen_roughness: m.sheen_roughness,
+            emission: m.emission.into(),
+            emission_strength: 1.0,
+            opacity: m.opacity,
+            thin_walled: m.thin_walled,
+        }
+    }
 }
 
-fn one() -> f32 {
-    1.0
+impl MaterialDesc {
+    fn to_material(&self, name: &str) -> Result<Material, String> {
+        let strength = self.emission_strength;
+        if !strength.is_finite() || strength < 0.0 {
+            return Err(format!(
+                "emission_strength {strength} must be finite and non-negative"
+            ));
+        }
+        let material = Material {
+            name: name.to_owned(),
+            base_color: self.base_color.into(),
+            base_weight: self.base_weight,
+            metallic: self.metallic,
+            roughness: self.roughness,
+            anisotropy: self.anisotropy,
+            specular_weight: self.specular_weight,
+            specular_color: self.specular_color.into(),
+            ior: self.ior,
+            transmission_weight: self.transmission_weight,
+            transmission_color: self.transmission_color.into(),
+            transmission_depth: self.transmission_depth,
+            coat_weight: self.coat_weight,
+            coat_roughness: self.coat_roughness,
+            coat_ior: self.coat_ior,
+            coat_color: self.coat_color.into(),
+            sheen_weight: self.sheen_weight,
+            sheen_color: self.sheen_color.into(),
+            sheen_roughness: self.sheen_roughness,
+            emission: Vec3::from(self.emission) * strength,
+            opacity: self.opacity,
+            thin_walled: self.thin_walled,
+        };
+        material.validate()?;
+        Ok(material)
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -326,17 +403,10 @@ fn build_scene(
 
     let mut material_ids = BTreeMap::new();
     for (name, m) in &file.materials {
-        let strength = m.emission_strength;
-        if !strength.is_finite() || strength < 0.0 {
-            return Err(invalid(format!(
-                "material \"{name}\": emission_strength {strength} must be finite and non-negative"
-            )));
-        }
-        let id = scene.add_material(Material {
-            name: name.clone(),
-            base_color: m.base_color.into(),
-            emission: Vec3::from(m.emission) * strength,
-        });
+        let material = m
+            .to_material(name)
+            .map_err(|e| invalid(format!("material \"{name}\": {e}")))?;
+        let id = scene.add_material(material);
         material_ids.insert(name.as_str(), id);
     }
 

@@ -7,11 +7,13 @@
 
 mod camera;
 pub mod file;
+mod material;
 mod mesh;
 pub mod shapes;
 
 pub use camera::Camera;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene};
+pub use material::Material;
 pub use mesh::Mesh;
 
 use std::path::Path;
@@ -26,31 +28,6 @@ const DEFAULT_SCENE_SOURCE: &str = include_str!("../../assets/scenes/cornell-box
 pub fn default_scene() -> Result<Scene, SceneError> {
     let base = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/scenes");
     parse_scene(DEFAULT_SCENE_SOURCE, Path::new(DEFAULT_SCENE_PATH), &base)
-}
-
-/// A surface material. For now a fixed parameter set; the material-graph compiler
-/// replaces it with compiled node graphs.
-#[derive(Clone, Debug, PartialEq)]
-pub struct Material {
-    pub name: String,
-    /// Diffuse reflectance (linear RGB, each channel in [0, 1]).
-    pub base_color: Vec3,
-    /// Emitted radiance (linear RGB, W·sr⁻¹·m⁻², already multiplied by its strength).
-    pub emission: Vec3,
-}
-
-impl Material {
-    pub fn diffuse(name: &str, base_color: Vec3) -> Self {
-        Self {
-            name: name.to_owned(),
-            base_color,
-            emission: Vec3::ZERO,
-        }
-    }
-
-    pub fn is_emissive(&self) -> bool {
-        self.emission.max_element() > 0.0
-    }
 }
 
 /// One placement of a mesh in the world. Many instances may share a mesh, which is
@@ -158,21 +135,8 @@ impl Scene {
             ));
         }
         for m in &self.materials {
-            if !m.base_color.is_finite()
-                || m.base_color.min_element() < 0.0
-                || m.base_color.max_element() > 1.0
-            {
-                return Err(format!(
-                    "material \"{}\": base_color {} must lie in [0, 1]",
-                    m.name, m.base_color
-                ));
-            }
-            if !m.emission.is_finite() || m.emission.min_element() < 0.0 {
-                return Err(format!(
-                    "material \"{}\": emission {} must be finite and non-negative",
-                    m.name, m.emission
-                ));
-            }
+            m.validate()
+                .map_err(|e| format!("material \"{}\": {e}", m.name))?;
         }
         for mesh in &self.meshes {
             mesh.validate()

@@ -1,0 +1,158 @@
+//! The principled surface material: the parameters of Blender's Principled BSDF / OpenPBR
+//! Surface, evaluated by `shaders/bsdf/principled.wgsl`. Defaults are Blender's.
+//!
+//! This is the fixed parameter set every material has; the material-graph compiler will
+//! compute these parameters per shading point instead.
+
+use glam::Vec3;
+
+#[derive(Clone, Debug, PartialEq)]
+pub struct Material {
+    pub name: String,
+    /// Diffuse albedo, or metal reflectance at normal incidence (linear RGB in [0, 1]).
+    pub base_color: Vec3,
+    pub base_weight: f32,
+    pub metallic: f32,
+    /// Perceptual roughness in [0, 1] (GGX alpha = roughness²).
+    pub roughness: f32,
+    /// Stretches the highlight along the tangent, in [0, 1].
+    pub anisotropy: f32,
+    pub specular_weight: f32,
+    /// Tints dielectric reflection; for metals, the edge tint at 82° (F82).
+    pub specular_color: Vec3,
+    pub ior: f32,
+    pub transmission_weight: f32,
+    pub transmission_color: Vec3,
+    /// Depth at which light inside reaches `transmission_color` (Beer–Lambert); 0 tints
+    /// the surface instead.
+    pub transmission_depth: f32,
+    pub coat_weight: f32,
+    pub coat_roughness: f32,
+    pub coat_ior: f32,
+    pub coat_color: Vec3,
+    pub sheen_weight: f32,
+    pub sheen_color: Vec3,
+    pub sheen_roughness: f32,
+    /// Emitted radiance (colour × strength), from the front side.
+    pub emission: Vec3,
+    /// 1 opaque, 0 invisible (alpha cut-out).
+    pub opacity: f32,
+    /// A surface with no inside (leaves, paper, soap film): light passes without bending.
+    pub thin_walled: bool,
+}
+
+impl Default for Material {
+    fn default() -> Self {
+        Self {
+            name: String::new(),
+            base_color: Vec3::splat(0.8),
+            base_weight: 1.0,
+            metallic: 0.0,
+            roughness: 0.5,
+            anisotropy: 0.0,
+            specular_weight: 1.0,
+            specular_color: Vec3::ONE,
+            ior: 1.5,
+            transmission_weight: 0.0,
+            transmission_color: Vec3::ONE,
+            transmission_depth: 0.0,
+            coat_weight: 0.0,
+            coat_roughness: 0.03,
+            coat_ior: 1.5,
+            coat_color: Vec3::ONE,
+            sheen_weight: 0.0,
+            sheen_color: Vec3::ONE,
+            sheen_roughness: 0.3,
+            emission: Vec3::ZERO,
+            opacity: 1.0,
+            thin_walled: false,
+        }
+    }
+}
+
+impl Material {
+    /// A purely Lambertian surface (no specular layer).
+    pub fn diffuse(name: &str, base_color: Vec3) -> Self {
+        Self {
+            name: name.to_owned(),
+            base_color,
+            specular_weight: 0.0,
+            ..Self::default()
+        }
+    }
+
+    /// A black surface emitting `radiance` from its front side.
+    pub fn emitter(name: &str, radiance: Vec3) -> Self {
+        Self {
+            base_color: Vec3::ZERO,
+            emission: radiance,
+            ..Self::diffuse(name, Vec3::ZERO)
+        }
+    }
+
+    pub fn is_emissive(&self) -> bool {
+        self.emission.max_element() > 0.0
+    }
+
+    /// Whether light can pass through (refraction, thin walls, cut-outs): such surfaces
+    /// keep their geometric orientation instead of being turned toward the viewer.
+    pub fn is_transmissive(&self) -> bool {
+        self.transmission_weight > 0.0 || self.thin_walled
+    }
+
+    pub fn validate(&self) -> Result<(), String> {
+        let colours = [
+            ("base_color", self.base_color),
+            ("specular_color", self.specular_color),
+            ("transmission_color", self.transmission_color),
+            ("coat_color", self.coat_color),
+            ("sheen_color", self.sheen_color),
+        ];
+        for (field, c) in colours {
+            if !c.is_finite() || c.min_element() < 0.0 || c.max_element() > 1.0 {
+                return Err(format!("{field} {c} must lie in [0, 1]"));
+            }
+        }
+        let unit = [
+            ("base_weight", self.base_weight),
+            ("metallic", self.metallic),
+            ("roughness", self.roughness),
+            ("anisotropy", self.anisotropy),
+            ("transmission_weight", self.transmission_weight),
+            ("coat_weight", self.coat_weight),
+            ("coat_roughness", self.coat_roughness),
+            ("sheen_weight", self.sheen_weight),
+            ("sheen_roughness", self.sheen_roughness),
+            ("opacity", self.opacity),
+        ];
+        for (field, v) in unit {
+            if !(0.0..=1.0).contains(&v) {
+                return Err(format!("{field} {v} must lie in [0, 1]"));
+            }
+        }
+        if !(self.specular_weight.is_finite() && self.specular_weight >= 0.0) {
+            return Err(format!(
+                "specular_weight {} must be finite and non-negative",
+                self.specular_weight
+            ));
+        }
+        for (field, v) in [("ior", self.ior), ("coat_ior", self.coat_ior)] {
+            if !(v.is_finite() && v >= 1.0) {
+                return Err(format!("{field} {v} must be at least 1"));
+            }
+        }
+        if !(self.transmission_depth.is_finite() && self.transmission_depth >= 0.0) {
+            return Err(format!(
+                "transmission_depth {} must be finite and non-negative",
+                self.transmission_depth
+            ));
+        }
+        if !self.emission.is_finite() || self.emission.min_element() < 0.0 {
+            return Err(format!(
+                "emission {} must be finite and non-negative",
+                self.emission
+            ));
+        }
+        Ok(())
+    }
+}
