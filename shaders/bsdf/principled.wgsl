@@ -145,8 +145,18 @@ struct PrincipledEval {
     pdf: f32,
 };
 
+// Only the diffuse lobe has weight: the common matte case skips the layering arithmetic
+// (which is exact here too, only slower).
+fn principled_is_diffuse(p: Principled) -> bool {
+    return p.metallic == 0.0 && p.specular_weight == 0.0 && p.coat_weight == 0.0
+        && p.sheen_weight == 0.0 && p.transmission_weight == 0.0;
+}
+
 // Sum over the non-delta lobes (delta lobes are 0 for every direction given).
 fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEval {
+    if (principled_is_diffuse(p)) {
+        return PrincipledEval(diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0)), diffuse_pdf(wo, wi));
+    }
     let w = principled_weights(p, wo);
     var value = vec3<f32>(0.0);
     var pdf = 0.0;
@@ -160,6 +170,10 @@ fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEva
 }
 
 fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32>) -> BsdfSample {
+    if (principled_is_diffuse(p)) {
+        let d = diffuse_sample(wo, p.base_color * clamp(p.base_weight, 0.0, 1.0), u);
+        return BsdfSample(d.wi, d.weight, d.pdf, false, d.pdf > 0.0);
+    }
     let w = principled_weights(p, wo);
     // Pick a lobe by its probability.
     var lobe = LOBE_DIFFUSE;
