@@ -35,7 +35,8 @@ struct Params {
     cam_lens: vec4<f32>,
     // rgb: uniform environment radiance; w: probability of picking the environment in NEE
     environment: vec4<f32>,
-    // x: total power of emissive triangles (sum of luminance * area)
+    // x: total power of emissive triangles (sum of luminance * area); y: probability of
+    // picking an emissive triangle in NEE; z: number of analytic lights.
     light_totals: vec4<f32>,
 };
 
@@ -86,6 +87,21 @@ struct LightTriangle {
     emission: vec4<f32>,
 };
 
+// A point, spot or distant light (src/scene/light.rs).
+struct AnalyticLight {
+    // xyz: position (point, spot) or the direction light travels (distant); w: kind
+    // (0 point, 1 spot, 2 distant).
+    position: vec4<f32>,
+    // xyz: spot axis (unit); w: sphere radius, or for distant lights 1 - cos of the disk's
+    // angular radius.
+    axis: vec4<f32>,
+    // rgb: intensity (point, spot) or irradiance (distant); w: pick probability.
+    intensity: vec4<f32>,
+    // x, y: cosines of the spot's outer and inner cone; w: cumulative pick probability,
+    // counted after the environment and the emissive triangles.
+    shape: vec4<f32>,
+};
+
 struct Stats {
     rays: atomic<u32>,
     non_finite: atomic<u32>,
@@ -117,3 +133,4 @@ struct Stats {
 @group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;
 // Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
 @group(0) @binding(12) var<storage, read> light_cdf: array<f32>;
+@group(0) @binding(19) var<storage, read> analytic_lights: array<AnalyticLight>;

@@ -38,19 +38,24 @@ fn to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
 // Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
 // geometric normal on the side the shading frame's z points to.
 fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled) -> vec3<f32> {
+    // One light: the environment, an emissive triangle or an analytic light, each family
+    // picked with the probability the host estimated from its power.
     let p_env = params.environment.w;
+    let p_tri = params.light_totals.y;
     let u_pick = rand();
     let u = rand2();
     var ls: LightSample;
     if (u_pick < p_env) {
         ls = sample_environment(u);
         ls.pdf *= p_env;
+    } else if (u_pick < p_env + p_tri) {
+        ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / p_tri, u);
+        ls.pdf *= p_tri;
     } else {
-        if (params.light_count == 0u) {
+        if (params.light_totals.z < 1.0) {
             return vec3<f32>(0.0);
         }
-        ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / (1.0 - p_env), u);
-        ls.pdf *= 1.0 - p_env;
+        ls = sample_analytic_light(pick_analytic_light(u_pick), s.pe.p, u);
     }
     if (ls.pdf <= 0.0) {
         return vec3<f32>(0.0);
@@ -72,7 +77,7 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     if (occluded(Ray(origin, ls.wi), t_max)) {
         return vec3<f32>(0.0);
     }
-    let w = power_heuristic(ls.pdf, e.pdf);
+    let w = select(1.0, power_heuristic(ls.pdf, e.pdf), ls.mis);
     return e.value * ls.radiance * (w / ls.pdf);
 }
 
@@ -122,7 +127,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         if (front && any(emission > vec3<f32>(0.0))) {
             var w = 1.0;
             if (nee && !prev_delta) {
-                let light_pdf = (1.0 - params.environment.w) * light_triangle_pdf(emission, hit.t, -dot(ray.dir, s.ng));
+                let light_pdf = params.light_totals.y * light_triangle_pdf(emission, hit.t, -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
             radiance += throughput * emission * w;

@@ -6,8 +6,11 @@ struct LightSample {
     wi: vec3<f32>,
     dist: f32,
     radiance: vec3<f32>,
-    // Solid-angle density at the shading point, including the pick probability.
+    // Solid-angle density at the shading point, including the pick probability (for delta
+    // lights, the pick probability alone).
     pdf: f32,
+    // Whether BSDF sampling can also reach this light, so MIS applies.
+    mis: bool,
 };
 
 fn pick_light_triangle(u: f32) -> u32 {
@@ -35,7 +38,7 @@ fn sample_light_triangle(p: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
     let area2 = length(c);
     let to_light = q - p;
     let dist2 = dot(to_light, to_light);
-    let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0);
+    let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, true);
     if (area2 == 0.0 || dist2 == 0.0) {
         return none;
     }
@@ -46,7 +49,7 @@ fn sample_light_triangle(p: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
         return none;
     }
     let pdf_area = light.emission.w / (0.5 * area2);
-    return LightSample(wi, dist, light.emission.rgb, pdf_area * dist2 / cos_light);
+    return LightSample(wi, dist, light.emission.rgb, pdf_area * dist2 / cos_light, true);
 }
 
 // Density with which `sample_light_triangle` would have produced a direction that reached

@@ -7,7 +7,8 @@ use wgpu::util::DeviceExt;
 
 use super::context::GpuContext;
 use super::gpu_types::{
-    GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle, INSTANCE_HAS_NORMALS, INSTANCE_HAS_UVS,
+    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UVS,
 };
 use crate::accel::{BvhNode, SceneAccel};
 use crate::scene::{Scene, shapes};
@@ -45,6 +46,10 @@ pub struct GpuScene {
     pub materials: wgpu::Buffer,
     pub light_triangles: wgpu::Buffer,
     pub light_cdf: wgpu::Buffer,
+    pub analytic_lights: wgpu::Buffer,
+    pub analytic_light_count: u32,
+    /// Probability that next-event estimation samples an emissive triangle.
+    pub triangle_pick: f32,
     pub instance_count: u32,
     pub light_count: u32,
     /// Sum over emissive triangles of luminance × area.
@@ -67,6 +72,10 @@ pub struct SceneArrays {
     pub light_triangles: Vec<GpuLightTriangle>,
     pub light_cdf: Vec<f32>,
     pub light_power: f32,
+    pub analytic_lights: Vec<GpuAnalyticLight>,
+    /// Pick probabilities of the environment and of the emissive triangles.
+    pub environment_pick: f32,
+    pub triangle_pick: f32,
 }
 
 fn rows(m: glam::Affine3A) -> [[f32; 4]; 3] {
@@ -187,7 +196,97 @@ impl SceneArrays {
         a.materials = scene.materials.iter().map(pack_material).collect();
 
         a.build_lights(scene);
+        a.build_light_selection(scene);
         a
+    }
+
+    /// Splits next-event estimation between the environment, the emissive triangles and
+    /// each analytic light in proportion to estimated power. The estimates only steer
+    /// sampling (any positive split is unbiased): an environment or a distant light is
+    /// weighed by the area of the scene's bounding sphere.
+    fn build_light_selection(&mut self, scene: &Scene) {
+        let radius = self
+            .tlas_nodes
+            .first()
+            .map(|n| 0.5 * (Vec3::from(n.max) - Vec3::from(n.min)).length())
+            .filter(|r| r.is_finite() && *r > 0.0)
+            .unwrap_or(1.0) as f64;
+        let pi = std::f64::consts::PI;
+        let environment = luminance(scene.environment) as f64 * 4.0 * pi * pi * radius * radius;
+        let triangles = pi * self.light_power as f64;
+        let mut analytic = Vec::new();
+        for light in &scene.lights {
+            let (power, gpu) = match *light {
+                crate::scene::Light::Point {
+                    position,
+                    intensity,
+                    radius,
+                } => (
+                    4.0 * pi * luminance(intensity) as f64,
+                    GpuAnalyticLight {
+                        position: position.extend(0.0).into(),
+                        axis: [0.0, 0.0, 1.0, radius],
+                        intensity: intensity.extend(0.0).into(),
+                        shape: [0.0; 4],
+                    },
+                ),
+                crate::scene::Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_angle,
+                    blend,
+                    radius,
+                } => {
+                    let outer = cone_angle.to_radians();
+                    let inner = outer * (1.0 - blend);
+                    (
+                        2.0 * pi * (1.0 - outer.cos() as f64) * luminance(intensity) as f64,
+                        GpuAnalyticLight {
+                            position: position.extend(1.0).into(),
+                            axis: direction.normalize().extend(radius).into(),
+                            intensity: intensity.extend(0.0).into(),
+                            shape: [outer.cos(), inner.cos(), 0.0, 0.0],
+                        },
+                    )
+                }
+                crate::scene::Light::Distant {
+                    direction,
+                    irradiance,
+                    angular_diameter,
+                } => {
+                    let half = (0.5 * angular_diameter).to_radians();
+                    let s = (0.5 * half).sin();
+                    (
+                        luminance(irradiance) as f64 * pi * radius * radius,
+                        GpuAnalyticLight {
+                            position: direction.normalize().extend(2.0).into(),
+                            // 1 - cos(half) without cancellation.
+                            axis: [0.0, 0.0, 1.0, 2.0 * s * s],
+                            intensity: irradiance.extend(0.0).into(),
+                            shape: [0.0; 4],
+                        },
+                    )
+                }
+            };
+            analytic.push((power, gpu));
+        }
+        let total = environment + triangles + analytic.iter().map(|(p, _)| p).sum::<f64>();
+        if total <= 0.0 {
+            return;
+        }
+        self.environment_pick = (environment / total) as f32;
+        self.triangle_pick = (triangles / total) as f32;
+        let mut cumulative = environment + triangles;
+        for (power, mut gpu) in analytic {
+            gpu.intensity[3] = (power / total) as f32;
+            cumulative += power;
+            gpu.shape[3] = (cumulative / total) as f32;
+            self.analytic_lights.push(gpu);
+        }
+        if let Some(last) = self.analytic_lights.last_mut() {
+            last.shape[3] = 1.0;
+        }
     }
 
     /// Every front-facing emissive triangle in world space, picked by power.
@@ -322,15 +421,6 @@ impl GpuScene {
         let limit = binding_limit(ctx);
         let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
         let mut bytes = 0;
-        let environment_pick = if luminance(scene.environment) > 0.0 {
-            if a.light_triangles.is_empty() {
-                1.0
-            } else {
-                0.5
-            }
-        } else {
-            0.0
-        };
         let (blas_nodes, node_page_shift, node_pages) =
             paged_buffers(ctx, "BLAS nodes", &a.blas_nodes, page_limit, &mut bytes)?;
         let (triangles, triangle_page_shift, triangle_pages) =
@@ -361,10 +451,13 @@ impl GpuScene {
                 &mut bytes,
             )?,
             light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, limit, &mut bytes)?,
+            analytic_lights: storage_buffer(ctx, "lights", &a.analytic_lights, limit, &mut bytes)?,
+            analytic_light_count: a.analytic_lights.len() as u32,
+            triangle_pick: a.triangle_pick,
             instance_count: a.instances.len() as u32,
             light_count: a.light_triangles.len() as u32,
             light_power: a.light_power,
-            environment_pick,
+            environment_pick: a.environment_pick,
             bytes,
         })
     }
@@ -389,7 +482,7 @@ pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
-    for b in 4..=18 {
+    for b in 4..=19 {
         entries.push(entry(
             b,
             wgpu::BufferBindingType::Storage { read_only: true },
@@ -436,6 +529,7 @@ impl GpuScene {
             (10, &self.materials),
             (11, &self.light_triangles),
             (12, &self.light_cdf),
+            (19, &self.analytic_lights),
         ];
         // Page 0 of each paged array keeps its original binding; pages 1..4 follow 12.
         let node_bindings = [6, 13, 14, 15];

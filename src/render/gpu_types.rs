@@ -75,6 +75,15 @@ pub struct GpuLightTriangle {
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
+pub struct GpuAnalyticLight {
+    pub position: [f32; 4],
+    pub axis: [f32; 4],
+    pub intensity: [f32; 4],
+    pub shape: [f32; 4],
+}
+
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuStats {
     pub rays: u32,
     pub non_finite: u32,

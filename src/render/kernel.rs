@@ -45,6 +45,7 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("bsdf/principled.wgsl"),
     shader_file!("lights/emissive_triangle.wgsl"),
     shader_file!("lights/environment.wgsl"),
+    shader_file!("lights/analytic.wgsl"),
 ];
 
 /// The path-tracing entry point `render`.

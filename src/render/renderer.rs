@@ -162,7 +162,12 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
             cam.focus_distance,
         ],
         environment: scene.environment.extend(gpu.environment_pick).into(),
-        light_totals: [gpu.light_power, 0.0, 0.0, 0.0],
+        light_totals: [
+            gpu.light_power,
+            gpu.triangle_pick,
+            gpu.analytic_light_count as f32,
+            0.0,
+        ],
         ..GpuParams::default()
     }
 }

@@ -25,7 +25,7 @@ use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::{Camera, Material, Mesh, Scene, SceneSettings, shapes};
+use super::{Camera, Light, Material, Mesh, Scene, SceneSettings, shapes};
 
 /// The version this build reads and writes. Older versions are upgraded on load where
 /// possible; newer ones are refused with a message saying so.
@@ -76,6 +76,75 @@ struct SceneFile {
     meshes: BTreeMap<String, MeshDesc>,
     #[serde(default)]
     instances: Vec<InstanceDesc>,
+    #[serde(default)]
+    lights: Vec<LightDesc>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+enum LightDesc {
+    Point {
+        position: [f32; 3],
+        intensity: [f32; 3],
+        #[serde(default)]
+        radius: f32,
+    },
+    Spot {
+        position: [f32; 3],
+        direction: [f32; 3],
+        intensity: [f32; 3],
+        cone_angle: f32,
+        #[serde(default)]
+        blend: f32,
+        #[serde(default)]
+        radius: f32,
+    },
+    Distant {
+        direction: [f32; 3],
+        irradiance: [f32; 3],
+        #[serde(default)]
+        angular_diameter: f32,
+    },
+}
+
+impl LightDesc {
+    fn to_light(&self) -> Light {
+        match *self {
+            LightDesc::Point {
+                position,
+                intensity,
+                radius,
+            } => Light::Point {
+                position: position.into(),
+                intensity: intensity.into(),
+                radius,
+            },
+            LightDesc::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                blend,
+                radius,
+            } => Light::Spot {
+                position: position.into(),
+                direction: direction.into(),
+                intensity: intensity.into(),
+                cone_angle,
+                blend,
+                radius,
+            },
+            LightDesc::Distant {
+                direction,
+                irradiance,
+                angular_diameter,
+            } => Light::Distant {
+                direction: direction.into(),
+                irradiance: irradiance.into(),
+                angular_diameter,
+            },
+        }
+    }
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -475,6 +544,7 @@ fn build_scene(
             .map_err(|e| invalid(format!("instance {i}: transform: {e}")))?;
         scene.add_instance(mesh, material, transform);
     }
+    scene.lights = file.lights.iter().map(LightDesc::to_light).collect();
     Ok(scene)
 }
 
@@ -601,6 +671,21 @@ mod tests {
         );
         let err = parse(&text).unwrap_err();
         assert!(err.to_string().contains("index"), "{err}");
+    }
+
+    #[test]
+    fn lights_load_with_defaults() {
+        let text = MINIMAL.replace(
+            "instances: [",
+            "lights: [Point(position: (0, 1, 0), intensity: (1, 1, 1)), \
+             Spot(position: (0, 1, 0), direction: (0, -1, 0), intensity: (1, 1, 1), cone_angle: 30), \
+             Distant(direction: (0, -1, 0), irradiance: (2, 2, 2))],\n        instances: [",
+        );
+        let scene = parse(&text).unwrap();
+        assert_eq!(scene.lights.len(), 3);
+        assert!(matches!(scene.lights[0], Light::Point { radius, .. } if radius == 0.0));
+        let bad = text.replace("cone_angle: 30", "cone_angle: 300");
+        assert!(parse(&bad).unwrap_err().to_string().contains("cone_angle"));
     }
 
     #[test]

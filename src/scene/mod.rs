@@ -7,12 +7,14 @@
 
 mod camera;
 pub mod file;
+mod light;
 mod material;
 mod mesh;
 pub mod shapes;
 
 pub use camera::Camera;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene};
+pub use light::Light;
 pub use material::Material;
 pub use mesh::Mesh;
 
@@ -69,6 +71,8 @@ pub struct Scene {
     pub materials: Vec<Material>,
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
+    /// Lights other than emissive geometry.
+    pub lights: Vec<Light>,
     pub settings: SceneSettings,
 }
 
@@ -81,6 +85,7 @@ impl Scene {
             materials: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
+            lights: Vec::new(),
             settings: SceneSettings::default(),
         }
     }
@@ -122,6 +127,28 @@ impl Scene {
         scene.camera.look_at *= factor;
         scene.camera.focus_distance *= factor;
         scene.camera.aperture_radius *= factor;
+        for light in &mut scene.lights {
+            match light {
+                // Intensity is per steradian: at a distance scaled by f, irradiance falls
+                // by f²; scale intensity by f² to keep the image.
+                Light::Point {
+                    position,
+                    intensity,
+                    radius,
+                }
+                | Light::Spot {
+                    position,
+                    intensity,
+                    radius,
+                    ..
+                } => {
+                    *position *= factor;
+                    *intensity *= factor * factor;
+                    *radius *= factor;
+                }
+                Light::Distant { .. } => {}
+            }
+        }
         scene
     }
 
@@ -137,6 +164,9 @@ impl Scene {
         for m in &self.materials {
             m.validate()
                 .map_err(|e| format!("material \"{}\": {e}", m.name))?;
+        }
+        for (i, light) in self.lights.iter().enumerate() {
+            light.validate().map_err(|e| format!("light {i}: {e}"))?;
         }
         for mesh in &self.meshes {
             mesh.validate()

@@ -1,0 +1,117 @@
+//! Point, sphere, spot and distant lights against closed-form irradiance: a matte plane
+//! of albedo 0.5 seen straight down through a 2° field of view (every pixel sees nearly
+//! the same point), lit directly, reflects L = albedo / π · E.
+
+mod common;
+
+use common::{gpu, mean, render, settings};
+use glam::{Affine3A, Vec3};
+use kiln::scene::{Camera, Light, Material, Scene, shapes};
+
+const ALBEDO: f32 = 0.5;
+
+fn lit_plane(light: Light) -> f32 {
+    let mut scene = Scene::empty(Camera {
+        up: Vec3::Z,
+        ..Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, 2.0)
+    });
+    let m = scene.add_material(Material::diffuse("matte", Vec3::splat(ALBEDO)));
+    let quad = scene.add_mesh(shapes::quad());
+    scene.add_instance(quad, m, Affine3A::from_scale(Vec3::splat(100.0)));
+    scene.lights.push(light);
+    let mut s = settings(8, 8, 64);
+    s.max_bounces = 1;
+    mean(&render(&gpu(), &scene, s).radiance()).x
+}
+
+fn expected(irradiance: f32) -> f32 {
+    ALBEDO / std::f32::consts::PI * irradiance
+}
+
+fn assert_close(name: &str, got: f32, want: f32, tolerance: f32) {
+    assert!(
+        (got - want).abs() <= tolerance * want.max(1e-6),
+        "{name}: {got}, expected {want} ± {:.1}%",
+        tolerance * 100.0
+    );
+}
+
+#[test]
+fn point_and_sphere_lights_give_inverse_square_irradiance() {
+    let point = Light::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Vec3::splat(10.0),
+        radius: 0.0,
+    };
+    assert_close("point light", lit_plane(point), expected(10.0 / 4.0), 0.005);
+    // A sphere of radiance I / (π r²) delivers I / d² to the point below its centre.
+    let sphere = Light::Point {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        intensity: Vec3::splat(10.0),
+        radius: 0.5,
+    };
+    assert_close(
+        "sphere light",
+        lit_plane(sphere),
+        expected(10.0 / 4.0),
+        0.02,
+    );
+}
+
+#[test]
+fn spot_light_lights_inside_its_cone_only() {
+    let spot = |direction: Vec3| Light::Spot {
+        position: Vec3::new(0.0, 2.0, 0.0),
+        direction,
+        intensity: Vec3::splat(10.0),
+        cone_angle: 30.0,
+        blend: 0.2,
+        radius: 0.0,
+    };
+    assert_close(
+        "spot pointing down",
+        lit_plane(spot(-Vec3::Y)),
+        expected(2.5),
+        0.005,
+    );
+    assert_eq!(
+        lit_plane(spot(Vec3::Y)),
+        0.0,
+        "a spot pointing away lights the plane"
+    );
+    // 40° off the axis is outside the 30° cone.
+    let tilted = Vec3::new(40f32.to_radians().sin(), -40f32.to_radians().cos(), 0.0);
+    assert_eq!(lit_plane(spot(tilted)), 0.0, "light outside the cone");
+}
+
+#[test]
+fn distant_light_gives_cosine_weighted_irradiance() {
+    let sun = |degrees: f32, angular_diameter: f32| Light::Distant {
+        direction: Vec3::new(degrees.to_radians().sin(), -degrees.to_radians().cos(), 0.0),
+        irradiance: Vec3::splat(3.0),
+        angular_diameter,
+    };
+    assert_close(
+        "overhead delta sun",
+        lit_plane(sun(0.0, 0.0)),
+        expected(3.0),
+        0.005,
+    );
+    assert_close(
+        "overhead sun disk",
+        lit_plane(sun(0.0, 0.53)),
+        expected(3.0),
+        0.01,
+    );
+    assert_close(
+        "sun at 60°",
+        lit_plane(sun(60.0, 0.53)),
+        expected(1.5),
+        0.01,
+    );
+    assert_eq!(
+        lit_plane(sun(120.0, 0.0)),
+        0.0,
+        "a sun below the horizon lights the plane"
+    );
+}
