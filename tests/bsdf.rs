@@ -286,6 +286,35 @@ fn empty_scene() -> Scene {
     Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0))
 }
 
+/// Runs the test kernel `shaders/tests/{name}.wgsl` (entry point `name`) with the lobe
+/// dispatch, returning `output_bytes` of its output.
+fn run_lobe_kernel(
+    name: &str,
+    wgsl: &str,
+    input: &[u8],
+    output_bytes: u64,
+    invocations: u32,
+) -> Vec<u8> {
+    let path = format!("shaders/tests/{name}.wgsl");
+    run_probe(
+        &gpu(),
+        &empty_scene(),
+        &settings(1, 1, 1),
+        &Probe {
+            name,
+            parts: &[
+                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
+                (&path, wgsl),
+            ],
+            entry: name,
+            input,
+            output_bytes,
+            invocations,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
+
 struct SampleStats {
     samples: u32,
     histogram: Vec<u64>,
@@ -299,7 +328,6 @@ struct SampleStats {
 }
 
 fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Vec<SampleStats> {
-    let ctx = gpu();
     let mut input = vec![
         [
             lobes.len() as u32,
@@ -315,26 +343,13 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
     let cells = bins.cell_count();
     let invocations = lobes.len() as u32 * (samples / SAMPLES_PER_INVOCATION);
     let words = lobes.len() * cells + 8 * invocations as usize;
-    let out = run_probe(
-        &ctx,
-        &empty_scene(),
-        &settings(1, 1, 1),
-        &Probe {
-            name: "bsdf_sample",
-            parts: &[
-                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
-                (
-                    "shaders/tests/bsdf_sample.wgsl",
-                    include_str!("../shaders/tests/bsdf_sample.wgsl"),
-                ),
-            ],
-            entry: "bsdf_sample",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 4 * words as u64,
-            invocations,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_lobe_kernel(
+        "bsdf_sample",
+        include_str!("../shaders/tests/bsdf_sample.wgsl"),
+        bytemuck::cast_slice(&input),
+        4 * words as u64,
+        invocations,
+    );
     let words: &[u32] = bytemuck::cast_slice(&out);
     let per_config = (samples / SAMPLES_PER_INVOCATION) as usize;
     (0..lobes.len())
@@ -371,7 +386,6 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
 }
 
 fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins) -> Vec<Vec<f64>> {
-    let ctx = gpu();
     let mut input = vec![
         [
             lobes.len() as u32,
@@ -386,26 +400,13 @@ fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins) -> Vec<Vec<f64>> {
     }
     let cells = bins.cell_count();
     let n = (lobes.len() * cells) as u32;
-    let out = run_probe(
-        &ctx,
-        &empty_scene(),
-        &settings(1, 1, 1),
-        &Probe {
-            name: "bsdf_pdf",
-            parts: &[
-                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
-                (
-                    "shaders/tests/bsdf_pdf.wgsl",
-                    include_str!("../shaders/tests/bsdf_pdf.wgsl"),
-                ),
-            ],
-            entry: "bsdf_pdf",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 4 * n as u64,
-            invocations: n,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_lobe_kernel(
+        "bsdf_pdf",
+        include_str!("../shaders/tests/bsdf_pdf.wgsl"),
+        bytemuck::cast_slice(&input),
+        4 * n as u64,
+        n,
+    );
     let values: &[f32] = bytemuck::cast_slice(&out);
     values
         .chunks(cells)
@@ -624,29 +625,15 @@ fn monte_carlo_albedo_never_exceeds_one() {
 
 #[test]
 fn no_nan_or_inf_at_random_and_extreme_inputs() {
-    let ctx = gpu();
     let n = 1u32 << 20;
     let input = [[n, 5u32, 0, 0]];
-    let out = run_probe(
-        &ctx,
-        &empty_scene(),
-        &settings(1, 1, 1),
-        &Probe {
-            name: "bsdf_extremes",
-            parts: &[
-                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
-                (
-                    "shaders/tests/bsdf_extremes.wgsl",
-                    include_str!("../shaders/tests/bsdf_extremes.wgsl"),
-                ),
-            ],
-            entry: "bsdf_extremes",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 16 * n as u64,
-            invocations: n,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_lobe_kernel(
+        "bsdf_extremes",
+        include_str!("../shaders/tests/bsdf_extremes.wgsl"),
+        bytemuck::cast_slice(&input),
+        16 * n as u64,
+        n,
+    );
     let values: &[[f32; 4]] = bytemuck::cast_slice(&out);
     let bad: f32 = values.iter().map(|v| v[0]).sum();
     assert_eq!(
@@ -682,32 +669,18 @@ struct RawSample {
 
 /// `count` samples of each lobe, all in one dispatch; returned lobe by lobe.
 fn raw_samples(lobes: &[Lobe], count: u32, seed: u32) -> Vec<Vec<RawSample>> {
-    let ctx = gpu();
     let mut input = vec![[count, seed, lobes.len() as u32, 0], [0; 4]];
     for l in lobes {
         input.extend(l.encode());
     }
     let total = count * lobes.len() as u32;
-    let out = run_probe(
-        &ctx,
-        &empty_scene(),
-        &settings(1, 1, 1),
-        &Probe {
-            name: "bsdf_raw",
-            parts: &[
-                ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
-                (
-                    "shaders/tests/bsdf_raw.wgsl",
-                    include_str!("../shaders/tests/bsdf_raw.wgsl"),
-                ),
-            ],
-            entry: "bsdf_raw",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 48 * total as u64,
-            invocations: total,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_lobe_kernel(
+        "bsdf_raw",
+        include_str!("../shaders/tests/bsdf_raw.wgsl"),
+        bytemuck::cast_slice(&input),
+        48 * total as u64,
+        total,
+    );
     let v: &[[f32; 4]] = bytemuck::cast_slice(&out);
     let samples: Vec<RawSample> = v
         .chunks(3)

@@ -30,6 +30,38 @@ fn thin_slab_reflectance(r: f32) -> f32 {
     return r + t * t * r / (1.0 - r * r);
 }
 
+// The generalized half vector of a reflection or refraction from wo to wi (Walter et al.
+// 2007, eq. 16), turned up; not ok where no microfacet seen from the front of both
+// directions connects them.
+struct HalfVector {
+    ok: bool,
+    m: vec3<f32>,
+    etap: f32,
+    reflect: bool,
+};
+
+fn dielectric_half_vector(wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> HalfVector {
+    let fail = HalfVector(false, vec3<f32>(0.0, 0.0, 1.0), 1.0, true);
+    let reflect = wo.z * wi.z > 0.0;
+    var etap = 1.0;
+    if (!reflect) {
+        etap = select(1.0 / eta, eta, wo.z > 0.0);
+    }
+    var m = wi * etap + wo;
+    if (dot(m, m) == 0.0) {
+        return fail;
+    }
+    m = normalize(m);
+    if (m.z < 0.0) {
+        m = -m;
+    }
+    // Microfacets seen from behind contribute nothing.
+    if (dot(m, wi) * wi.z < 0.0 || dot(m, wo) * wo.z < 0.0) {
+        return fail;
+    }
+    return HalfVector(true, m, etap, reflect);
+}
+
 fn dielectric_eval(wo: vec3<f32>, wi: vec3<f32>, alpha: vec2<f32>, eta: f32, tint: vec3<f32>, thin: bool) -> vec3<f32> {
     if (dielectric_index_matched(eta) || ggx_is_smooth(alpha) || wo.z == 0.0 || wi.z == 0.0) {
         return vec3<f32>(0.0);
@@ -47,24 +79,13 @@ fn dielectric_eval(wo: vec3<f32>, wi: vec3<f32>, alpha: vec2<f32>, eta: f32, tin
         return tint * (f * (1.0 - r));
     }
     let cos_o = wo.z;
-    let cos_i = wi.z;
-    let reflect = cos_o * cos_i > 0.0;
-    var etap = 1.0;
-    if (!reflect) {
-        etap = select(1.0 / eta, eta, cos_o > 0.0);
-    }
-    var m = wi * etap + wo;
-    if (dot(m, m) == 0.0) {
+    let h = dielectric_half_vector(wo, wi, eta);
+    if (!h.ok) {
         return vec3<f32>(0.0);
     }
-    m = normalize(m);
-    if (m.z < 0.0) {
-        m = -m;
-    }
-    // Microfacets seen from behind contribute nothing.
-    if (dot(m, wi) * cos_i < 0.0 || dot(m, wo) * cos_o < 0.0) {
-        return vec3<f32>(0.0);
-    }
+    let m = h.m;
+    let etap = h.etap;
+    let reflect = h.reflect;
     let f = fresnel_dielectric(dot(wo, m), eta);
     let d = ggx_d(m, alpha);
     let g = ggx_g2(wo, wi, alpha);
@@ -88,24 +109,13 @@ fn dielectric_pdf(wo: vec3<f32>, wi: vec3<f32>, alpha: vec2<f32>, eta: f32, thin
         let pdf = ggx_vndf_pdf(wou, m, alpha) / (4.0 * dot(wou, m));
         return pdf * select(1.0 - r, r, same_hemisphere(wo, wi));
     }
-    let cos_o = wo.z;
-    let cos_i = wi.z;
-    let reflect = cos_o * cos_i > 0.0;
-    var etap = 1.0;
-    if (!reflect) {
-        etap = select(1.0 / eta, eta, cos_o > 0.0);
-    }
-    var m = wi * etap + wo;
-    if (dot(m, m) == 0.0) {
+    let h = dielectric_half_vector(wo, wi, eta);
+    if (!h.ok) {
         return 0.0;
     }
-    m = normalize(m);
-    if (m.z < 0.0) {
-        m = -m;
-    }
-    if (dot(m, wi) * cos_i < 0.0 || dot(m, wo) * cos_o < 0.0) {
-        return 0.0;
-    }
+    let m = h.m;
+    let etap = h.etap;
+    let reflect = h.reflect;
     let r = fresnel_dielectric(dot(wo, m), eta);
     let vndf = ggx_vndf_pdf(wo, m, alpha);
     if (reflect) {
