@@ -179,10 +179,8 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         scene.validate().map_err(RenderError::Scene)?;
-        let mut check = scene.clone();
-        check.settings.width = settings.width;
-        check.settings.height = settings.height;
-        check.validate().map_err(RenderError::Scene)?;
+        crate::scene::validate_image_size(settings.width, settings.height)
+            .map_err(RenderError::Scene)?;
 
         let accel = build_scene_accel(scene)?;
         let upload_start = Instant::now();

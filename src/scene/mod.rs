@@ -197,13 +197,16 @@ impl Scene {
                 ));
             }
         }
-        let s = &self.settings;
-        if s.width == 0 || s.height == 0 || s.width > 16384 || s.height > 16384 {
-            return Err(format!(
-                "image size {}x{} must be between 1x1 and 16384x16384",
-                s.width, s.height
-            ));
-        }
-        Ok(())
+        validate_image_size(self.settings.width, self.settings.height)
     }
+}
+
+/// Image sizes the renderer accepts.
+pub fn validate_image_size(width: u32, height: u32) -> Result<(), String> {
+    if width == 0 || height == 0 || width > 16384 || height > 16384 {
+        return Err(format!(
+            "image size {width}x{height} must be between 1x1 and 16384x16384"
+        ));
+    }
+    Ok(())
 }
