@@ -7,6 +7,7 @@ const INV_4PI: f32 = 0.07957747154594766788;
 
 // Params.flags
 const FLAG_LIGHT_SAMPLING: u32 = 1u;
+const FLAG_ENVIRONMENT_MAP: u32 = 2u;
 
 struct Params {
     film_size: vec2<u32>,
@@ -134,3 +135,5 @@ struct Stats {
 // Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
 @group(0) @binding(12) var<storage, read> light_cdf: array<f32>;
 @group(0) @binding(19) var<storage, read> analytic_lights: array<AnalyticLight>;
+// The environment map and its sampling CDFs (shaders/lights/environment.wgsl).
+@group(0) @binding(20) var<storage, read> env_data: array<vec4<f32>>;

@@ -104,9 +104,10 @@ struct RenderArgs {
     /// Stop after this many seconds and write what has accumulated.
     #[arg(long)]
     time_limit: Option<f64>,
-    /// Uniform environment radiance R,G,B (overrides the scene's).
-    #[arg(long, value_parser = parse_rgb)]
-    environment: Option<Vec3>,
+    /// Environment: a uniform radiance R,G,B or an equirectangular .hdr/.exr map
+    /// (overrides the scene's).
+    #[arg(long, value_parser = parse_environment)]
+    environment: Option<EnvironmentArg>,
     /// Sample BSDFs only, without next-event estimation (a reference for MIS).
     #[arg(long)]
     no_light_sampling: bool,
@@ -126,6 +127,22 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         }
     };
     Ok((parse(w)?, parse(h)?))
+}
+
+#[derive(Clone, Debug)]
+enum EnvironmentArg {
+    Uniform(Vec3),
+    Map(PathBuf),
+}
+
+fn parse_environment(s: &str) -> Result<EnvironmentArg, String> {
+    let lower = s.to_ascii_lowercase();
+    if lower.ends_with(".hdr") || lower.ends_with(".exr") {
+        return Ok(EnvironmentArg::Map(PathBuf::from(s)));
+    }
+    parse_rgb(s)
+        .map(EnvironmentArg::Uniform)
+        .map_err(|e| format!("{e}, or a .hdr / .exr file"))
 }
 
 fn parse_rgb(s: &str) -> Result<Vec3, String> {
@@ -211,8 +228,18 @@ fn render(args: RenderArgs, backend: Option<Backend>) -> Result<()> {
         bail!("--exposure must be a finite number of stops");
     }
     let (mut scene, name) = load(args.scene.as_deref())?;
-    if let Some(env) = args.environment {
-        scene.environment = env;
+    match args.environment {
+        Some(EnvironmentArg::Uniform(colour)) => {
+            scene.environment = colour;
+            scene.environment_map = None;
+        }
+        Some(EnvironmentArg::Map(path)) => {
+            let map = kiln::scene::EnvironmentMap::load(&path).map_err(|e| {
+                anyhow::anyhow!("cannot load environment map {}: {e}", path.display())
+            })?;
+            scene.environment_map = Some(map);
+        }
+        None => {}
     }
     let mut settings = RenderSettings::from_scene(&scene);
     if let Some((w, h)) = args.size {

@@ -119,6 +119,37 @@ fn time_limit_stops_early_and_still_writes() {
 }
 
 #[test]
+fn environment_map_flag_renders_and_a_missing_map_is_named() {
+    let dir = tempfile::tempdir().unwrap();
+    let sky = dir.path().join("sky.exr");
+    image::Rgb32FImage::from_fn(8, 4, |x, _| image::Rgb([x as f32 * 0.1, 0.5, 0.25]))
+        .save(&sky)
+        .unwrap();
+    let out = dir.path().join("lit.png");
+    let (code, err) = run(&[
+        "render",
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "-q",
+        "--environment",
+        sky.to_str().unwrap(),
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "stderr:\n{err}");
+    let (code, err) = run(&[
+        "render",
+        "--environment",
+        "nowhere.hdr",
+        "-o",
+        out.to_str().unwrap(),
+    ]);
+    assert_clean_error(code, &err, 1, "nowhere.hdr");
+}
+
+#[test]
 fn info_lists_the_chosen_adapter() {
     let out = kiln().arg("info").output().unwrap();
     assert!(out.status.success());

@@ -48,6 +48,8 @@ pub struct GpuScene {
     pub light_cdf: wgpu::Buffer,
     pub analytic_lights: wgpu::Buffer,
     pub analytic_light_count: u32,
+    pub environment_data: wgpu::Buffer,
+    pub has_environment_map: bool,
     /// Probability that next-event estimation samples an emissive triangle.
     pub triangle_pick: f32,
     pub instance_count: u32,
@@ -73,6 +75,8 @@ pub struct SceneArrays {
     pub light_cdf: Vec<f32>,
     pub light_power: f32,
     pub analytic_lights: Vec<GpuAnalyticLight>,
+    /// `env_data` of shaders/lights/environment.wgsl (empty without a map).
+    pub environment_data: Vec<[f32; 4]>,
     /// Pick probabilities of the environment and of the emissive triangles.
     pub environment_pick: f32,
     pub triangle_pick: f32,
@@ -102,6 +106,74 @@ pub fn encode_octahedral(n: Vec3) -> u32 {
 
 pub fn luminance(c: Vec3) -> f32 {
     c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
+}
+
+/// Polar angle of the centre of row `y` of an equirectangular map `height` rows tall.
+fn row_theta(y: usize, height: usize) -> f64 {
+    (y as f64 + 0.5) / height as f64 * std::f64::consts::PI
+}
+
+/// Radiance averaged over the sphere (the uniform sky of the same power).
+fn mean_environment_luminance(map: &crate::scene::EnvironmentMap) -> f64 {
+    let (w, h) = (map.width as usize, map.height as usize);
+    let mut sum = 0.0;
+    for y in 0..h {
+        let s = row_theta(y, h).sin();
+        for x in 0..w {
+            sum += luminance(map.texels[y * w + x]) as f64 * s;
+        }
+    }
+    // Each texel spans (2π / w) (π / h) sin θ steradians; the sphere has 4π.
+    sum * map.strength as f64 * 2.0 * std::f64::consts::PI * std::f64::consts::PI
+        / (w * h) as f64
+        / (4.0 * std::f64::consts::PI)
+}
+
+/// The map and its sampling distribution, proportional to luminance × sin θ (texels near
+/// the poles cover less solid angle): per row an inclusive conditional CDF over columns
+/// (in each texel's w), then an inclusive marginal CDF over rows.
+pub fn environment_data(map: &crate::scene::EnvironmentMap) -> Vec<[f32; 4]> {
+    let (w, h) = (map.width as usize, map.height as usize);
+    let mut data = Vec::with_capacity(1 + w * h + h);
+    data.push([
+        map.width as f32,
+        map.height as f32,
+        map.strength,
+        map.rotation_degrees.to_radians(),
+    ]);
+    let mut row_sums = Vec::with_capacity(h);
+    for y in 0..h {
+        let s = row_theta(y, h).sin();
+        let weights: Vec<f64> = (0..w)
+            .map(|x| luminance(map.texels[y * w + x]) as f64 * s)
+            .collect();
+        let row: f64 = weights.iter().sum();
+        let mut acc = 0.0;
+        for (x, weight) in weights.iter().enumerate() {
+            acc += weight;
+            // A black row is sampled uniformly (it is then never chosen anyway).
+            let cdf = if row > 0.0 {
+                acc / row
+            } else {
+                (x + 1) as f64 / w as f64
+            };
+            let t = map.texels[y * w + x];
+            data.push([t.x, t.y, t.z, if x + 1 == w { 1.0 } else { cdf as f32 }]);
+        }
+        row_sums.push(row);
+    }
+    let total: f64 = row_sums.iter().sum();
+    let mut acc = 0.0;
+    for (y, row) in row_sums.iter().enumerate() {
+        acc += row;
+        let cdf = if total > 0.0 {
+            acc / total
+        } else {
+            (y + 1) as f64 / h as f64
+        };
+        data.push([if y + 1 == h { 1.0 } else { cdf as f32 }, 0.0, 0.0, 0.0]);
+    }
+    data
 }
 
 /// The GPU form of a material (`Material` in shaders/scene.wgsl).
@@ -196,6 +268,9 @@ impl SceneArrays {
         a.materials = scene.materials.iter().map(pack_material).collect();
 
         a.build_lights(scene);
+        if let Some(map) = &scene.environment_map {
+            a.environment_data = environment_data(map);
+        }
         a.build_light_selection(scene);
         a
     }
@@ -212,7 +287,11 @@ impl SceneArrays {
             .filter(|r| r.is_finite() && *r > 0.0)
             .unwrap_or(1.0) as f64;
         let pi = std::f64::consts::PI;
-        let environment = luminance(scene.environment) as f64 * 4.0 * pi * pi * radius * radius;
+        let sky = match &scene.environment_map {
+            Some(map) => mean_environment_luminance(map),
+            None => luminance(scene.environment) as f64,
+        };
+        let environment = sky * 4.0 * pi * pi * radius * radius;
         let triangles = pi * self.light_power as f64;
         let mut analytic = Vec::new();
         for light in &scene.lights {
@@ -453,6 +532,14 @@ impl GpuScene {
             light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, limit, &mut bytes)?,
             analytic_lights: storage_buffer(ctx, "lights", &a.analytic_lights, limit, &mut bytes)?,
             analytic_light_count: a.analytic_lights.len() as u32,
+            environment_data: storage_buffer(
+                ctx,
+                "environment map",
+                &a.environment_data,
+                limit,
+                &mut bytes,
+            )?,
+            has_environment_map: !a.environment_data.is_empty(),
             triangle_pick: a.triangle_pick,
             instance_count: a.instances.len() as u32,
             light_count: a.light_triangles.len() as u32,
@@ -482,7 +569,7 @@ pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
-    for b in 4..=19 {
+    for b in 4..=20 {
         entries.push(entry(
             b,
             wgpu::BufferBindingType::Storage { read_only: true },
@@ -530,6 +617,7 @@ impl GpuScene {
             (11, &self.light_triangles),
             (12, &self.light_cdf),
             (19, &self.analytic_lights),
+            (20, &self.environment_data),
         ];
         // Page 0 of each paged array keeps its original binding; pages 1..4 follow 12.
         let node_bindings = [6, 13, 14, 15];

@@ -4,6 +4,8 @@ use bytemuck::{Pod, Zeroable};
 
 /// `Params.flags`: next-event estimation with MIS on.
 pub const FLAG_LIGHT_SAMPLING: u32 = 1;
+/// `Params.flags`: the environment is a map in `env_data`.
+pub const FLAG_ENVIRONMENT_MAP: u32 = 2;
 /// `Instance.flags`
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;

@@ -16,7 +16,7 @@ use thiserror::Error;
 
 use super::context::{GpuContext, GpuError};
 use super::gpu_scene::{FrameBuffers, GpuScene, UploadError, scene_bind_group_layout};
-use super::gpu_types::{FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
+use super::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
 use super::kernel::{KernelError, path_tracing_kernel};
 use super::readback::{map_and_read, read_buffer};
 use crate::accel::{AccelError, build_scene_accel};
@@ -143,6 +143,10 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         max_bounces: settings.max_bounces,
         flags: if settings.light_sampling {
             FLAG_LIGHT_SAMPLING
+        } else {
+            0
+        } | if gpu.has_environment_map {
+            FLAG_ENVIRONMENT_MAP
         } else {
             0
         },

@@ -25,7 +25,7 @@ use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
-use super::{Camera, Light, Material, Mesh, Scene, SceneSettings, shapes};
+use super::{Camera, EnvironmentMap, Light, Material, Mesh, Scene, SceneSettings, shapes};
 
 /// The version this build reads and writes. Older versions are upgraded on load where
 /// possible; newer ones are refused with a message saying so.
@@ -71,6 +71,8 @@ struct SceneFile {
     #[serde(default)]
     environment: [f32; 3],
     #[serde(default)]
+    environment_map: Option<EnvironmentMapDesc>,
+    #[serde(default)]
     materials: BTreeMap<String, MaterialDesc>,
     #[serde(default)]
     meshes: BTreeMap<String, MeshDesc>,
@@ -78,6 +80,22 @@ struct SceneFile {
     instances: Vec<InstanceDesc>,
     #[serde(default)]
     lights: Vec<LightDesc>,
+}
+
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+struct EnvironmentMapDesc {
+    /// An equirectangular `.hdr` or `.exr`, relative to the scene file.
+    file: String,
+    #[serde(default = "unit_strength")]
+    strength: f32,
+    /// Degrees about +Y.
+    #[serde(default)]
+    rotation: f32,
+}
+
+fn unit_strength() -> f32 {
+    1.0
 }
 
 #[derive(Debug, Serialize, Deserialize)]
@@ -463,6 +481,14 @@ fn build_scene(
     };
     let mut scene = Scene::empty(camera);
     scene.environment = file.environment.into();
+    if let Some(desc) = &file.environment_map {
+        let path_of_map = base_dir.join(&desc.file);
+        let mut map = EnvironmentMap::load(&path_of_map)
+            .map_err(|e| invalid(format!("environment map {}: {e}", path_of_map.display())))?;
+        map.strength = desc.strength;
+        map.rotation_degrees = desc.rotation;
+        scene.environment_map = Some(map);
+    }
     scene.settings = SceneSettings {
         width: file.render.width,
         height: file.render.height,

@@ -6,6 +6,7 @@
 //! [`shapes`], and nothing here knows about BVHs or buffers.
 
 mod camera;
+mod environment;
 pub mod file;
 mod light;
 mod material;
@@ -13,6 +14,7 @@ mod mesh;
 pub mod shapes;
 
 pub use camera::Camera;
+pub use environment::EnvironmentMap;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene};
 pub use light::Light;
 pub use material::Material;
@@ -68,6 +70,8 @@ pub struct Scene {
     pub camera: Camera,
     /// Radiance arriving from every direction no geometry covers (linear RGB).
     pub environment: Vec3,
+    /// Replaces the uniform `environment` when present.
+    pub environment_map: Option<EnvironmentMap>,
     pub materials: Vec<Material>,
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
@@ -82,6 +86,7 @@ impl Scene {
         Self {
             camera,
             environment: Vec3::ZERO,
+            environment_map: None,
             materials: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
@@ -160,6 +165,9 @@ impl Scene {
                 "environment radiance {} must be finite and non-negative",
                 self.environment
             ));
+        }
+        if let Some(map) = &self.environment_map {
+            map.validate()?;
         }
         for m in &self.materials {
             m.validate()
