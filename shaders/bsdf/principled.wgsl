@@ -48,12 +48,14 @@ const LOBE_METAL: u32 = 2u;
 const LOBE_GLASS: u32 = 3u;
 const LOBE_SPECULAR: u32 = 4u;
 const LOBE_DIFFUSE: u32 = 5u;
-const LOBE_COUNT: u32 = 6u;
+// The metal's multiple-scattering compensation (shaders/bsdf/multiple_scattering.wgsl).
+const LOBE_METAL_MS: u32 = 6u;
+const LOBE_COUNT: u32 = 7u;
 
 // Per-lobe colour scale (layering) and selection probability for one wo.
 struct LobeWeights {
-    scale: array<vec3<f32>, 6>,
-    probability: array<f32, 6>,
+    scale: array<vec3<f32>, 7>,
+    probability: array<f32, 7>,
 };
 
 fn principled_glass_tint(p: Principled) -> vec3<f32> {
@@ -78,6 +80,7 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     below *= 1.0 - sheen * min(sheen_e, 1.0) * max(p.sheen_color.r, max(p.sheen_color.g, p.sheen_color.b));
     let metal = clamp(p.metallic, 0.0, 1.0);
     w.scale[LOBE_METAL] = below * metal;
+    w.scale[LOBE_METAL_MS] = below * metal;
     let dielectric = below * (1.0 - metal);
     let glass = clamp(p.transmission_weight, 0.0, 1.0);
     w.scale[LOBE_GLASS] = dielectric * glass;
@@ -88,11 +91,12 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     w.scale[LOBE_DIFFUSE] = opaque * (1.0 - spec_albedo) * p.base_color * clamp(p.base_weight, 0.0, 1.0);
 
     // Selection by estimated albedo toward wo.
-    var e: array<f32, 6>;
+    var e: array<f32, 7>;
     e[LOBE_COAT] = luminance(w.scale[LOBE_COAT]) * coat_albedo;
     e[LOBE_SHEEN] = luminance(w.scale[LOBE_SHEEN]) * min(sheen_e, 1.0);
     let f82 = fresnel_f82(cos_o, p.base_color * p.base_weight, p.specular_color);
     e[LOBE_METAL] = luminance(w.scale[LOBE_METAL] * f82);
+    e[LOBE_METAL_MS] = luminance(w.scale[LOBE_METAL_MS] * conductor_ms_albedo(cos_o, p.roughness, p.base_color * p.base_weight));
     e[LOBE_GLASS] = luminance(w.scale[LOBE_GLASS] * max(principled_glass_tint(p), vec3<f32>(0.05)));
     e[LOBE_SPECULAR] = luminance(w.scale[LOBE_SPECULAR]) * fresnel_dielectric(cos_o, max(p.ior, 1.0));
     e[LOBE_DIFFUSE] = luminance(w.scale[LOBE_DIFFUSE]);
@@ -123,6 +127,9 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         case LOBE_METAL: { return conductor_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha, p.base_color * p.base_weight, p.specular_color); }
         case LOBE_GLASS: { return dielectric_eval(wo, wi, alpha, p.ior, principled_glass_tint(p), p.thin_walled); }
         case LOBE_SPECULAR: { return dielectric_reflection_eval(wo, wi, alpha, p.ior, vec3<f32>(1.0)); }
+        case LOBE_METAL_MS: {
+            return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);
+        }
         default: { return diffuse_eval(wo, wi, vec3<f32>(1.0)); }
     }
 }

@@ -38,6 +38,8 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("bsdf/microfacet.wgsl"),
     shader_file!("bsdf/fresnel.wgsl"),
     shader_file!("bsdf/conductor.wgsl"),
+    shader_file!("bsdf/ggx_albedo_table.wgsl"),
+    shader_file!("bsdf/multiple_scattering.wgsl"),
     shader_file!("bsdf/dielectric.wgsl"),
     shader_file!("bsdf/lambert.wgsl"),
     shader_file!("bsdf/sheen_table.wgsl"),
