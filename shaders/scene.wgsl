@@ -116,16 +116,12 @@ struct Stats {
 @group(0) @binding(5) var<storage, read> instances: array<Instance>;
 // The two largest arrays are split into up to four pages, each its own binding, so a
 // scene is not limited by the per-binding size (128 MiB on lavapipe). Read them through
-// fetch_blas_node and fetch_triangle, which kernel assembly generates for the number of
-// pages the scene uses (src/render/kernel.rs, `paging_wgsl`).
+// fetch_blas_node and fetch_triangle, which kernel assembly generates together with the
+// bindings of pages 1 to 3 (13-15 and 16-18) for the pages the scene uses
+// (src/render/kernel.rs, `paging_wgsl`): unused pages take no binding slot, which keeps
+// ordinary scenes within GL's 16 storage buffers per stage.
 @group(0) @binding(6) var<storage, read> blas_nodes_0: array<BvhNode>;
-@group(0) @binding(13) var<storage, read> blas_nodes_1: array<BvhNode>;
-@group(0) @binding(14) var<storage, read> blas_nodes_2: array<BvhNode>;
-@group(0) @binding(15) var<storage, read> blas_nodes_3: array<BvhNode>;
 @group(0) @binding(7) var<storage, read> triangles_0: array<Triangle>;
-@group(0) @binding(16) var<storage, read> triangles_1: array<Triangle>;
-@group(0) @binding(17) var<storage, read> triangles_2: array<Triangle>;
-@group(0) @binding(18) var<storage, read> triangles_3: array<Triangle>;
 // Three global vertex indices per triangle, in the same order as `triangles`.
 @group(0) @binding(8) var<storage, read> triangle_vertices: array<u32>;
 // Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w unused.

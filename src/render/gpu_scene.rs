@@ -10,6 +10,7 @@ use super::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
     INSTANCE_HAS_NORMALS, INSTANCE_HAS_UVS,
 };
+use super::kernel::{KernelFeatures, NODE_PAGE_BINDING, TRIANGLE_PAGE_BINDING};
 use crate::accel::{BvhNode, SceneAccel};
 use crate::scene::{Scene, shapes};
 
@@ -550,8 +551,12 @@ impl GpuScene {
     }
 }
 
-/// Layout of group 0 (`shaders/scene.wgsl`): params, film, stats, then the scene.
-pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
+/// Layout of group 0 (`shaders/scene.wgsl`): params, film, stats, then the scene, with
+/// only the pages of the paged arrays that `features` uses.
+pub fn scene_bind_group_layout(
+    device: &wgpu::Device,
+    features: &KernelFeatures,
+) -> wgpu::BindGroupLayout {
     let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
@@ -562,6 +567,7 @@ pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
         },
         count: None,
     };
+    let read_only = wgpu::BufferBindingType::Storage { read_only: true };
     let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
     for b in 1..=3 {
         entries.push(entry(
@@ -569,11 +575,14 @@ pub fn scene_bind_group_layout(device: &wgpu::Device) -> wgpu::BindGroupLayout {
             wgpu::BufferBindingType::Storage { read_only: false },
         ));
     }
-    for b in 4..=20 {
-        entries.push(entry(
-            b,
-            wgpu::BufferBindingType::Storage { read_only: true },
-        ));
+    for b in (4..=12).chain([19, 20]) {
+        entries.push(entry(b, read_only));
+    }
+    for p in 1..features.node_pages {
+        entries.push(entry(NODE_PAGE_BINDING + p - 1, read_only));
+    }
+    for p in 1..features.triangle_pages {
+        entries.push(entry(TRIANGLE_PAGE_BINDING + p - 1, read_only));
     }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("scene"),
@@ -591,8 +600,8 @@ pub struct FrameBuffers<'a> {
 
 impl GpuScene {
     /// The kernel features this scene needs.
-    pub fn features(&self) -> crate::render::kernel::KernelFeatures {
-        crate::render::kernel::KernelFeatures {
+    pub fn features(&self) -> KernelFeatures {
+        KernelFeatures {
             node_pages: self.node_pages,
             triangle_pages: self.triangle_pages,
         }
@@ -619,11 +628,16 @@ impl GpuScene {
             (19, &self.analytic_lights),
             (20, &self.environment_data),
         ];
-        // Page 0 of each paged array keeps its original binding; pages 1..4 follow 12.
-        let node_bindings = [6, 13, 14, 15];
-        let triangle_bindings = [7, 16, 17, 18];
-        buffers.extend(node_bindings.into_iter().zip(&self.blas_nodes));
-        buffers.extend(triangle_bindings.into_iter().zip(&self.triangles));
+        // Page 0 of each paged array has its own binding; further pages exist only when
+        // used (see `scene_bind_group_layout`).
+        buffers.push((6, &self.blas_nodes[0]));
+        buffers.push((7, &self.triangles[0]));
+        for p in 1..self.node_pages {
+            buffers.push((NODE_PAGE_BINDING + p - 1, &self.blas_nodes[p as usize]));
+        }
+        for p in 1..self.triangle_pages {
+            buffers.push((TRIANGLE_PAGE_BINDING + p - 1, &self.triangles[p as usize]));
+        }
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
             .map(|(binding, b)| wgpu::BindGroupEntry {

@@ -221,7 +221,21 @@ impl Default for KernelFeatures {
 /// accessor is a plain load: on lavapipe even an untaken branch to the other pages slows
 /// traversal by 40%.
 pub fn paging_wgsl(features: &KernelFeatures) -> String {
-    fn accessor(name: &str, ty: &str, array: &str, shift: &str, pages: u32) -> String {
+    fn accessor(
+        name: &str,
+        ty: &str,
+        array: &str,
+        shift: &str,
+        first_binding: u32,
+        pages: u32,
+    ) -> String {
+        let mut text = String::new();
+        for p in 1..pages {
+            text.push_str(&format!(
+                "@group(0) @binding({}) var<storage, read> {array}_{p}: array<{ty}>;\n",
+                first_binding + p - 1
+            ));
+        }
         let mut body = String::new();
         if pages <= 1 {
             body.push_str(&format!("    return {array}_0[i];\n"));
@@ -235,7 +249,8 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             }
             body.push_str(&format!("    return {array}_{}[j];\n", pages - 1));
         }
-        format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n")
+        text.push_str(&format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n"));
+        text
     }
     format!(
         "// Generated for {} node page(s) and {} triangle page(s).\n{}\n{}",
@@ -246,6 +261,7 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             "BvhNode",
             "blas_nodes",
             "node_page_shift",
+            NODE_PAGE_BINDING,
             features.node_pages
         ),
         accessor(
@@ -253,10 +269,15 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             "Triangle",
             "triangles",
             "triangle_page_shift",
+            TRIANGLE_PAGE_BINDING,
             features.triangle_pages
         ),
     )
 }
+
+/// Bindings of pages 1.. of the paged arrays (page 0 is at 6 and 7).
+pub const NODE_PAGE_BINDING: u32 = 13;
+pub const TRIANGLE_PAGE_BINDING: u32 = 16;
 
 /// The path-tracing kernel's source.
 pub fn path_tracing_kernel(features: &KernelFeatures) -> KernelSource {

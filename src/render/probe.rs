@@ -49,7 +49,7 @@ pub fn run_probe(
     let device = &ctx.device;
     let accel = build_scene_accel(scene)?;
     let gpu_scene = GpuScene::upload(ctx, scene, &accel, settings.page_bytes)?;
-    let scene_layout = scene_bind_group_layout(device);
+    let scene_layout = scene_bind_group_layout(device, &gpu_scene.features());
     let probe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("probe"),
         entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {

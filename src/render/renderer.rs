@@ -193,7 +193,7 @@ impl Renderer {
 
         let kernel_start = Instant::now();
         let device = &ctx.device;
-        let layout = scene_bind_group_layout(device);
+        let layout = scene_bind_group_layout(device, &gpu_scene.features());
         let pipeline = path_tracing_kernel(&gpu_scene.features()).create_pipeline(
             &ctx,
             &[&layout],
