@@ -4,7 +4,8 @@
 //! - `shaders/bsdf/sheen_table.wgsl`: directional albedo of the white sheen lobe over
 //!   roughness 0.07..1 and cos θo (8 × 8);
 //! - `shaders/bsdf/ggx_albedo_table.wgsl`: directional albedo E(μ, roughness) of the white
-//!   single-scattering GGX conductor (16 × 16) and its cosine-weighted average E_avg.
+//!   single-scattering GGX conductor (16 × 16) and its cosine-weighted average E_avg;
+//! - `shaders/bsdf/diffuse_albedo_table.wgsl`: the same for the rough (Oren–Nayar) diffuse.
 //!
 //! Run with `cargo run --release --example albedo_tables`.
 
@@ -155,19 +156,7 @@ fn main() -> anyhow::Result<()> {
         }
     }
     let values = albedos(&ctx, &configs, 1 << 16)?;
-    let mut table = Vec::new();
-    let mut average = Vec::new();
-    for row in values.chunks(n + fine) {
-        table.extend_from_slice(&row[..n]);
-        let e = &row[n..];
-        let h = 1.0 / (fine - 1) as f64;
-        let mut integral = 0.0;
-        for i in 0..fine - 1 {
-            let (m0, m1) = (i as f64 * h, (i + 1) as f64 * h);
-            integral += 0.5 * h * (e[i] * m0 + e[i + 1] * m1);
-        }
-        average.push((2.0 * integral).min(1.0));
-    }
+    let (table, average) = table_and_average(&values, n, fine);
     write(
         "ggx_albedo_table.wgsl",
         &format!(
@@ -178,5 +167,54 @@ fn main() -> anyhow::Result<()> {
             wgsl_array("GGX_ALBEDO_AVERAGE", &average, n)
         ),
     )?;
+
+    // Rough diffuse (Fujii–Oren–Nayar): rows sigma 0..1, columns μ 0..1, and E_avg.
+    let mut configs = Vec::new();
+    for row in 0..n {
+        let sigma = row as f32 / (n - 1) as f32;
+        for col in 0..n {
+            configs.push(config(
+                6,
+                [sigma; 2],
+                (col as f32 / (n - 1) as f32).max(1e-3),
+            ));
+        }
+        for col in 0..fine {
+            configs.push(config(
+                6,
+                [sigma; 2],
+                (col as f32 / (fine - 1) as f32).max(1e-3),
+            ));
+        }
+    }
+    let values = albedos(&ctx, &configs, 1 << 16)?;
+    let (table, average) = table_and_average(&values, n, fine);
+    write(
+        "diffuse_albedo_table.wgsl",
+        &format!(
+            "{header}// Directional albedo E(μ, sigma) of the white single-scattering rough diffuse\n\
+             // lobe: rows sigma 0 to 1, columns μ = cos θo 0 to 1, {n} × {n}, 2^16 samples each;\n\
+             // then E_avg per sigma.\n{}{}",
+            wgsl_array("FON_ALBEDO", &table, n),
+            wgsl_array("FON_ALBEDO_AVERAGE", &average, n)
+        ),
+    )?;
     Ok(())
+}
+
+/// Splits rows of (n coarse, fine) albedos into the n × n table and, per row,
+/// E_avg = 2 ∫ E(μ) μ dμ by the trapezoid rule on the fine grid.
+fn table_and_average(values: &[f64], n: usize, fine: usize) -> (Vec<f64>, Vec<f64>) {
+    let mut table = Vec::new();
+    let mut average = Vec::new();
+    for row in values.chunks(n + fine) {
+        table.extend_from_slice(&row[..n]);
+        let e = &row[n..];
+        let h = 1.0 / (fine - 1) as f64;
+        let integral: f64 = (0..fine - 1)
+            .map(|i| 0.5 * h * (e[i] * i as f64 * h + e[i + 1] * (i + 1) as f64 * h))
+            .sum();
+        average.push((2.0 * integral).min(1.0));
+    }
+    (table, average)
 }

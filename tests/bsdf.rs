@@ -36,6 +36,7 @@ struct Principled {
     coat_roughness: f32,
     sheen_weight: f32,
     sheen_roughness: f32,
+    diffuse_roughness: f32,
 }
 
 impl Principled {
@@ -49,6 +50,7 @@ impl Principled {
             coat_roughness: 0.05,
             sheen_weight: 0.0,
             sheen_roughness: 0.3,
+            diffuse_roughness: 0.0,
         }
     }
 }
@@ -86,7 +88,12 @@ impl Lobe {
                 5 => [self.kind, self.thin as u32, 40, 8],
                 _ => [self.kind, self.thin as u32, 0, 0],
             },
-            [ax.to_bits(), ay.to_bits(), self.eta.to_bits(), 0],
+            [
+                ax.to_bits(),
+                ay.to_bits(),
+                self.eta.to_bits(),
+                p.diffuse_roughness.to_bits(),
+            ],
             bits(self.f0, 0.0),
             bits(self.tint, 0.0),
             bits(self.wo, 0.0),
@@ -220,6 +227,14 @@ fn principled_lobes() -> Vec<Lobe> {
         principled: Some(principled),
     };
     let materials = [
+        (
+            "rough clay",
+            Principled {
+                diffuse_roughness: 1.0,
+                specular_weight: 0.0,
+                ..Principled::plastic()
+            },
+        ),
         ("plastic", Principled::plastic()),
         (
             "rough gold",

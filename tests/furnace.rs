@@ -265,6 +265,16 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
             0.9,
         ),
         (
+            // Energy-preserving (EON-style compensation): loses nothing.
+            "rough (Oren–Nayar) white diffuse",
+            Material {
+                diffuse_roughness: 1.0,
+                specular_weight: 0.0,
+                ..white()
+            },
+            0.98,
+        ),
+        (
             "sheen over white diffuse",
             Material {
                 sheen_weight: 1.0,

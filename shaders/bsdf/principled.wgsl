@@ -40,6 +40,7 @@ struct Principled {
     sheen_color: vec3<f32>,
     sheen_roughness: f32,
     thin_walled: bool,
+    diffuse_roughness: f32,
 };
 
 const LOBE_COAT: u32 = 0u;
@@ -88,7 +89,7 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     let spec = max(p.specular_weight, 0.0) * p.specular_color;
     w.scale[LOBE_SPECULAR] = opaque * spec;
     let spec_albedo = fresnel_dielectric(cos_o, max(p.ior, 1.0)) * min(max(spec.r, max(spec.g, spec.b)), 1.0);
-    w.scale[LOBE_DIFFUSE] = opaque * (1.0 - spec_albedo) * p.base_color * clamp(p.base_weight, 0.0, 1.0);
+    w.scale[LOBE_DIFFUSE] = opaque * (1.0 - spec_albedo);
 
     // Selection by estimated albedo toward wo.
     var e: array<f32, 7>;
@@ -99,7 +100,7 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     e[LOBE_METAL_MS] = luminance(w.scale[LOBE_METAL_MS] * conductor_ms_albedo(cos_o, p.roughness, p.base_color * p.base_weight));
     e[LOBE_GLASS] = luminance(w.scale[LOBE_GLASS] * max(principled_glass_tint(p), vec3<f32>(0.05)));
     e[LOBE_SPECULAR] = luminance(w.scale[LOBE_SPECULAR]) * fresnel_dielectric(cos_o, max(p.ior, 1.0));
-    e[LOBE_DIFFUSE] = luminance(w.scale[LOBE_DIFFUSE]);
+    e[LOBE_DIFFUSE] = luminance(w.scale[LOBE_DIFFUSE] * p.base_color * clamp(p.base_weight, 0.0, 1.0));
     var total = 0.0;
     for (var i = 0u; i < LOBE_COUNT; i++) {
         // Every lobe with any weight keeps some probability, so its pdf is never 0 where
@@ -130,7 +131,9 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         case LOBE_METAL_MS: {
             return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);
         }
-        default: { return diffuse_eval(wo, wi, vec3<f32>(1.0)); }
+        // The diffuse lobe carries its albedo itself: its energy compensation depends on
+        // the albedo non-linearly.
+        default: { return energy_preserving_diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness); }
     }
 }
 
@@ -162,7 +165,10 @@ fn principled_is_diffuse(p: Principled) -> bool {
 // Sum over the non-delta lobes (delta lobes are 0 for every direction given).
 fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEval {
     if (principled_is_diffuse(p)) {
-        return PrincipledEval(diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0)), diffuse_pdf(wo, wi));
+        return PrincipledEval(
+            energy_preserving_diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness),
+            diffuse_pdf(wo, wi),
+        );
     }
     let w = principled_weights(p, wo);
     var value = vec3<f32>(0.0);
@@ -178,8 +184,12 @@ fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEva
 
 fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32>) -> BsdfSample {
     if (principled_is_diffuse(p)) {
-        let d = diffuse_sample(wo, p.base_color * clamp(p.base_weight, 0.0, 1.0), u);
-        return BsdfSample(d.wi, d.weight, d.pdf, false, d.pdf > 0.0);
+        let d = diffuse_sample(wo, vec3<f32>(1.0), u);
+        if (d.pdf <= 0.0) {
+            return no_sample();
+        }
+        let f = energy_preserving_diffuse_eval(wo, d.wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness);
+        return BsdfSample(d.wi, f / d.pdf, d.pdf, false, true);
     }
     let w = principled_weights(p, wo);
     // Pick a lobe by its probability.
@@ -253,7 +263,7 @@ fn principled_extinction(p: Principled) -> vec3<f32> {
 // (base colour, base weight), (specular colour, specular weight), (transmission colour,
 // transmission weight), (coat colour, coat weight), (sheen colour, sheen weight),
 // (metallic, roughness, anisotropy, IOR), (coat roughness, coat IOR, sheen roughness,
-// transmission depth).
+// transmission depth), then thin-walled and the diffuse roughness.
 fn principled_unpack(
     base: vec4<f32>,
     specular: vec4<f32>,
@@ -263,6 +273,7 @@ fn principled_unpack(
     params: vec4<f32>,
     layers: vec4<f32>,
     thin_walled: bool,
+    diffuse_roughness: f32,
 ) -> Principled {
     return Principled(
         base.rgb, base.w,
@@ -272,5 +283,6 @@ fn principled_unpack(
         coat.w, layers.x, layers.y, coat.rgb,
         sheen.w, sheen.rgb, layers.z,
         thin_walled,
+        diffuse_roughness,
     );
 }

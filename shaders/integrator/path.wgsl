@@ -28,6 +28,7 @@ fn material_principled(m: Material) -> Principled {
         m.principled[0], m.principled[1], m.principled[2], m.principled[3],
         m.principled[4], m.principled[5], m.principled[6],
         m.flags.x != 0u,
+        bitcast<f32>(m.flags.z),
     );
 }
 

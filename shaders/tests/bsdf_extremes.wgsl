@@ -38,6 +38,7 @@ fn extreme_principled(bits: u32, roughness: f32, anisotropy: f32, colour: f32) -
         COLOURS[(h >> 16u) % 5u], ROUGHNESS[(h >> 19u) & 7u], IORS[(h >> 22u) & 7u], vec3<f32>(v, 1.0, colour),
         COLOURS[(h >> 25u) % 5u], vec3<f32>(1.0, w, colour), ROUGHNESS[(h >> 28u) & 7u],
         ((h >> 31u) & 1u) != 0u,
+        COLOURS[(h >> 27u) % 5u],
     );
 }
 

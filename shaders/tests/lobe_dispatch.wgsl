@@ -6,7 +6,8 @@
 // (alpha.x, alpha.y, eta, 0) as f32 bits, f0 or albedo, tint, wo, then for the principled
 // surface its seven packed vec4s (principled_unpack).
 // Kinds: 0 diffuse, 1 conductor, 2 dielectric, 3 sheen (roughness in alpha.x), 4 dielectric
-// reflection only (scale in tint), 5 the principled surface.
+// reflection only (scale in tint), 5 the principled surface, 6 single-scattering rough
+// diffuse (sigma in alpha.x).
 
 const CONFIG_STRIDE: u32 = 12u;
 
@@ -40,6 +41,7 @@ fn lobe_params(base: u32) -> LobeParams {
             bitcast<vec4<f32>>(probe_in[base + 10u]),
             bitcast<vec4<f32>>(probe_in[base + 11u]),
             probe_in[base].y != 0u,
+            bitcast<f32>(probe_in[base + 1u].w),
         ),
     );
 }
@@ -51,6 +53,7 @@ fn lobe_eval(p: LobeParams, wi: vec3<f32>) -> vec3<f32> {
         case 3u: { return sheen_eval(p.wo, wi, p.alpha.x, p.f0); }
         case 4u: { return dielectric_reflection_eval(p.wo, wi, p.alpha, p.eta, p.tint); }
         case 5u: { return principled_eval(p.principled, p.wo, wi).value; }
+        case 6u: { return rough_diffuse_eval(p.wo, wi, p.f0, p.alpha.x); }
         default: { return dielectric_eval(p.wo, wi, p.alpha, p.eta, p.tint, p.thin); }
     }
 }
@@ -62,6 +65,7 @@ fn lobe_pdf(p: LobeParams, wi: vec3<f32>) -> f32 {
         case 3u: { return sheen_pdf(p.wo, wi); }
         case 4u: { return dielectric_reflection_pdf(p.wo, wi, p.alpha); }
         case 5u: { return principled_eval(p.principled, p.wo, wi).pdf; }
+        case 6u: { return diffuse_pdf(p.wo, wi); }
         default: { return dielectric_pdf(p.wo, wi, p.alpha, p.eta, p.thin); }
     }
 }
@@ -78,6 +82,11 @@ fn lobe_sample(p: LobeParams) -> BsdfSample {
         case 3u: { return sheen_sample(p.wo, p.alpha.x, p.f0, u); }
         case 4u: { return dielectric_reflection_sample(p.wo, p.alpha, p.eta, p.tint, u); }
         case 5u: { return principled_sample(p.principled, p.wo, uc, rand(), u); }
+        case 6u: {
+            let d = diffuse_sample(p.wo, vec3<f32>(1.0), u);
+            let f = rough_diffuse_eval(p.wo, d.wi, p.f0, p.alpha.x);
+            return BsdfSample(d.wi, f / max(d.pdf, 1e-30), d.pdf, false, d.pdf > 0.0);
+        }
         default: { return dielectric_sample(p.wo, p.alpha, p.eta, p.tint, p.thin, uc, u); }
     }
 }

@@ -196,7 +196,12 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
             ],
         ],
         emission: v(m.emission, m.opacity),
-        flags: [m.thin_walled as u32, m.is_transmissive() as u32, 0, 0],
+        flags: [
+            m.thin_walled as u32,
+            m.is_transmissive() as u32,
+            m.diffuse_roughness.to_bits(),
+            0,
+        ],
     }
 }
 

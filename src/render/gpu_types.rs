@@ -62,7 +62,8 @@ pub struct GpuMaterial {
     pub principled: [[f32; 4]; 7],
     /// rgb: emitted radiance; w: opacity.
     pub emission: [f32; 4],
-    /// x: 1 if thin-walled; y: 1 if light passes through (keeps geometric orientation).
+    /// x: 1 if thin-walled; y: 1 if light passes through (keeps geometric orientation);
+    /// z: diffuse roughness (f32 bits).
     pub flags: [u32; 4],
 }
 

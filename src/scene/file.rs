@@ -220,6 +220,7 @@ enum Projection {
 struct MaterialDesc {
     base_color: [f32; 3],
     base_weight: f32,
+    diffuse_roughness: f32,
     metallic: f32,
     roughness: f32,
     anisotropy: f32,
@@ -248,6 +249,7 @@ impl Default for MaterialDesc {
         Self {
             base_color: m.base_color.into(),
             base_weight: m.base_weight,
+            diffuse_roughness: m.diffuse_roughness,
             metallic: m.metallic,
             roughness: m.roughness,
             anisotropy: m.anisotropy,
@@ -284,6 +286,7 @@ impl MaterialDesc {
             name: name.to_owned(),
             base_color: self.base_color.into(),
             base_weight: self.base_weight,
+            diffuse_roughness: self.diffuse_roughness,
             metallic: self.metallic,
             roughness: self.roughness,
             anisotropy: self.anisotropy,

@@ -12,6 +12,8 @@ pub struct Material {
     /// Diffuse albedo, or metal reflectance at normal incidence (linear RGB in [0, 1]).
     pub base_color: Vec3,
     pub base_weight: f32,
+    /// Oren–Nayar roughness of the diffuse base in [0, 1]; 0 is Lambertian.
+    pub diffuse_roughness: f32,
     pub metallic: f32,
     /// Perceptual roughness in [0, 1] (GGX alpha = roughness²).
     pub roughness: f32,
@@ -47,6 +49,7 @@ impl Default for Material {
             name: String::new(),
             base_color: Vec3::splat(0.8),
             base_weight: 1.0,
+            diffuse_roughness: 0.0,
             metallic: 0.0,
             roughness: 0.5,
             anisotropy: 0.0,
@@ -115,6 +118,7 @@ impl Material {
         }
         let unit = [
             ("base_weight", self.base_weight),
+            ("diffuse_roughness", self.diffuse_roughness),
             ("metallic", self.metallic),
             ("roughness", self.roughness),
             ("anisotropy", self.anisotropy),
