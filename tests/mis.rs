@@ -1,5 +1,6 @@
 //! Multiple importance sampling must never be worse than BSDF sampling alone: a glass, a
-//! rough gold and a coated sphere under a uniform sky and a small, bright area light,
+//! rough gold and a coated sphere under an HDR sky with a small bright sun and a small,
+//! bright area light,
 //! rendered with both strategies over several seeds. Both converge to the same image, and
 //! the pixel variance with NEE + MIS is at most that of BSDF sampling (within the noise of
 //! the variance estimate itself).
@@ -8,7 +9,7 @@ mod common;
 
 use common::{gpu, render, settings};
 use glam::{Affine3A, Vec3};
-use kiln::scene::{Camera, Material, Scene, shapes};
+use kiln::scene::{Camera, EnvironmentMap, Material, Scene, shapes};
 
 const SEEDS: u32 = 8;
 const SIZE: u32 = 24;
@@ -19,7 +20,26 @@ fn scene(material: Material) -> Scene {
         Vec3::new(0.0, 0.3, 0.0),
         40.0,
     ));
-    scene.environment = Vec3::splat(0.3);
+    // An HDR sky: dim blue gradient with a small sun 100× brighter.
+    let (w, h) = (64u32, 32u32);
+    let texels = (0..h)
+        .flat_map(|y| {
+            (0..w).map(move |x| {
+                if (40..43).contains(&x) && (6..8).contains(&y) {
+                    Vec3::new(60.0, 55.0, 50.0)
+                } else {
+                    Vec3::new(0.2, 0.25, 0.3 + 0.2 * y as f32 / h as f32)
+                }
+            })
+        })
+        .collect();
+    scene.environment_map = Some(EnvironmentMap {
+        width: w,
+        height: h,
+        texels,
+        strength: 1.0,
+        rotation_degrees: 0.0,
+    });
     let m = scene.add_material(material);
     let floor = scene.add_material(Material::diffuse("floor", Vec3::splat(0.5)));
     let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(40.0)));
