@@ -14,7 +14,7 @@ mod common;
 
 use std::sync::OnceLock;
 
-use common::chi2::{SphereBins, chi2_test, sidak_alpha};
+use common::chi2::{SphereBins, chi2_conditional, sidak_alpha};
 use common::{gpu, settings};
 use glam::Vec3;
 use kiln::render::probe::{Probe, run_probe};
@@ -481,13 +481,7 @@ fn check_lobe(
     let n = samples as f64;
     let in_cells: u64 = stats.histogram.iter().sum();
     let integral: f64 = expected.iter().sum();
-    let stray: u64 = stats
-        .histogram
-        .iter()
-        .zip(expected)
-        .filter(|(_, e)| **e == 0.0)
-        .map(|(o, _)| *o)
-        .sum();
+    let (outcome, stray) = chi2_conditional(&stats.histogram, expected);
     if stray as f64 > PROBABILITY_FLOOR * n {
         return Err(format!(
             "{}: {stray} samples where the pdf is 0",
@@ -503,19 +497,6 @@ fn check_lobe(
             lobe.label
         ));
     }
-    let observed: Vec<u64> = stats
-        .histogram
-        .iter()
-        .zip(expected)
-        .filter(|(_, e)| **e > 0.0)
-        .map(|(o, _)| *o)
-        .collect();
-    let probability: Vec<f64> = expected
-        .iter()
-        .filter(|e| **e > 0.0)
-        .map(|e| e / integral)
-        .collect();
-    let outcome = chi2_test(&observed, &probability, observed.iter().sum(), 5.0);
     if outcome.p_value < alpha {
         return Err(format!(
             "{}: p = {:.3e}\n{}",

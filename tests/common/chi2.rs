@@ -546,3 +546,33 @@ fn ln_gamma(x: f64) -> f64 {
                     - inv2 * (1.0 / 1260.0 - inv2 * (1.0 / 1680.0 - inv2 * (1.0 / 1188.0)))));
     (x - 0.5) * x.ln() - x + 0.5 * (2.0 * PI).ln() + series - shift
 }
+
+/// Chi-square of the directions that landed where the pdf is positive against the pdf
+/// normalised over those cells: the distribution's shape, separate from how much
+/// probability is absorbed (which callers check on their own). Also returns the samples
+/// that landed where the integrated pdf is exactly 0 — on the GPU, a few can, from f32
+/// rounding at hard edges of the support — for the caller to bound.
+pub fn chi2_conditional(observed: &[u64], expected_probability: &[f64]) -> (Chi2Outcome, u64) {
+    let stray: u64 = observed
+        .iter()
+        .zip(expected_probability)
+        .filter(|(_, e)| **e == 0.0)
+        .map(|(o, _)| *o)
+        .sum();
+    let integral: f64 = expected_probability.iter().sum();
+    let kept: Vec<u64> = observed
+        .iter()
+        .zip(expected_probability)
+        .filter(|(_, e)| **e > 0.0)
+        .map(|(o, _)| *o)
+        .collect();
+    let probability: Vec<f64> = expected_probability
+        .iter()
+        .filter(|e| **e > 0.0)
+        .map(|e| e / integral)
+        .collect();
+    (
+        chi2_test(&kept, &probability, kept.iter().sum(), 5.0),
+        stray,
+    )
+}
