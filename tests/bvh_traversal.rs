@@ -119,6 +119,11 @@ fn test_scene(rng: &mut Rng) -> Scene {
     scene
 }
 
+/// A vector as the f32 bits of a vec4 with w = 0.
+fn bits4(v: Vec3) -> [u32; 4] {
+    [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0]
+}
+
 #[test]
 fn bvh_closest_hit_matches_brute_force_for_random_and_degenerate_meshes() {
     check_against_brute_force(None);
@@ -178,25 +183,8 @@ fn check_against_brute_force(page_bytes: Option<u64>) {
             d[axis] = -origin[axis].signum();
             dir = d;
         }
-        input.push(
-            origin
-                .to_array()
-                .map(f32::to_bits)
-                .into_iter()
-                .chain([0])
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap(),
-        );
-        input.push(
-            dir.to_array()
-                .map(f32::to_bits)
-                .into_iter()
-                .chain([0])
-                .collect::<Vec<_>>()
-                .try_into()
-                .unwrap(),
-        );
+        input.push(bits4(origin));
+        input.push(bits4(dir));
     }
 
     let mut probe_settings = settings(1, 1, 1);

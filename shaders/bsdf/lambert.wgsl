@@ -44,22 +44,11 @@ fn rough_diffuse_eval(wo: vec3<f32>, wi: vec3<f32>, albedo: vec3<f32>, sigma: f3
 // so white reflects everything at any roughness. E(μ, sigma) and E_avg are tabulated
 // (16 × 16) from `rough_diffuse_eval` by `cargo run --example albedo_tables`.
 fn fon_albedo(mu: f32, sigma: f32) -> f32 {
-    let n = 15.0;
-    let x = clamp(mu, 0.0, 1.0) * n;
-    let y = clamp(sigma, 0.0, 1.0) * n;
-    let x0 = min(u32(x), 14u);
-    let y0 = min(u32(y), 14u);
-    let fx = x - f32(x0);
-    let fy = y - f32(y0);
-    let row0 = mix(FON_ALBEDO[y0 * 16u + x0], FON_ALBEDO[y0 * 16u + x0 + 1u], fx);
-    let row1 = mix(FON_ALBEDO[(y0 + 1u) * 16u + x0], FON_ALBEDO[(y0 + 1u) * 16u + x0 + 1u], fx);
-    return clamp(mix(row0, row1, fy), 0.0, 1.0);
+    return table16_bilinear(&FON_ALBEDO, mu, sigma);
 }
 
 fn fon_albedo_average(sigma: f32) -> f32 {
-    let y = clamp(sigma, 0.0, 1.0) * 15.0;
-    let y0 = min(u32(y), 14u);
-    return clamp(mix(FON_ALBEDO_AVERAGE[y0], FON_ALBEDO_AVERAGE[y0 + 1u], y - f32(y0)), 0.0, 1.0);
+    return table16_linear(&FON_ALBEDO_AVERAGE, sigma);
 }
 
 fn energy_preserving_diffuse_eval(wo: vec3<f32>, wi: vec3<f32>, albedo: vec3<f32>, sigma: f32) -> vec3<f32> {

@@ -10,24 +10,34 @@
 
 const GGX_TABLE_SIZE: u32 = 16u;
 
-fn ggx_albedo(mu: f32, roughness: f32) -> f32 {
+// Bilinear lookup in a 16 × 16 table over [0, 1]² (rows y, columns x), and linear lookup
+// in its 16-entry companion: shared by the GGX and rough-diffuse albedo tables.
+fn table16_bilinear(table: ptr<private, array<f32, 256>>, x_in: f32, y_in: f32) -> f32 {
     let n = f32(GGX_TABLE_SIZE - 1u);
-    let x = clamp(mu, 0.0, 1.0) * n;
-    let y = clamp(roughness, 0.0, 1.0) * n;
+    let x = clamp(x_in, 0.0, 1.0) * n;
+    let y = clamp(y_in, 0.0, 1.0) * n;
     let x0 = min(u32(x), GGX_TABLE_SIZE - 2u);
     let y0 = min(u32(y), GGX_TABLE_SIZE - 2u);
     let fx = x - f32(x0);
     let fy = y - f32(y0);
     let s = GGX_TABLE_SIZE;
-    let row0 = mix(GGX_ALBEDO[y0 * s + x0], GGX_ALBEDO[y0 * s + x0 + 1u], fx);
-    let row1 = mix(GGX_ALBEDO[(y0 + 1u) * s + x0], GGX_ALBEDO[(y0 + 1u) * s + x0 + 1u], fx);
+    let row0 = mix((*table)[y0 * s + x0], (*table)[y0 * s + x0 + 1u], fx);
+    let row1 = mix((*table)[(y0 + 1u) * s + x0], (*table)[(y0 + 1u) * s + x0 + 1u], fx);
     return clamp(mix(row0, row1, fy), 0.0, 1.0);
 }
 
-fn ggx_albedo_average(roughness: f32) -> f32 {
-    let y = clamp(roughness, 0.0, 1.0) * f32(GGX_TABLE_SIZE - 1u);
+fn table16_linear(table: ptr<private, array<f32, 16>>, y_in: f32) -> f32 {
+    let y = clamp(y_in, 0.0, 1.0) * f32(GGX_TABLE_SIZE - 1u);
     let y0 = min(u32(y), GGX_TABLE_SIZE - 2u);
-    return clamp(mix(GGX_ALBEDO_AVERAGE[y0], GGX_ALBEDO_AVERAGE[y0 + 1u], y - f32(y0)), 0.0, 1.0);
+    return clamp(mix((*table)[y0], (*table)[y0 + 1u], y - f32(y0)), 0.0, 1.0);
+}
+
+fn ggx_albedo(mu: f32, roughness: f32) -> f32 {
+    return table16_bilinear(&GGX_ALBEDO, mu, roughness);
+}
+
+fn ggx_albedo_average(roughness: f32) -> f32 {
+    return table16_linear(&GGX_ALBEDO_AVERAGE, roughness);
 }
 
 // The colour of the multiply-scattered light: Kulla–Conty's F_ms with the hemispherical
