@@ -133,3 +133,6 @@ struct Stats {
 @group(0) @binding(19) var<storage, read> analytic_lights: array<AnalyticLight>;
 // The environment map and its sampling CDFs (shaders/lights/environment.wgsl).
 @group(0) @binding(20) var<storage, read> env_data: array<vec4<f32>>;
+// The rough dielectric's energy table, 2 × 16³ f32 four to a vec4 (shaders/bsdf/
+// dielectric_energy.wgsl).
+@group(0) @binding(21) var<uniform> dielectric_energy_table: array<vec4<f32>, 2048>;

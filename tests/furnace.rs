@@ -222,11 +222,32 @@ fn furnace_white_metal_stays_white_at_every_roughness() {
 }
 
 #[test]
+fn furnace_white_glass_stays_white_at_every_roughness() {
+    // Rough glass is scaled by its tabulated energy albedo (Turquin 2019); without it this
+    // sphere measured 0.81 (solid) and 0.78 (thin-walled) at roughness 0.5.
+    for thin_walled in [false, true] {
+        for roughness in [0.25, 0.5, 0.75, 1.0] {
+            let material = Material {
+                transmission_weight: 1.0,
+                roughness,
+                thin_walled,
+                ..white()
+            };
+            let (_, on_sphere) = principled_furnace(material, true, 256);
+            eprintln!("white glass, thin {thin_walled}, roughness {roughness}: {on_sphere}");
+            assert!(
+                (on_sphere - 1.0).abs() < 0.03,
+                "thin {thin_walled}, roughness {roughness}: {on_sphere}"
+            );
+        }
+    }
+}
+
+#[test]
 fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
-    // Rough dielectric lobes have no multiple-scattering compensation yet and lose the
-    // energy of paths that would bounce between microfacets (measured on this sphere at
-    // roughness 0.5: glass 0.81, thin glass 0.78); nothing may reflect more than it
-    // receives. The floors are those measurements less a margin.
+    // Layers over a diffuse base lose what albedo scaling cannot return (the energy a
+    // rough specular layer holds back from the base); nothing may reflect more than it
+    // receives. The floors are measurements on this sphere less a margin.
     let cases = [
         (
             "rough white metal",
@@ -236,25 +257,6 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
                 ..white()
             },
             0.85,
-        ),
-        (
-            "rough thin-walled glass",
-            Material {
-                transmission_weight: 1.0,
-                roughness: 0.5,
-                thin_walled: true,
-                ..white()
-            },
-            0.75,
-        ),
-        (
-            "rough glass",
-            Material {
-                transmission_weight: 1.0,
-                roughness: 0.5,
-                ..white()
-            },
-            0.75,
         ),
         (
             "white plastic",

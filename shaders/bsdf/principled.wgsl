@@ -15,8 +15,9 @@
 // transmissive or thin-walled materials z is the outside (front) of the surface, for
 // opaque ones the caller turns it toward wo.
 //
-// Not yet: multiple-scattering energy compensation for rough GGX (rough white metal
-// darkens with roughness, as in pbrt-v4), and coat/base layering beyond albedo scaling.
+// Rough metal and rough glass carry multiple-scattering energy compensation
+// (multiple_scattering.wgsl, dielectric_energy.wgsl), so white ones stay white at every
+// roughness. Not yet: coat/base layering beyond albedo scaling.
 
 struct Principled {
     base_color: vec3<f32>,
@@ -126,7 +127,10 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         }
         case LOBE_SHEEN: { return sheen_eval(wo, wi, p.sheen_roughness, vec3<f32>(1.0)); }
         case LOBE_METAL: { return conductor_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha, p.base_color * p.base_weight, p.specular_color); }
-        case LOBE_GLASS: { return dielectric_eval(wo, wi, alpha, p.ior, principled_glass_tint(p), p.thin_walled); }
+        case LOBE_GLASS: {
+            let c = dielectric_compensation(wo.z, p.roughness, p.ior, p.thin_walled);
+            return c * dielectric_eval(wo, wi, alpha, p.ior, principled_glass_tint(p), p.thin_walled);
+        }
         case LOBE_SPECULAR: { return dielectric_reflection_eval(wo, wi, alpha, p.ior, vec3<f32>(1.0)); }
         case LOBE_METAL_MS: {
             return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);

@@ -48,6 +48,8 @@ pub struct GpuScene {
     pub light_triangles: wgpu::Buffer,
     pub light_cdf: wgpu::Buffer,
     pub analytic_lights: wgpu::Buffer,
+    /// The BSDFs' energy tables (`tables::DIELECTRIC_ENERGY`), a uniform buffer.
+    pub bsdf_tables: wgpu::Buffer,
     pub analytic_light_count: u32,
     pub environment_data: wgpu::Buffer,
     pub has_environment_map: bool,
@@ -538,6 +540,7 @@ impl GpuScene {
             light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, limit, &mut bytes)?,
             analytic_lights: storage_buffer(ctx, "lights", &a.analytic_lights, limit, &mut bytes)?,
             analytic_light_count: a.analytic_lights.len() as u32,
+            bsdf_tables: bsdf_tables_buffer(ctx),
             environment_data: storage_buffer(
                 ctx,
                 "environment map",
@@ -554,6 +557,20 @@ impl GpuScene {
             bytes,
         })
     }
+}
+
+/// The binding of the BSDF energy tables (`shaders/bsdf/dielectric_energy.wgsl`).
+pub const BSDF_TABLES_BINDING: u32 = 21;
+
+/// The BSDF tables as a uniform buffer: uniform, not storage, so they take none of GL's
+/// 16 storage-buffer slots, and 32 KiB fit well within every adapter's 64 KiB.
+fn bsdf_tables_buffer(ctx: &GpuContext) -> wgpu::Buffer {
+    ctx.device
+        .create_buffer_init(&wgpu::util::BufferInitDescriptor {
+            label: Some("BSDF tables"),
+            contents: bytemuck::cast_slice(&super::tables::DIELECTRIC_ENERGY),
+            usage: wgpu::BufferUsages::UNIFORM,
+        })
 }
 
 /// Layout of group 0 (`shaders/scene.wgsl`): params, film, stats, then the scene, with
@@ -583,6 +600,7 @@ pub fn scene_bind_group_layout(
     for b in (4..=12).chain([19, 20]) {
         entries.push(entry(b, read_only));
     }
+    entries.push(entry(BSDF_TABLES_BINDING, wgpu::BufferBindingType::Uniform));
     for p in 1..features.node_pages {
         entries.push(entry(NODE_PAGE_BINDING + p - 1, read_only));
     }
@@ -632,6 +650,7 @@ impl GpuScene {
             (12, &self.light_cdf),
             (19, &self.analytic_lights),
             (20, &self.environment_data),
+            (BSDF_TABLES_BINDING, &self.bsdf_tables),
         ];
         // Page 0 of each paged array has its own binding; further pages exist only when
         // used (see `scene_bind_group_layout`).

@@ -41,6 +41,7 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("bsdf/ggx_albedo_table.wgsl"),
     shader_file!("bsdf/multiple_scattering.wgsl"),
     shader_file!("bsdf/dielectric.wgsl"),
+    shader_file!("bsdf/dielectric_energy.wgsl"),
     shader_file!("bsdf/lambert.wgsl"),
     shader_file!("bsdf/diffuse_albedo_table.wgsl"),
     shader_file!("bsdf/sheen_table.wgsl"),

@@ -11,6 +11,7 @@ pub mod kernel;
 pub mod probe;
 mod readback;
 mod renderer;
+pub mod tables;
 
 pub use context::{Backend, GpuContext, GpuError};
 pub use renderer::{Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer};
