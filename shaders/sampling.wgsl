@@ -88,6 +88,21 @@ fn frame_from_normal(n: vec3<f32>) -> Frame {
     return Frame(t, bt, n);
 }
 
+// The frame around unit `n` whose tangent is `t` (made orthogonal to n) turned by `turns`
+// of a full turn about n; an arbitrary tangent where t is zero or parallel to n.
+fn frame_from_normal_tangent(n: vec3<f32>, t_in: vec3<f32>, turns: f32) -> Frame {
+    var t = t_in - n * dot(n, t_in);
+    let len2 = dot(t, t);
+    if (len2 > 1e-12 * max(dot(t_in, t_in), 1e-30)) {
+        t = t * inverseSqrt(len2);
+    } else {
+        t = frame_from_normal(n).t;
+    }
+    let angle = 2.0 * PI * turns;
+    t = cos(angle) * t + sin(angle) * cross(n, t);
+    return Frame(t, cross(n, t), n);
+}
+
 fn frame_to_world(f: Frame, v: vec3<f32>) -> vec3<f32> {
     return v.x * f.t + v.y * f.b + v.z * f.n;
 }

@@ -72,7 +72,8 @@ const INSTANCE_HAS_NORMALS: u32 = 1u;
 const INSTANCE_HAS_UVS: u32 = 2u;
 
 // A principled material: the seven vec4s of `principled_unpack`, emission (+ opacity in
-// w), and flags (x: thin-walled, y: transmissive, z: diffuse roughness as f32 bits).
+// w), and flags (x: thin-walled, y: transmissive, z: diffuse roughness and w: anisotropy
+// rotation in turns, as f32 bits).
 struct Material {
     principled: array<vec4<f32>, 7>,
     emission: vec4<f32>,

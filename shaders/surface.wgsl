@@ -8,6 +8,9 @@ struct Surface {
     // Interpolated vertex normal, or `ng` for meshes without normals; same side as `ng`.
     ns: vec3<f32>,
     uv: vec2<f32>,
+    // dp/du from the triangle's texture coordinates (world space, not unit, not
+    // orthogonal to the normals); zero where the mesh has no UVs or they are degenerate.
+    dpdu: vec3<f32>,
     material: u32,
 };
 
@@ -39,6 +42,7 @@ fn surface_at(hit: SceneHit) -> Surface {
 
     var ns = ng;
     var uv = vec2<f32>(hit.b1, hit.b2);
+    var dpdu = vec3<f32>(0.0);
     let base = hit.triangle * 3u;
     let v0 = vertices[triangle_vertices[base]];
     let v1 = vertices[triangle_vertices[base + 1u]];
@@ -60,6 +64,13 @@ fn surface_at(hit: SceneHit) -> Surface {
         let uv1 = bitcast<vec2<f32>>(v1.yz);
         let uv2 = bitcast<vec2<f32>>(v2.yz);
         uv = b0 * uv0 + hit.b1 * uv1 + hit.b2 * uv2;
+        // pbrt-v4 §6.5.3: solve dp1 = du1 dpdu + dv1 dpdv, dp2 = du2 dpdu + dv2 dpdv.
+        let duv1 = uv1 - uv0;
+        let duv2 = uv2 - uv0;
+        let det = duv1.x * duv2.y - duv1.y * duv2.x;
+        if (abs(det) > 1e-12) {
+            dpdu = transform_vector(inst.to_world, ((p1 - p0) * duv2.y - (p2 - p0) * duv1.y) / det);
+        }
     }
-    return Surface(pe, ng, ns, uv, inst.material);
+    return Surface(pe, ng, ns, uv, dpdu, inst.material);
 }

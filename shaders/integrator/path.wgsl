@@ -97,9 +97,26 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     loop {
         rays_traced++;
         let hit = intersect_scene(ray);
+        let t_scene = select(3.0e38, hit.t, hit.hit);
+        // Sphere lights and sun disks in front of the surface (or the sky).
+        var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
+        if (params.light_totals.z >= 1.0) {
+            light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
+        }
         if (any(extinction > vec3<f32>(0.0))) {
             // Beer–Lambert over the segment; a medium without an exit absorbs everything.
-            throughput *= exp(-extinction * select(3.0e38, hit.t, hit.hit));
+            throughput *= exp(-extinction * min(t_scene, light_hit.t));
+        }
+        if (light_hit.hit) {
+            var w = 1.0;
+            if (nee && !prev_delta) {
+                w = power_heuristic(prev_bsdf_pdf, light_hit.pdf);
+            }
+            radiance += throughput * light_hit.radiance * w;
+            if (light_hit.t < t_scene) {
+                // The sphere light is opaque: the path ends on it.
+                break;
+            }
         }
         if (!hit.hit) {
             var w = 1.0;
@@ -143,9 +160,13 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let flip = !transmissive && !front;
         let ng = select(s.ng, -s.ng, flip);
         let ns = select(s.ns, -s.ns, flip);
-        let frame = frame_from_normal(ns);
-        let wo = to_local(frame, -ray.dir);
         let p = material_principled(material);
+        // Anisotropic highlights follow the texture's u direction, turned by the material.
+        var frame = frame_from_normal(ns);
+        if (p.anisotropy > 0.0) {
+            frame = frame_from_normal_tangent(ns, s.dpdu, bitcast<f32>(material.flags.w));
+        }
+        let wo = to_local(frame, -ray.dir);
 
         if (nee) {
             radiance += throughput * sample_direct(s, ng, frame, wo, p);

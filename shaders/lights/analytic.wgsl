@@ -1,6 +1,9 @@
-// Point (optionally spherical), spot and distant lights: sampled by next-event estimation
-// only (BSDF rays do not hit them), so their samples carry MIS weight 1. Delta lights
-// (zero radius or angular size) return pdf = the pick probability alone.
+// Point (optionally spherical), spot and distant lights. Delta lights (zero radius or
+// angular size) can only be reached by next-event estimation: their samples return pdf =
+// the pick probability alone and MIS weight 1. Spheres (point and spot lights with a
+// radius) and sun disks (distant lights with an angular diameter) are also hit by BSDF
+// rays (`analytic_light_hit`), so both strategies are weighted by MIS. A sphere light is
+// an opaque emitter to the rays that hit it but, as in Cycles, casts no shadow.
 
 // Uniform direction in the cone around +z whose half-angle has 1 - cos = one_minus_cos
 // (passed as such to keep tiny cones, like the sun's, accurate).
@@ -45,7 +48,7 @@ fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample 
         // Irradiance E = L ∫cos dω = L π sin²θ over the disk.
         let cos_max = 1.0 - one_minus_cos;
         let radiance = l.intensity.rgb / (PI * (1.0 - cos_max * cos_max));
-        return LightSample(wi, 3.0e38, radiance, pick / (2.0 * PI * one_minus_cos), false);
+        return LightSample(wi, 3.0e38, radiance, pick / (2.0 * PI * one_minus_cos), true);
     }
     let to = l.position.xyz - p;
     let d2 = dot(to, to);
@@ -72,5 +75,74 @@ fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample 
     let b = dot(to, wi);
     let dist = b - sqrt(max(0.0, r * r - (d2 - b * b)));
     let radiance = l.intensity.rgb * falloff / (PI * r * r);
-    return LightSample(wi, max(dist, 0.0), radiance, pick / (2.0 * PI * one_minus_cos), false);
+    return LightSample(wi, max(dist, 0.0), radiance, pick / (2.0 * PI * one_minus_cos), true);
+}
+
+// What a ray from `o` along unit `d` sees of the analytic lights before `t_max`: the
+// nearest sphere light, or where the ray escapes (t_max = 3e38), the sun disks it points
+// into. `pdf` is next-event estimation's solid-angle density for that direction (pick
+// probability included), for the MIS weight.
+struct AnalyticHit {
+    hit: bool,
+    // Distance to the sphere hit; 3e38 for sun disks, which block nothing.
+    t: f32,
+    radiance: vec3<f32>,
+    pdf: f32,
+};
+
+fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
+    var result = AnalyticHit(false, t_max, vec3<f32>(0.0), 0.0);
+    let count = u32(params.light_totals.z);
+    for (var i = 0u; i < count; i++) {
+        let l = analytic_lights[i];
+        let kind = u32(l.position.w);
+        let pick = l.intensity.w;
+        if (kind == 2u) {
+            let one_minus_cos = l.axis.w;
+            if (one_minus_cos <= 0.0 || result.t < 3.0e38) {
+                continue;
+            }
+            if (1.0 - dot(d, -normalize(l.position.xyz)) <= one_minus_cos) {
+                let cos_max = 1.0 - one_minus_cos;
+                result.hit = true;
+                result.radiance += l.intensity.rgb / (PI * (1.0 - cos_max * cos_max));
+                result.pdf += pick / (2.0 * PI * one_minus_cos);
+            }
+            continue;
+        }
+        let r = l.axis.w;
+        if (r <= 0.0) {
+            continue;
+        }
+        // Ray–sphere intersection in the form of Haines et al. 2019 ("Precision
+        // Improvements for Ray/Sphere Intersection"): the discriminant from the distance
+        // of the centre to the ray, not from b² - c, which cancels catastrophically.
+        let f = o - l.position.xyz;
+        let d2 = dot(f, f);
+        if (d2 <= r * r) {
+            // Inside the sphere: next-event estimation treats it as a point light too.
+            continue;
+        }
+        let b = -dot(f, d);
+        let perp = f + b * d;
+        let disc = r * r - dot(perp, perp);
+        if (b <= 0.0 || disc < 0.0) {
+            continue;
+        }
+        let t = b - sqrt(disc);
+        if (t <= 0.0 || t >= result.t) {
+            continue;
+        }
+        var falloff = 1.0;
+        if (kind == 1u) {
+            falloff = spot_falloff(dot(normalize(f), l.axis.xyz), l.shape.x, l.shape.y);
+        }
+        let sin2_max = r * r / d2;
+        let cos_max = sqrt(max(0.0, 1.0 - sin2_max));
+        let one_minus_cos = sin2_max / (1.0 + cos_max);
+        // The nearest sphere replaces anything found so far (spheres are opaque), except
+        // sun disks, which only a ray that hits no sphere can reach.
+        result = AnalyticHit(true, t, l.intensity.rgb * falloff / (PI * r * r), pick / (2.0 * PI * one_minus_cos));
+    }
+    return result;
 }

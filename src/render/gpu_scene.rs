@@ -202,7 +202,7 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
             m.thin_walled as u32,
             m.is_transmissive() as u32,
             m.diffuse_roughness.to_bits(),
-            0,
+            m.anisotropy_rotation.to_bits(),
         ],
     }
 }

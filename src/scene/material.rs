@@ -19,6 +19,10 @@ pub struct Material {
     pub roughness: f32,
     /// Stretches the highlight along the tangent, in [0, 1].
     pub anisotropy: f32,
+    /// Turns the tangent about the shading normal, in turns (Blender's "Anisotropic
+    /// Rotation": 0.25 is 90°). The tangent follows the texture's u direction where the
+    /// mesh has UVs.
+    pub anisotropy_rotation: f32,
     pub specular_weight: f32,
     /// Tints dielectric reflection; for metals, the edge tint at 82° (F82).
     pub specular_color: Vec3,
@@ -53,6 +57,7 @@ impl Default for Material {
             metallic: 0.0,
             roughness: 0.5,
             anisotropy: 0.0,
+            anisotropy_rotation: 0.0,
             specular_weight: 1.0,
             specular_color: Vec3::ONE,
             ior: 1.5,
@@ -133,6 +138,12 @@ impl Material {
             if !(0.0..=1.0).contains(&v) {
                 return Err(format!("{field} {v} must lie in [0, 1]"));
             }
+        }
+        if !self.anisotropy_rotation.is_finite() {
+            return Err(format!(
+                "anisotropy_rotation {} must be finite",
+                self.anisotropy_rotation
+            ));
         }
         if !(self.specular_weight.is_finite() && self.specular_weight >= 0.0) {
             return Err(format!(
