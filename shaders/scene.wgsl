@@ -125,7 +125,8 @@ struct Stats {
 @group(0) @binding(7) var<storage, read> triangles_0: array<Triangle>;
 // Three global vertex indices per triangle, in the same order as `triangles`.
 @group(0) @binding(8) var<storage, read> triangle_vertices: array<u32>;
-// Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w unused.
+// Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w = colour
+// (pack4x8unorm).
 @group(0) @binding(9) var<storage, read> vertices: array<vec4<u32>>;
 @group(0) @binding(10) var<storage, read> materials: array<Material>;
 @group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;

@@ -11,6 +11,9 @@ struct Surface {
     // dp/du from the triangle's texture coordinates (world space, not unit, not
     // orthogonal to the normals); zero where the mesh has no UVs or they are degenerate.
     dpdu: vec3<f32>,
+    dpdv: vec3<f32>,
+    // Interpolated vertex colour (white where the mesh has none).
+    color: vec4<f32>,
     material: u32,
 };
 
@@ -43,6 +46,7 @@ fn surface_at(hit: SceneHit) -> Surface {
     var ns = ng;
     var uv = vec2<f32>(hit.b1, hit.b2);
     var dpdu = vec3<f32>(0.0);
+    var dpdv = vec3<f32>(0.0);
     let base = hit.triangle * 3u;
     let v0 = vertices[triangle_vertices[base]];
     let v1 = vertices[triangle_vertices[base + 1u]];
@@ -70,7 +74,9 @@ fn surface_at(hit: SceneHit) -> Surface {
         let det = duv1.x * duv2.y - duv1.y * duv2.x;
         if (abs(det) > 1e-12) {
             dpdu = transform_vector(inst.to_world, ((p1 - p0) * duv2.y - (p2 - p0) * duv1.y) / det);
+            dpdv = transform_vector(inst.to_world, ((p2 - p0) * duv1.x - (p1 - p0) * duv2.x) / det);
         }
     }
-    return Surface(pe, ng, ns, uv, dpdu, inst.material);
+    let color = b0 * unpack4x8unorm(v0.w) + hit.b1 * unpack4x8unorm(v1.w) + hit.b2 * unpack4x8unorm(v2.w);
+    return Surface(pe, ng, ns, uv, dpdu, dpdv, color, inst.material);
 }

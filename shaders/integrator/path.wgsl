@@ -32,6 +32,45 @@ fn material_principled(m: Material) -> Principled {
     );
 }
 
+// The fixed-parameter material of the material buffer (materials without a graph).
+fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
+    let m = materials[id];
+    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, bitcast<f32>(m.flags.w));
+}
+
+// A small hash of the instance index in [0, 1), for the Object Info node.
+fn instance_random(i: u32) -> f32 {
+    var x = i * 747796405u + 2891336453u;
+    x = ((x >> ((x >> 28u) + 4u)) ^ x) * 277803737u;
+    x = (x >> 22u) ^ x;
+    return f32(x >> 8u) / 16777216.0;
+}
+
+// What material graphs see of a hit (shaders/nodes/inputs.wgsl).
+fn shading_point(s: Surface, hit: SceneHit, wo: vec3<f32>, front: bool) -> ShadingPoint {
+    let inst = instances[hit.instance];
+    let p_object = transform_point(inst.to_object, s.pe.p);
+    let bounds = fetch_blas_node(inst.blas_root);
+    let extent = bounds.max - bounds.min;
+    let generated = (p_object - bounds.min) / select(extent, vec3<f32>(1.0), extent <= vec3<f32>(0.0));
+    let n_object = normalize(transform_vector(transpose_rows(inst.to_world), s.ns));
+    let location = vec3<f32>(inst.to_world[0].w, inst.to_world[1].w, inst.to_world[2].w);
+    return ShadingPoint(
+        s.pe.p, s.ns, s.ng, s.uv, s.dpdu, s.dpdv, wo, p_object, n_object, generated, s.color,
+        instance_random(hit.instance), location, !front,
+    );
+}
+
+// The rows of the transpose of a 3x4 matrix's linear part (normals go to object space
+// by the transpose of the object-to-world matrix, up to scale).
+fn transpose_rows(m: array<vec4<f32>, 3>) -> array<vec4<f32>, 3> {
+    return array<vec4<f32>, 3>(
+        vec4<f32>(m[0].x, m[1].x, m[2].x, 0.0),
+        vec4<f32>(m[0].y, m[1].y, m[2].y, 0.0),
+        vec4<f32>(m[0].z, m[1].z, m[2].z, 0.0),
+    );
+}
+
 fn to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n));
 }
@@ -126,12 +165,18 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             radiance += throughput * environment_radiance(ray.dir) * w;
             break;
         }
-        let s = surface_at(hit);
+        var s = surface_at(hit);
         let material = materials[s.material];
         let front = dot(ray.dir, s.ng) < 0.0;
+        let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
+        // A normal from a normal map or bump on the other side of the surface than its
+        // geometry would let light leak: keep the interpolated one then.
+        if (dot(me.normal, s.ng) > 0.0) {
+            s.ns = me.normal;
+        }
 
         // Alpha cut-out: the path continues through the surface without scattering.
-        let opacity = material.emission.w;
+        let opacity = me.opacity;
         if (opacity < 1.0 && rand() >= opacity) {
             passes++;
             if (passes > MAX_PASS_THROUGH) {
@@ -141,11 +186,13 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             continue;
         }
 
-        let emission = material.emission.rgb;
+        let emission = me.emission;
         if (front && any(emission > vec3<f32>(0.0))) {
             var w = 1.0;
             if (nee && !prev_delta) {
-                let light_pdf = params.light_totals.y * light_triangle_pdf(emission, hit.t, -dot(ray.dir, s.ng));
+                // Light sampling knows the surface by its buffer emission (0 for emission
+                // that varies over it, which only BSDF sampling finds).
+                let light_pdf = params.light_totals.y * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
             radiance += throughput * emission * w;
@@ -160,11 +207,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let flip = !transmissive && !front;
         let ng = select(s.ng, -s.ng, flip);
         let ns = select(s.ns, -s.ns, flip);
-        let p = material_principled(material);
+        let p = me.principled;
         // Anisotropic highlights follow the texture's u direction, turned by the material.
         var frame = frame_from_normal(ns);
         if (p.anisotropy > 0.0) {
-            frame = frame_from_normal_tangent(ns, s.dpdu, bitcast<f32>(material.flags.w));
+            frame = frame_from_normal_tangent(ns, s.dpdu, me.anisotropy_rotation);
         }
         let wo = to_local(frame, -ray.dir);
 

@@ -281,9 +281,11 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
 pub const NODE_PAGE_BINDING: u32 = 13;
 pub const TRIANGLE_PAGE_BINDING: u32 = 16;
 
-/// The path-tracing kernel's source.
-pub fn path_tracing_kernel(features: &KernelFeatures) -> KernelSource {
+/// The path-tracing kernel's source, with a scene's materials
+/// (`crate::material::scene_materials_wgsl`) spliced in before the integrator.
+pub fn path_tracing_kernel(features: &KernelFeatures, materials: &str) -> KernelSource {
     let mut source = KernelSource::with_library("path tracer", features);
+    source.push("(generated) scene materials", materials);
     source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
     source
 }
@@ -299,7 +301,8 @@ mod tests {
                 node_pages: pages,
                 triangle_pages: 5 - pages,
             };
-            if let Err(e) = path_tracing_kernel(&features).validate() {
+            let materials = crate::material::materials_wgsl(&[]);
+            if let Err(e) = path_tracing_kernel(&features, &materials).validate() {
                 panic!("{e}");
             }
         }

@@ -44,6 +44,8 @@ pub enum RenderError {
     Kernel(#[from] KernelError),
     #[error(transparent)]
     Gpu(#[from] GpuError),
+    #[error(transparent)]
+    Material(#[from] crate::material::GraphError),
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -194,7 +196,8 @@ impl Renderer {
         let kernel_start = Instant::now();
         let device = &ctx.device;
         let layout = scene_bind_group_layout(device, &gpu_scene.features());
-        let pipeline = path_tracing_kernel(&gpu_scene.features()).create_pipeline(
+        let materials = crate::material::scene_materials_wgsl(scene)?;
+        let pipeline = path_tracing_kernel(&gpu_scene.features(), &materials).create_pipeline(
             &ctx,
             &[&layout],
             "render",

@@ -215,7 +215,7 @@ enum Projection {
 
 /// The principled material's parameters (docs/SCENE_FORMAT.md lists them); any left out
 /// take Blender's defaults.
-#[derive(Debug, Serialize, Deserialize)]
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(deny_unknown_fields, default)]
 struct MaterialDesc {
     base_color: [f32; 3],
@@ -242,6 +242,10 @@ struct MaterialDesc {
     emission_strength: f32,
     opacity: f32,
     thin_walled: bool,
+    /// A node graph (docs/NODES.md) computing the parameters instead of the fields above.
+    graph: Option<crate::material::Graph>,
+    /// A `.kmat` material file, relative to the scene file, instead of the fields above.
+    graph_file: Option<String>,
 }
 
 impl Default for MaterialDesc {
@@ -272,12 +276,41 @@ impl Default for MaterialDesc {
             emission_strength: 1.0,
             opacity: m.opacity,
             thin_walled: m.thin_walled,
+            graph: None,
+            graph_file: None,
         }
     }
 }
 
 impl MaterialDesc {
-    fn to_material(&self, name: &str) -> Result<Material, String> {
+    fn to_material(&self, name: &str, base_dir: &Path) -> Result<Material, String> {
+        let graph = match (&self.graph, &self.graph_file) {
+            (Some(_), Some(_)) => return Err("give `graph` or `graph_file`, not both".into()),
+            (Some(g), None) => Some(g.clone()),
+            (None, Some(file)) => {
+                let (_, g) = crate::material::load_material(&base_dir.join(file))
+                    .map_err(|e| e.to_string())?;
+                Some(g)
+            }
+            (None, None) => None,
+        };
+        if let Some(graph) = graph {
+            let plain = MaterialDesc {
+                graph: None,
+                graph_file: None,
+                ..MaterialDesc::default()
+            };
+            let rest = MaterialDesc {
+                graph: None,
+                graph_file: None,
+                ..self.clone()
+            };
+            if rest != plain {
+                return Err("a material with a graph takes its parameters from the graph:                             remove the other fields"
+                    .into());
+            }
+            return Material::from_graph(name, graph).map_err(|e| e.to_string());
+        }
         let strength = self.emission_strength;
         if !strength.is_finite() || strength < 0.0 {
             return Err(format!(
@@ -309,6 +342,7 @@ impl MaterialDesc {
             emission: Vec3::from(self.emission) * strength,
             opacity: self.opacity,
             thin_walled: self.thin_walled,
+            graph: None,
         };
         material.validate()?;
         Ok(material)
@@ -505,7 +539,7 @@ fn build_scene(
     let mut material_ids = BTreeMap::new();
     for (name, m) in &file.materials {
         let material = m
-            .to_material(name)
+            .to_material(name, base_dir)
             .map_err(|e| invalid(format!("material \"{name}\": {e}")))?;
         let id = scene.add_material(material);
         material_ids.insert(name.as_str(), id);

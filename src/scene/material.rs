@@ -4,7 +4,11 @@
 //! This is the fixed parameter set every material has; the material-graph compiler will
 //! compute these parameters per shading point instead.
 
+use std::sync::Arc;
+
 use glam::Vec3;
+
+use crate::material::{Graph, GraphError, MaterialTraits};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -45,6 +49,16 @@ pub struct Material {
     pub opacity: f32,
     /// A surface with no inside (leaves, paper, soap film): light passes without bending.
     pub thin_walled: bool,
+    /// A node graph computing the parameters per shading point; the fields above then
+    /// only carry what the renderer must know in advance (constant emission).
+    pub graph: Option<Arc<GraphMaterial>>,
+}
+
+/// A material's node graph with what compiling it told about it.
+#[derive(Clone, Debug, PartialEq)]
+pub struct GraphMaterial {
+    pub graph: Graph,
+    pub traits: MaterialTraits,
 }
 
 impl Default for Material {
@@ -74,6 +88,7 @@ impl Default for Material {
             emission: Vec3::ZERO,
             opacity: 1.0,
             thin_walled: false,
+            graph: None,
         }
     }
 }
@@ -98,6 +113,19 @@ impl Material {
         }
     }
 
+    /// A material computed by a node graph. The graph is compiled once here, so errors
+    /// surface when the material is made, naming the node and socket.
+    pub fn from_graph(name: &str, graph: Graph) -> Result<Self, GraphError> {
+        let compiled = crate::material::compile(name, &graph, "material")?;
+        let traits = compiled.traits;
+        Ok(Self {
+            name: name.to_owned(),
+            emission: traits.constant_emission.map_or(Vec3::ZERO, Vec3::from),
+            graph: Some(Arc::new(GraphMaterial { graph, traits })),
+            ..Self::default()
+        })
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }
@@ -105,6 +133,9 @@ impl Material {
     /// Whether light can pass through (refraction, thin walls, cut-outs): such surfaces
     /// keep their geometric orientation instead of being turned toward the viewer.
     pub fn is_transmissive(&self) -> bool {
+        if let Some(g) = &self.graph {
+            return g.traits.transmissive;
+        }
         self.transmission_weight > 0.0 || self.thin_walled
     }
 

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: the GPU context and small scenes.
 #![allow(dead_code)]
 pub mod chi2;
+pub mod node_reference;
 
 use std::sync::Arc;
 

@@ -1,0 +1,1001 @@
+//! Material graph → WGSL.
+//!
+//! The passes, in order: flatten node groups → check node types, parameters and socket
+//! types → find the output and reject cycles → keep only what reaches the output → fold
+//! constants → merge identical nodes → emit one WGSL function per material, its nodes in
+//! topological order. Every error names the material, the node and the socket.
+//!
+//! The emitted function is `fn <name>(sp: ShadingPoint) -> MaterialEval`
+//! (shaders/nodes/inputs.wgsl); it calls the node library's functions
+//! (shaders/nodes/*.wgsl), of which kernel assembly includes only those called.
+
+use std::collections::{BTreeMap, BTreeSet, HashMap};
+use std::fmt::Write as _;
+
+use thiserror::Error;
+
+use super::graph::{Conversion, Graph, Input, Link, Node, Param, RampStop, SocketType, Value};
+use super::nodes::{self, Code, Default, NodeDef, ParamKind};
+
+/// A graph error, with where it is.
+#[derive(Clone, Debug, Error, PartialEq)]
+#[error("material \"{material}\"{}: {message}", location(.node, .socket))]
+pub struct GraphError {
+    pub material: String,
+    pub node: Option<String>,
+    pub socket: Option<String>,
+    pub message: String,
+}
+
+fn location(node: &Option<String>, socket: &Option<String>) -> String {
+    match (node, socket) {
+        (Some(n), Some(s)) => format!(", node \"{n}\", socket \"{s}\""),
+        (Some(n), None) => format!(", node \"{n}\""),
+        _ => String::new(),
+    }
+}
+
+/// What the renderer must know about a compiled material without running it.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct MaterialTraits {
+    /// Light may pass through (transmission, thin walls): the surface keeps its front.
+    pub transmissive: bool,
+    /// Emission when it is the same everywhere (such surfaces are sampled as lights).
+    pub constant_emission: Option<[f32; 3]>,
+    /// Emission that varies over the surface (not sampled as a light).
+    pub varying_emission: bool,
+}
+
+#[derive(Clone, Debug)]
+pub struct CompiledMaterial {
+    pub function: String,
+    /// The material's WGSL: helper functions, then `function`.
+    pub code: String,
+    /// Node-library functions `code` calls (entry points; kernel assembly adds what
+    /// they call in turn).
+    pub calls: BTreeSet<String>,
+    pub traits: MaterialTraits,
+}
+
+/// Where an input's value comes from after flattening.
+#[derive(Clone, Debug, PartialEq)]
+enum Src {
+    Const(Value),
+    Out(usize, usize),
+    Default,
+}
+
+#[derive(Clone, Debug)]
+struct FlatNode {
+    id: String,
+    def: &'static NodeDef,
+    params: BTreeMap<String, Param>,
+    /// One per `def.inputs`.
+    inputs: Vec<Src>,
+}
+
+struct Ctx<'a> {
+    material: &'a str,
+}
+
+impl Ctx<'_> {
+    fn err(&self, node: Option<&str>, socket: Option<&str>, message: String) -> GraphError {
+        GraphError {
+            material: self.material.to_owned(),
+            node: node.map(str::to_owned),
+            socket: socket.map(str::to_owned),
+            message,
+        }
+    }
+}
+
+/// Compiles `graph` into a function called `function`.
+pub fn compile(material: &str, graph: &Graph, function: &str) -> Result<CompiledMaterial, GraphError> {
+    let ctx = Ctx { material };
+    let mut flat = Flattener::new(&ctx, graph).run()?;
+    check_types(&ctx, &flat)?;
+    let output = find_output(&ctx, graph, &flat)?;
+    reject_cycles(&ctx, &flat, output)?;
+    fold_constants(&mut flat, output);
+    merge_identical(&mut flat, output);
+    let traits = traits(&flat, output);
+    let mut emitter = Emitter {
+        flat: &flat,
+        prefix: function,
+        helpers: String::new(),
+        calls: BTreeSet::new(),
+    };
+    let body = emitter.function_body(&[(output, 0)])?;
+    let mut code = emitter.helpers.clone();
+    let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> MaterialEval {{");
+    code.push_str(&body.statements);
+    let _ = writeln!(code, "    return {};\n}}", body.roots[0]);
+    Ok(CompiledMaterial {
+        function: function.to_owned(),
+        code,
+        calls: emitter.calls,
+        traits,
+    })
+}
+
+/// Compiles the value of one output, `node.socket`, into `fn <function>(sp:
+/// ShadingPoint) -> vec4<f32>` (floats in x, vectors and colours in xyz): previews and
+/// the per-node tests evaluate single sockets this way.
+pub fn compile_value(material: &str, graph: &Graph, at: &Link, function: &str) -> Result<CompiledMaterial, GraphError> {
+    let ctx = Ctx { material };
+    let mut flat = Flattener::new(&ctx, graph).run()?;
+    check_types(&ctx, &flat)?;
+    let Some(node) = flat.iter().position(|n| n.id == at.node) else {
+        return Err(ctx.err(None, None, format!("no node \"{}\"", at.node)));
+    };
+    let Some((output, def)) = flat[node].def.output(&at.socket) else {
+        return Err(ctx.err(Some(&at.node), Some(&at.socket), "no such output".into()));
+    };
+    let ty = def.ty;
+    reject_cycles(&ctx, &flat, node)?;
+    fold_constants(&mut flat, node);
+    merge_identical(&mut flat, node);
+    let mut emitter = Emitter {
+        flat: &flat,
+        prefix: function,
+        helpers: String::new(),
+        calls: BTreeSet::new(),
+    };
+    let body = emitter.function_body(&[(node, output)])?;
+    let value = match ty {
+        SocketType::Float => format!("vec4<f32>({}, 0.0, 0.0, 0.0)", body.roots[0]),
+        SocketType::Vec2 => format!("vec4<f32>({}, 0.0, 0.0)", body.roots[0]),
+        SocketType::Vector | SocketType::Color => format!("vec4<f32>({}, 0.0)", body.roots[0]),
+        SocketType::Bsdf => return Err(ctx.err(Some(&at.node), Some(&at.socket), "a BSDF has no value to preview".into())),
+    };
+    let mut code = emitter.helpers.clone();
+    let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> vec4<f32> {{");
+    code.push_str(&body.statements);
+    let _ = writeln!(code, "    return {value};\n}}");
+    Ok(CompiledMaterial {
+        function: function.to_owned(),
+        code,
+        calls: emitter.calls,
+        traits: MaterialTraits::default(),
+    })
+}
+
+// ------------------------------------------------------------------ flattening
+
+/// Expands groups into one flat node list with resolved links.
+struct Flattener<'a> {
+    ctx: &'a Ctx<'a>,
+    graph: &'a Graph,
+    nodes: Vec<FlatNode>,
+    index: HashMap<String, usize>,
+}
+
+/// A scope: the nodes of the material or of one group instance.
+#[derive(Clone)]
+struct Scope<'a> {
+    prefix: String,
+    nodes: &'a BTreeMap<String, Node>,
+    /// For a group instance: the instance node and the scope it sits in.
+    instance: Option<(&'a Node, Box<Scope<'a>>, &'a super::graph::Group)>,
+    depth: usize,
+}
+
+const MAX_GROUP_DEPTH: usize = 16;
+
+impl<'a> Flattener<'a> {
+    fn new(ctx: &'a Ctx<'a>, graph: &'a Graph) -> Self {
+        Self {
+            ctx,
+            graph,
+            nodes: Vec::new(),
+            index: HashMap::new(),
+        }
+    }
+
+    fn run(mut self) -> Result<Vec<FlatNode>, GraphError> {
+        let root = Scope {
+            prefix: String::new(),
+            nodes: &self.graph.nodes,
+            instance: None,
+            depth: 0,
+        };
+        self.create(&root)?;
+        self.resolve(&root)?;
+        Ok(self.nodes)
+    }
+
+    fn group(&self, id: &str, node: &Node) -> Result<(&'a str, &'a super::graph::Group), GraphError> {
+        let name = match node.params.get("group") {
+            Some(Param::Text(name)) => name.as_str(),
+            _ => {
+                return Err(self.ctx.err(
+                    Some(id),
+                    None,
+                    "a group node needs params: { \"group\": \"name\" }".into(),
+                ));
+            }
+        };
+        match self.graph.groups.get_key_value(name) {
+            Some((k, g)) => Ok((k.as_str(), g)),
+            None => Err(self.ctx.err(Some(id), None, format!("no group named \"{name}\""))),
+        }
+    }
+
+    /// Creates the flat nodes of a scope (recursively for group instances).
+    fn create(&mut self, scope: &Scope<'a>) -> Result<(), GraphError> {
+        for (id, node) in scope.nodes {
+            let full = format!("{}{id}", scope.prefix);
+            match node.kind.as_str() {
+                "group" => {
+                    if scope.depth >= MAX_GROUP_DEPTH {
+                        return Err(self.ctx.err(
+                            Some(&full),
+                            None,
+                            format!("groups nest deeper than {MAX_GROUP_DEPTH} (a group that contains itself?)"),
+                        ));
+                    }
+                    let (_, group) = self.group(&full, node)?;
+                    self.create(&Scope {
+                        prefix: format!("{full}/"),
+                        nodes: &group.nodes,
+                        instance: Some((node, Box::new(scope.clone()), group)),
+                        depth: scope.depth + 1,
+                    })?;
+                }
+                "group_input" => {
+                    if scope.instance.is_none() {
+                        return Err(self.ctx.err(
+                            Some(&full),
+                            None,
+                            "group_input is only meaningful inside a group".into(),
+                        ));
+                    }
+                }
+                kind => {
+                    let Some(def) = nodes::find(kind) else {
+                        return Err(self.ctx.err(Some(&full), None, format!("unknown node type \"{kind}\"")));
+                    };
+                    for name in node.inputs.keys() {
+                        if def.input(name).is_none() {
+                            return Err(self.ctx.err(
+                                Some(&full),
+                                Some(name),
+                                format!("{kind} has no input \"{name}\" (inputs: {})", names(def.inputs.iter().map(|s| s.name))),
+                            ));
+                        }
+                    }
+                    for (name, value) in &node.params {
+                        check_param(self.ctx, &full, def, name, value)?;
+                    }
+                    self.index.insert(full.clone(), self.nodes.len());
+                    self.nodes.push(FlatNode {
+                        id: full,
+                        def,
+                        params: node.params.clone(),
+                        inputs: vec![Src::Default; def.inputs.len()],
+                    });
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Resolves every input of a scope's nodes.
+    fn resolve(&mut self, scope: &Scope<'a>) -> Result<(), GraphError> {
+        for (id, node) in scope.nodes {
+            let full = format!("{}{id}", scope.prefix);
+            if node.kind == "group" {
+                let (_, group) = self.group(&full, node)?;
+                for name in node.inputs.keys() {
+                    if !group.inputs.iter().any(|s| &s.name == name) {
+                        return Err(self.ctx.err(Some(&full), Some(name), format!("the group has no input \"{name}\"")));
+                    }
+                }
+                self.resolve(&Scope {
+                    prefix: format!("{full}/"),
+                    nodes: &group.nodes,
+                    instance: Some((node, Box::new(scope.clone()), group)),
+                    depth: scope.depth + 1,
+                })?;
+                continue;
+            }
+            let Some(&index) = self.index.get(&full) else { continue };
+            let def = self.nodes[index].def;
+            for (i, socket) in def.inputs.iter().enumerate() {
+                if let Some(input) = node.inputs.get(socket.name) {
+                    let src = self.source(scope, &full, socket.name, input, 0)?;
+                    self.nodes[index].inputs[i] = src;
+                }
+            }
+        }
+        Ok(())
+    }
+
+    /// Where `input` (of node `at`, socket `socket`, in `scope`) gets its value.
+    fn source(&self, scope: &Scope<'a>, at: &str, socket: &str, input: &Input, hops: usize) -> Result<Src, GraphError> {
+        if hops > 64 * MAX_GROUP_DEPTH {
+            return Err(self.ctx.err(Some(at), Some(socket), "links through groups loop".into()));
+        }
+        let link = match input {
+            Input::Value(v) => return Ok(Src::Const(v.clone())),
+            Input::Link(link) => link,
+        };
+        let Some(target) = scope.nodes.get(&link.node) else {
+            return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": no node \"{}\"", link.node)));
+        };
+        let full = format!("{}{}", scope.prefix, link.node);
+        match target.kind.as_str() {
+            "group" => {
+                let (_, group) = self.group(&full, target)?;
+                let Some(inner) = group.links.get(&link.socket) else {
+                    return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": the group has no output \"{}\"", link.socket)));
+                };
+                let inner_scope = Scope {
+                    prefix: format!("{full}/"),
+                    nodes: &group.nodes,
+                    instance: Some((target, Box::new(scope.clone()), group)),
+                    depth: scope.depth + 1,
+                };
+                self.source(&inner_scope, at, socket, &Input::Link(inner.clone()), hops + 1)
+            }
+            "group_input" => {
+                let Some((instance, outer, group)) = &scope.instance else {
+                    return Err(self.ctx.err(Some(&full), None, "group_input outside a group".into()));
+                };
+                let Some(declared) = group.inputs.iter().find(|s| s.name == link.socket) else {
+                    return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": the group has no input \"{}\"", link.socket)));
+                };
+                match instance.inputs.get(&link.socket) {
+                    Some(outer_input) => self.source(outer, at, socket, outer_input, hops + 1),
+                    None => Ok(declared.default.clone().map_or(Src::Default, Src::Const)),
+                }
+            }
+            _ => {
+                let index = self.index[&full];
+                let def = self.nodes[index].def;
+                match def.output(&link.socket) {
+                    Some((o, _)) => Ok(Src::Out(index, o)),
+                    None => Err(self.ctx.err(
+                        Some(at),
+                        Some(socket),
+                        format!(
+                            "link to \"{link}\": {} has no output \"{}\" (outputs: {})",
+                            def.kind,
+                            link.socket,
+                            names(def.outputs.iter().map(|o| o.name))
+                        ),
+                    )),
+                }
+            }
+        }
+    }
+}
+
+fn names<'a>(it: impl Iterator<Item = &'a str>) -> String {
+    let v: Vec<&str> = it.collect();
+    if v.is_empty() { "none".into() } else { v.join(", ") }
+}
+
+fn check_param(ctx: &Ctx, node: &str, def: &NodeDef, name: &str, value: &Param) -> Result<(), GraphError> {
+    if def.kind == "group" {
+        return Ok(());
+    }
+    let Some(p) = def.param(name) else {
+        return Err(ctx.err(
+            Some(node),
+            Some(name),
+            format!("{} has no parameter \"{name}\" (parameters: {})", def.kind, names(def.params.iter().map(|p| p.name))),
+        ));
+    };
+    let ok = match (&p.kind, value) {
+        (ParamKind::Enum(options), Param::Text(t)) => {
+            if !options.contains(&t.as_str()) {
+                return Err(ctx.err(Some(node), Some(name), format!("\"{t}\" is not one of {}", options.join(", "))));
+            }
+            true
+        }
+        (ParamKind::Bool(_), Param::Bool(_)) => true,
+        (ParamKind::Ramp, Param::Ramp(stops)) => {
+            if stops.is_empty() {
+                return Err(ctx.err(Some(node), Some(name), "a colour ramp needs at least one stop".into()));
+            }
+            if stops.iter().any(|s| !s.position.is_finite() || s.color.iter().any(|c| !c.is_finite())) {
+                return Err(ctx.err(Some(node), Some(name), "ramp stops must be finite".into()));
+            }
+            true
+        }
+        _ => false,
+    };
+    if ok {
+        Ok(())
+    } else {
+        Err(ctx.err(Some(node), Some(name), format!("wrong kind of value: {value:?}")))
+    }
+}
+
+// ----------------------------------------------------------------- type checks
+
+fn output_type(flat: &[FlatNode], node: usize, output: usize) -> SocketType {
+    flat[node].def.outputs[output].ty
+}
+
+fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
+    for node in flat {
+        for (socket, src) in node.def.inputs.iter().zip(&node.inputs) {
+            let fail = |m: String| Err(ctx.err(Some(&node.id), Some(socket.name), m));
+            match src {
+                Src::Out(n, o) => {
+                    let from = output_type(flat, *n, *o);
+                    if from.converts_to(socket.ty).is_none() {
+                        return fail(format!(
+                            "a {} output ({}.{}) cannot feed a {} input",
+                            from.name(),
+                            flat[*n].id,
+                            flat[*n].def.outputs[*o].name,
+                            socket.ty.name()
+                        ));
+                    }
+                }
+                Src::Const(v) => {
+                    let fits = matches!(
+                        (v, socket.ty),
+                        (Value::Float(_), SocketType::Float | SocketType::Vector | SocketType::Color)
+                            | (Value::Vec2(_), SocketType::Vec2)
+                            | (Value::Vec3(_), SocketType::Vector | SocketType::Color)
+                    );
+                    if !fits {
+                        return fail(format!("the value {v:?} does not fit a {} input", socket.ty.name()));
+                    }
+                    let finite = match v {
+                        Value::Float(x) => x.is_finite(),
+                        Value::Vec2(a) => a.iter().all(|x| x.is_finite()),
+                        Value::Vec3(a) => a.iter().all(|x| x.is_finite()),
+                    };
+                    if !finite {
+                        return fail("values must be finite".into());
+                    }
+                }
+                Src::Default => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+fn find_output(ctx: &Ctx, graph: &Graph, flat: &[FlatNode]) -> Result<usize, GraphError> {
+    if let Some(id) = &graph.output {
+        return match flat.iter().position(|n| &n.id == id) {
+            Some(i) if flat[i].def.kind == "material_output" => Ok(i),
+            Some(_) => Err(ctx.err(Some(id), None, "the output must be a material_output node".into())),
+            None => Err(ctx.err(None, None, format!("output node \"{id}\" does not exist"))),
+        };
+    }
+    let outputs: Vec<usize> = (0..flat.len())
+        .filter(|&i| flat[i].def.kind == "material_output" && !flat[i].id.contains('/'))
+        .collect();
+    match outputs.as_slice() {
+        [one] => Ok(*one),
+        [] => Err(ctx.err(None, None, "the graph has no material_output node".into())),
+        _ => Err(ctx.err(None, None, "several material_output nodes: say which with `output: \"id\"`".into())),
+    }
+}
+
+/// Depth-first search from the output; a node met again while still open closes a cycle.
+fn reject_cycles(ctx: &Ctx, flat: &[FlatNode], output: usize) -> Result<(), GraphError> {
+    #[derive(Clone, Copy, PartialEq)]
+    enum Mark {
+        New,
+        Open,
+        Done,
+    }
+    let mut mark = vec![Mark::New; flat.len()];
+    // Explicit stack: (node, next input to visit).
+    let mut stack = vec![(output, 0usize)];
+    mark[output] = Mark::Open;
+    while let Some((node, next)) = stack.last_mut() {
+        let node = *node;
+        if *next >= flat[node].inputs.len() {
+            mark[node] = Mark::Done;
+            stack.pop();
+            continue;
+        }
+        let i = *next;
+        *next += 1;
+        if let Src::Out(n, _) = flat[node].inputs[i] {
+            match mark[n] {
+                Mark::New => {
+                    mark[n] = Mark::Open;
+                    stack.push((n, 0));
+                }
+                Mark::Open => {
+                    let start = stack.iter().position(|(s, _)| *s == n).unwrap_or(0);
+                    let path: Vec<&str> = stack[start..].iter().map(|(s, _)| flat[*s].id.as_str()).chain([flat[n].id.as_str()]).collect();
+                    return Err(ctx.err(
+                        Some(&flat[n].id),
+                        Some(flat[node].def.inputs[i].name),
+                        format!("the graph has a cycle: {}", path.join(" ← ")),
+                    ));
+                }
+                Mark::Done => {}
+            }
+        }
+    }
+    Ok(())
+}
+
+/// Nodes that reach `roots`, in topological order (inputs first).
+fn topological(flat: &[FlatNode], roots: &[usize]) -> Vec<usize> {
+    let mut order = Vec::new();
+    let mut seen = vec![false; flat.len()];
+    fn visit(flat: &[FlatNode], n: usize, seen: &mut [bool], order: &mut Vec<usize>) {
+        if seen[n] {
+            return;
+        }
+        seen[n] = true;
+        for src in &flat[n].inputs {
+            if let Src::Out(m, _) = src {
+                visit(flat, *m, seen, order);
+            }
+        }
+        order.push(n);
+    }
+    for &r in roots {
+        visit(flat, r, &mut seen, &mut order);
+    }
+    order
+}
+
+// ------------------------------------------------------------ constant folding
+
+/// The constant value of an input, if it has one.
+fn constant(flat: &[FlatNode], node: &FlatNode, input: usize) -> Option<Value> {
+    match &node.inputs[input] {
+        Src::Const(v) => Some(v.clone()),
+        Src::Default => match &node.def.inputs[input].default {
+            Default::Value(v) => Some(v.clone()),
+            Default::Implicit(..) => None,
+        },
+        Src::Out(..) => {
+            let _ = flat;
+            None
+        }
+    }
+}
+
+fn as_f32(v: &Value) -> f32 {
+    match v {
+        Value::Float(x) => *x,
+        Value::Vec2(a) => (a[0] + a[1]) / 2.0,
+        Value::Vec3(a) => (a[0] + a[1] + a[2]) / 3.0,
+    }
+}
+
+fn as_vec3(v: &Value) -> [f32; 3] {
+    match v {
+        Value::Float(x) => [*x; 3],
+        Value::Vec2(a) => [a[0], a[1], 0.0],
+        Value::Vec3(a) => *a,
+    }
+}
+
+fn enum_index(node: &FlatNode, name: &str) -> usize {
+    match (node.def.param(name).map(|p| &p.kind), node.params.get(name)) {
+        (Some(ParamKind::Enum(options)), Some(Param::Text(t))) => options.iter().position(|o| o == t).unwrap_or(0),
+        _ => 0,
+    }
+}
+
+fn bool_param(node: &FlatNode, name: &str) -> bool {
+    match (node.def.param(name).map(|p| &p.kind), node.params.get(name)) {
+        (_, Some(Param::Bool(b))) => *b,
+        (Some(ParamKind::Bool(default)), _) => *default,
+        _ => false,
+    }
+}
+
+/// The outputs of nodes whose every input is constant and whose result the CPU computes
+/// exactly as the WGSL does (constants, component shuffles and the elementary math
+/// operations); other nodes stay as code.
+fn fold(node: &FlatNode, inputs: &[Value]) -> Option<Vec<Value>> {
+    let f = |i: usize| as_f32(&inputs[i]);
+    let v = |i: usize| as_vec3(&inputs[i]);
+    Some(match node.def.kind {
+        "value" => vec![Value::Float(f(0))],
+        "rgb" | "vector" => vec![Value::Vec3(v(0))],
+        "combine_xyz" => vec![Value::Vec3([f(0), f(1), f(2)])],
+        "separate_xyz" => {
+            let a = v(0);
+            vec![Value::Float(a[0]), Value::Float(a[1]), Value::Float(a[2])]
+        }
+        "mix_float" => {
+            let t = if bool_param(node, "clamp_factor") { f(0).clamp(0.0, 1.0) } else { f(0) };
+            vec![Value::Float(f(1) + (f(2) - f(1)) * t)]
+        }
+        "math" => {
+            let (a, b) = (f(0), f(1));
+            let r = match nodes::MATH_OPERATIONS[enum_index(node, "operation")] {
+                "add" => a + b,
+                "subtract" => a - b,
+                "multiply" => a * b,
+                "divide" => {
+                    if b == 0.0 {
+                        0.0
+                    } else {
+                        a / b
+                    }
+                }
+                "minimum" => a.min(b),
+                "maximum" => a.max(b),
+                "absolute" => a.abs(),
+                "floor" => a.floor(),
+                "ceil" => a.ceil(),
+                _ => return None,
+            };
+            let r = if bool_param(node, "clamp") { r.clamp(0.0, 1.0) } else { r };
+            vec![Value::Float(r)]
+        }
+        "clamp" => {
+            let (x, lo, hi) = (f(0), f(1), f(2));
+            let (lo, hi) = if enum_index(node, "clamp_type") == 1 && lo > hi { (hi, lo) } else { (lo, hi) };
+            vec![Value::Float(x.max(lo).min(hi))]
+        }
+        "invert" => {
+            let (t, c) = (f(0), v(1));
+            vec![Value::Vec3(c.map(|x| x + (1.0 - 2.0 * x) * t))]
+        }
+        _ => return None,
+    })
+}
+
+/// Replaces links from foldable nodes with their constant outputs, in topological order
+/// so folds propagate.
+fn fold_constants(flat: &mut [FlatNode], output: usize) {
+    let order = topological(flat, &[output]);
+    let mut folded: HashMap<usize, Vec<Value>> = HashMap::new();
+    for n in order {
+        // Substitute already-folded producers.
+        for i in 0..flat[n].inputs.len() {
+            if let Src::Out(m, o) = flat[n].inputs[i] {
+                if let Some(values) = folded.get(&m) {
+                    let v = values[o].clone();
+                    // Keep the consumer's socket type: a colour output folds into a vec3.
+                    flat[n].inputs[i] = Src::Const(convert_const(&v, output_type(flat, m, o), flat[n].def.inputs[i].ty));
+                }
+            }
+        }
+        let inputs: Option<Vec<Value>> = (0..flat[n].inputs.len()).map(|i| constant(flat, &flat[n], i)).collect();
+        if let Some(inputs) = inputs {
+            if let Some(values) = fold(&flat[n], &inputs) {
+                folded.insert(n, values);
+            }
+        }
+    }
+}
+
+fn convert_const(v: &Value, from: SocketType, to: SocketType) -> Value {
+    match from.converts_to(to) {
+        Some(Conversion::Splat) => Value::Vec3([as_f32(v); 3]),
+        Some(Conversion::Luminance) => {
+            let c = as_vec3(v);
+            Value::Float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
+        }
+        Some(Conversion::Average) => Value::Float(as_f32(v)),
+        _ => v.clone(),
+    }
+}
+
+/// Common-subexpression elimination: nodes of the same type, parameters and inputs
+/// compute the same values; later ones are redirected to the first.
+fn merge_identical(flat: &mut [FlatNode], root: usize) {
+    let order = topological(flat, &[root]);
+    let mut first: HashMap<String, usize> = HashMap::new();
+    let mut redirect: HashMap<usize, usize> = HashMap::new();
+    for n in order {
+        for src in flat[n].inputs.iter_mut() {
+            if let Src::Out(m, _) = src {
+                if let Some(&r) = redirect.get(m) {
+                    *m = r;
+                }
+            }
+        }
+        if flat[n].def.kind == "material_output" {
+            continue;
+        }
+        let key = format!("{}|{:?}|{:?}", flat[n].def.kind, flat[n].params, flat[n].inputs);
+        match first.get(&key) {
+            Some(&f) => {
+                redirect.insert(n, f);
+            }
+            None => {
+                first.insert(key, n);
+            }
+        }
+    }
+}
+
+// ---------------------------------------------------------------------- traits
+
+fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
+    let surface = match &flat[output].inputs[0] {
+        Src::Out(n, _) => *n,
+        // The default surface: grey, opaque, not emissive.
+        _ => return MaterialTraits::default(),
+    };
+    let node = &flat[surface];
+    let input = |name: &str| node.def.inputs.iter().position(|s| s.name == name).expect("principled input");
+    let known = |name: &str| constant(flat, node, input(name));
+    let transmission = known("transmission_weight").map(|v| as_f32(&v));
+    let transmissive = bool_param(node, "thin_walled") || transmission != Some(0.0);
+    let (strength, color) = (known("emission_strength"), known("emission_color"));
+    let (constant_emission, varying_emission) = match (strength, color) {
+        (Some(s), Some(c)) => {
+            let e = as_vec3(&c).map(|x| x.max(0.0) * as_f32(&s).max(0.0));
+            (e.iter().any(|&x| x > 0.0).then_some(e), false)
+        }
+        (Some(s), None) if as_f32(&s) == 0.0 => (None, false),
+        (None, Some(c)) if as_vec3(&c) == [0.0; 3] => (None, false),
+        _ => (None, true),
+    };
+    MaterialTraits {
+        transmissive,
+        constant_emission,
+        varying_emission,
+    }
+}
+
+// -------------------------------------------------------------------- emission
+
+struct Emitter<'a> {
+    flat: &'a [FlatNode],
+    /// Names of helper functions start with the material function's name.
+    prefix: &'a str,
+    helpers: String,
+    calls: BTreeSet<String>,
+}
+
+struct Body {
+    statements: String,
+    roots: Vec<String>,
+}
+
+fn literal(v: &Value, ty: SocketType) -> String {
+    let f = |x: f32| {
+        let s = format!("{x:?}");
+        if s.contains('.') || s.contains('e') { s } else { format!("{s}.0") }
+    };
+    match (v, ty) {
+        (Value::Float(x), SocketType::Float) => f(*x),
+        (Value::Float(x), _) => format!("vec3<f32>({})", f(*x)),
+        (Value::Vec2(a), _) => format!("vec2<f32>({}, {})", f(a[0]), f(a[1])),
+        (Value::Vec3(a), SocketType::Float) => f((a[0] + a[1] + a[2]) / 3.0),
+        (Value::Vec3(a), _) => format!("vec3<f32>({}, {}, {})", f(a[0]), f(a[1]), f(a[2])),
+    }
+}
+
+fn convert(expr: String, from: SocketType, to: SocketType) -> String {
+    match from.converts_to(to) {
+        Some(Conversion::Splat) => format!("vec3<f32>({expr})"),
+        Some(Conversion::Luminance) => format!("dot({expr}, vec3<f32>(0.2126, 0.7152, 0.0722))"),
+        Some(Conversion::Average) => format!("dot({expr}, vec3<f32>(1.0 / 3.0))"),
+        _ => expr,
+    }
+}
+
+/// Identifiers called as functions in a template: `name(`.
+fn called_functions(code: &str) -> Vec<String> {
+    let mut out = Vec::new();
+    let bytes = code.as_bytes();
+    let mut i = 0;
+    while i < bytes.len() {
+        if bytes[i].is_ascii_alphabetic() || bytes[i] == b'_' {
+            let start = i;
+            while i < bytes.len() && (bytes[i].is_ascii_alphanumeric() || bytes[i] == b'_') {
+                i += 1;
+            }
+            if i < bytes.len() && bytes[i] == b'(' {
+                out.push(code[start..i].to_owned());
+            }
+        } else {
+            i += 1;
+        }
+    }
+    out
+}
+
+impl Emitter<'_> {
+    /// Statements computing `roots` (node, output) and their expressions.
+    fn function_body(&mut self, roots: &[(usize, usize)]) -> Result<Body, GraphError> {
+        let root_nodes: Vec<usize> = roots.iter().map(|r| r.0).collect();
+        let order = topological(self.flat, &root_nodes);
+        let mut statements = String::new();
+        for &n in &order {
+            let node = &self.flat[n];
+            let _ = writeln!(statements, "    // {} ({})", node.id, node.def.kind);
+            let code = self.node_code(n)?;
+            if node.def.kind == "material_output" {
+                let _ = writeln!(statements, "    let n{n} = {code};");
+                continue;
+            }
+            let _ = writeln!(statements, "    let n{n} = {code};");
+        }
+        let roots = roots.iter().map(|&(n, o)| self.output_expr(n, o)).collect();
+        Ok(Body { statements, roots })
+    }
+
+    fn output_expr(&self, n: usize, o: usize) -> String {
+        if self.flat[n].def.kind == "material_output" {
+            return format!("n{n}");
+        }
+        format!("n{n}{}", self.flat[n].def.outputs[o].field)
+    }
+
+    /// The WGSL expression of input `i` of node `n`, in the input's type.
+    fn input_expr(&mut self, n: usize, i: usize) -> String {
+        let node = &self.flat[n];
+        let socket = &node.def.inputs[i];
+        match &node.inputs[i] {
+            Src::Const(v) => literal(v, socket.ty),
+            Src::Out(m, o) => convert(self.output_expr(*m, *o), output_type(self.flat, *m, *o), socket.ty),
+            Src::Default => match &socket.default {
+                Default::Value(v) => literal(v, socket.ty),
+                Default::Implicit(expr, _) => {
+                    self.calls.extend(called_functions(expr));
+                    (*expr).to_owned()
+                }
+            },
+        }
+    }
+
+    fn param_expr(&self, node: &FlatNode, name: &str) -> Option<String> {
+        let def = node.def.param(name)?;
+        Some(match &def.kind {
+            ParamKind::Enum(_) => format!("{}u", enum_index(node, name)),
+            ParamKind::Bool(_) => bool_param(node, name).to_string(),
+            ParamKind::Ramp => return None,
+        })
+    }
+
+    fn node_code(&mut self, n: usize) -> Result<String, GraphError> {
+        let node = &self.flat[n];
+        match (&node.def.code, node.def.kind) {
+            (Code::Template(t), _) => {
+                let mut code = String::new();
+                let mut rest = *t;
+                while let Some(start) = rest.find('{') {
+                    code.push_str(&rest[..start]);
+                    let end = rest[start..].find('}').map(|e| start + e).expect("template brace");
+                    let name = &rest[start + 1..end];
+                    let value = match node.def.inputs.iter().position(|s| s.name == name) {
+                        Some(i) => self.input_expr(n, i),
+                        None => self.param_expr(node, name).unwrap_or_else(|| panic!("template of {} names {name}", node.def.kind)),
+                    };
+                    code.push_str(&value);
+                    rest = &rest[end + 1..];
+                }
+                code.push_str(rest);
+                self.calls.extend(called_functions(t));
+                Ok(code)
+            }
+            (_, "color_ramp") => Ok(self.color_ramp(n)),
+            (_, "bump") => self.bump(n),
+            (_, "principled_bsdf") => Ok(self.principled(n)),
+            (_, "material_output") => Ok(match &node.inputs[0] {
+                Src::Out(m, o) => self.output_expr(*m, *o),
+                _ => default_surface(),
+            }),
+            _ => unreachable!("special node {}", node.def.kind),
+        }
+    }
+
+    fn color_ramp(&mut self, n: usize) -> String {
+        let node = &self.flat[n];
+        let mut stops: Vec<RampStop> = match node.params.get("stops") {
+            Some(Param::Ramp(s)) => s.clone(),
+            _ => vec![
+                RampStop { position: 0.0, color: [0.0, 0.0, 0.0, 1.0] },
+                RampStop { position: 1.0, color: [1.0; 4] },
+            ],
+        };
+        stops.sort_by(|a, b| a.position.total_cmp(&b.position));
+        let mode = enum_index(node, "interpolation");
+        let name = format!("{}_ramp{n}", self.prefix);
+        let c = |s: &RampStop| format!("vec4<f32>({:?}, {:?}, {:?}, {:?})", s.color[0], s.color[1], s.color[2], s.color[3]);
+        let mut f = format!("fn {name}(t: f32) -> vec4<f32> {{\n");
+        let _ = writeln!(f, "    if (!(t > {:?})) {{ return {}; }}", stops[0].position, c(&stops[0]));
+        for w in stops.windows(2) {
+            let _ = writeln!(
+                f,
+                "    if (t <= {:?}) {{ return nd_ramp_mix({}, {}, {:?}, {:?}, t, {mode}u); }}",
+                w[1].position,
+                c(&w[0]),
+                c(&w[1]),
+                w[0].position,
+                w[1].position
+            );
+        }
+        let _ = writeln!(f, "    return {};\n}}\n", c(stops.last().expect("stops")));
+        self.helpers.push_str(&f);
+        self.calls.insert("nd_ramp_mix".into());
+        let fac = self.input_expr(n, 0);
+        format!("{name}({fac})")
+    }
+
+    fn bump(&mut self, n: usize) -> Result<String, GraphError> {
+        let node = &self.flat[n];
+        let height = node.def.inputs.iter().position(|s| s.name == "height").expect("height");
+        let normal = self.input_expr(n, 3);
+        let Src::Out(m, o) = node.inputs[height] else {
+            // A constant height has no slope.
+            return Ok(normal);
+        };
+        // The height's subgraph becomes a function of the shading point, evaluated at the
+        // point and one step along each tangent direction.
+        let name = format!("{}_height{n}", self.prefix);
+        let body = self.function_body(&[(m, o)])?;
+        let h = convert(body.roots[0].clone(), output_type(self.flat, m, o), SocketType::Float);
+        let _ = write!(self.helpers, "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n", body.statements);
+        let strength = self.input_expr(n, 0);
+        let distance = self.input_expr(n, 1);
+        let invert = bool_param(&self.flat[n], "invert");
+        self.calls.extend(["frame_from_normal_tangent", "nd_bump", "nd_bump_step", "nd_displaced"].map(String::from));
+        Ok(format!(
+            "nd_bump({strength}, {distance}, {name}(sp), {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).t, nd_bump_step(sp))), \
+             {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).b, nd_bump_step(sp))), nd_bump_step(sp), {normal}, \
+             frame_from_normal_tangent({normal}, sp.dpdu, 0.0), {invert})"
+        ))
+    }
+
+    fn principled(&mut self, n: usize) -> String {
+        let thin = bool_param(&self.flat[n], "thin_walled");
+        let mut e = |name: &str| {
+            let i = self.flat[n].def.inputs.iter().position(|s| s.name == name).expect("principled input");
+            self.input_expr(n, i)
+        };
+        let code = format!(
+            "MaterialEval(Principled(nd_unit3({base_color}), nd_unit({base_weight}), nd_unit({metallic}), nd_unit({roughness}), \
+             nd_unit({anisotropy}), max(nd_finite({specular_weight}, 1.0), 0.0), nd_unit3({specular_color}), \
+             clamp(nd_finite({ior}, 1.5), 1.0, 100.0), nd_unit({transmission_weight}), nd_unit3({transmission_color}), \
+             max(nd_finite({transmission_depth}, 0.0), 0.0), nd_unit({coat_weight}), nd_unit({coat_roughness}), \
+             clamp(nd_finite({coat_ior}, 1.5), 1.0, 100.0), nd_unit3({coat_color}), nd_unit({sheen_weight}), \
+             nd_unit3({sheen_color}), nd_unit({sheen_roughness}), {thin}, nd_unit({diffuse_roughness})), \
+             max(nd_finite3({emission_color}), vec3<f32>(0.0)) * max(nd_finite({emission_strength}, 0.0), 0.0), \
+             nd_unit({alpha}), nd_safe_normal({normal}, sp.n), nd_finite({anisotropy_rotation}, 0.0))",
+            base_color = e("base_color"),
+            base_weight = e("base_weight"),
+            metallic = e("metallic"),
+            roughness = e("roughness"),
+            anisotropy = e("anisotropy"),
+            specular_weight = e("specular_weight"),
+            specular_color = e("specular_color"),
+            ior = e("ior"),
+            transmission_weight = e("transmission_weight"),
+            transmission_color = e("transmission_color"),
+            transmission_depth = e("transmission_depth"),
+            coat_weight = e("coat_weight"),
+            coat_roughness = e("coat_roughness"),
+            coat_ior = e("coat_ior"),
+            coat_color = e("coat_color"),
+            sheen_weight = e("sheen_weight"),
+            sheen_color = e("sheen_color"),
+            sheen_roughness = e("sheen_roughness"),
+            diffuse_roughness = e("diffuse_roughness"),
+            emission_color = e("emission_color"),
+            emission_strength = e("emission_strength"),
+            alpha = e("alpha"),
+            normal = e("normal"),
+            anisotropy_rotation = e("anisotropy_rotation"),
+        );
+        self.calls.extend(["nd_unit", "nd_unit3", "nd_finite", "nd_finite3", "nd_safe_normal"].map(String::from));
+        code
+    }
+}
+
+/// An unconnected material output: Blender's default grey principled surface.
+fn default_surface() -> String {
+    "nd_default_surface(sp)".into()
+}
+
+/// Links used for tests and tools: a node's output as `node.socket`.
+pub fn link(node: &str, socket: &str) -> Input {
+    Input::Link(Link::new(node, socket))
+}

@@ -1,0 +1,244 @@
+//! The material graph as a user edits and saves it: nodes by id, each with a type from the
+//! node library ([`super::nodes`]), parameter values, and inputs that are either values or
+//! links to another node's output. Node groups are graphs used as nodes.
+//!
+//! This is plain data: nothing here checks types or cycles; [`super::compile`] does, and
+//! names the node and socket of every error.
+
+use std::collections::BTreeMap;
+
+use serde::{Deserialize, Serialize};
+
+/// The types a socket carries. `Vector` and `Color` are both three floats but convert
+/// into each other only where Blender does (implicitly, channel for channel).
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash, Serialize, Deserialize)]
+#[serde(rename_all = "snake_case")]
+pub enum SocketType {
+    Float,
+    Vec2,
+    Vector,
+    Color,
+    Bsdf,
+}
+
+impl SocketType {
+    pub fn name(self) -> &'static str {
+        match self {
+            SocketType::Float => "float",
+            SocketType::Vec2 => "vec2",
+            SocketType::Vector => "vector",
+            SocketType::Color => "color",
+            SocketType::Bsdf => "bsdf",
+        }
+    }
+
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            SocketType::Float => "f32",
+            SocketType::Vec2 => "vec2<f32>",
+            SocketType::Vector | SocketType::Color => "vec3<f32>",
+            SocketType::Bsdf => "MaterialEval",
+        }
+    }
+
+    /// Whether a value of `self` may feed an input of type `to`, and how: the implicit
+    /// conversions Blender makes between float, vector and colour.
+    pub fn converts_to(self, to: SocketType) -> Option<Conversion> {
+        use SocketType::*;
+        match (self, to) {
+            (a, b) if a == b => Some(Conversion::None),
+            (Vector, Color) | (Color, Vector) => Some(Conversion::None),
+            (Float, Vector) | (Float, Color) => Some(Conversion::Splat),
+            (Color, Float) => Some(Conversion::Luminance),
+            (Vector, Float) => Some(Conversion::Average),
+            _ => None,
+        }
+    }
+}
+
+/// An implicit conversion between socket types.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Conversion {
+    None,
+    /// float → vector/colour: the value in every channel.
+    Splat,
+    /// colour → float: Rec. 709 luminance, as Blender's colour-to-float conversion.
+    Luminance,
+    /// vector → float: the mean of the components, as Blender.
+    Average,
+}
+
+/// A constant: a float, or two or three floats.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Value {
+    Float(f32),
+    Vec2([f32; 2]),
+    Vec3([f32; 3]),
+}
+
+/// What feeds an input: a constant, or a link written `"node.output"`.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Input {
+    Link(Link),
+    Value(Value),
+}
+
+/// A link to output `socket` of node `node`; in files, the string `"node.socket"`.
+#[derive(Clone, Debug, PartialEq, Eq, Hash, PartialOrd, Ord)]
+pub struct Link {
+    pub node: String,
+    pub socket: String,
+}
+
+impl Link {
+    pub fn new(node: &str, socket: &str) -> Self {
+        Self {
+            node: node.to_owned(),
+            socket: socket.to_owned(),
+        }
+    }
+}
+
+impl std::fmt::Display for Link {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "{}.{}", self.node, self.socket)
+    }
+}
+
+impl Serialize for Link {
+    fn serialize<S: serde::Serializer>(&self, s: S) -> Result<S::Ok, S::Error> {
+        s.serialize_str(&self.to_string())
+    }
+}
+
+impl<'de> Deserialize<'de> for Link {
+    fn deserialize<D: serde::Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+        let text = String::deserialize(d)?;
+        // Node ids may contain dots; the socket is after the last one.
+        match text.rsplit_once('.') {
+            Some((node, socket)) if !node.is_empty() && !socket.is_empty() => {
+                Ok(Link::new(node, socket))
+            }
+            _ => Err(serde::de::Error::custom(format!(
+                "link \"{text}\" must be written \"node.socket\""
+            ))),
+        }
+    }
+}
+
+/// One stop of a colour ramp.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+pub struct RampStop {
+    pub position: f32,
+    pub color: [f32; 4],
+}
+
+/// A node parameter: a choice (`"multiply"`), a flag, a number, a file, or ramp stops.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(untagged)]
+pub enum Param {
+    Bool(bool),
+    Number(f32),
+    Text(String),
+    Ramp(Vec<RampStop>),
+}
+
+/// One node: its type, parameters and connected or set inputs. Unset inputs take the
+/// node type's defaults.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Node {
+    #[serde(rename = "type")]
+    pub kind: String,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub params: BTreeMap<String, Param>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub inputs: BTreeMap<String, Input>,
+    /// Where the editor draws the node; no meaning to the compiler.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub position: Option<[f32; 2]>,
+}
+
+impl Node {
+    pub fn new(kind: &str) -> Self {
+        Self {
+            kind: kind.to_owned(),
+            ..Self::default()
+        }
+    }
+
+    pub fn input(mut self, name: &str, input: impl Into<Input>) -> Self {
+        self.inputs.insert(name.to_owned(), input.into());
+        self
+    }
+
+    pub fn param(mut self, name: &str, param: Param) -> Self {
+        self.params.insert(name.to_owned(), param);
+        self
+    }
+}
+
+impl From<f32> for Input {
+    fn from(v: f32) -> Self {
+        Input::Value(Value::Float(v))
+    }
+}
+
+impl From<[f32; 3]> for Input {
+    fn from(v: [f32; 3]) -> Self {
+        Input::Value(Value::Vec3(v))
+    }
+}
+
+impl From<Link> for Input {
+    fn from(l: Link) -> Self {
+        Input::Link(l)
+    }
+}
+
+/// A socket a group exposes.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct GroupSocket {
+    pub name: String,
+    #[serde(rename = "type")]
+    pub ty: SocketType,
+    /// The value of an input left unconnected where the group is used.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub default: Option<Value>,
+}
+
+/// A graph used as a node (`type: "group", params: { "group": "name" }`). Inside, node
+/// type `group_input` has one output per exposed input; `outputs` says which inner
+/// socket feeds each exposed output.
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Group {
+    #[serde(default)]
+    pub inputs: Vec<GroupSocket>,
+    pub outputs: Vec<GroupSocket>,
+    pub nodes: BTreeMap<String, Node>,
+    /// Exposed output name → the inner `"node.socket"` that computes it.
+    pub links: BTreeMap<String, Link>,
+}
+
+/// A material: nodes, the groups they use, and the node whose output is the surface
+/// (a `material_output` node; the only one if `output` is not given).
+#[derive(Clone, Debug, Default, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Graph {
+    pub nodes: BTreeMap<String, Node>,
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub groups: BTreeMap<String, Group>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output: Option<String>,
+}
+
+impl Graph {
+    pub fn add(&mut self, id: &str, node: Node) -> &mut Self {
+        self.nodes.insert(id.to_owned(), node);
+        self
+    }
+}

@@ -1,0 +1,160 @@
+//! Material node graphs: the data model ([`graph`]), the node library ([`nodes`], with its
+//! WGSL in `shaders/nodes/`), the compiler to WGSL ([`compile`]) and the `.kmat` file
+//! format ([`load_material`]). Kernel assembly splices compiled materials into the
+//! path-tracing kernel through [`materials_wgsl`].
+
+pub mod compile;
+pub mod docs;
+pub mod graph;
+pub mod library;
+pub mod nodes;
+
+use std::collections::BTreeSet;
+use std::path::Path;
+
+use serde::{Deserialize, Serialize};
+use thiserror::Error;
+
+pub use compile::{CompiledMaterial, GraphError, MaterialTraits, compile};
+pub use graph::{Graph, Group, GroupSocket, Input, Link, Node, Param, RampStop, SocketType, Value};
+
+/// The `.kmat` format version this build reads and writes.
+pub const MATERIAL_FORMAT_VERSION: u32 = 1;
+
+#[derive(Debug, Error)]
+pub enum MaterialFileError {
+    #[error("cannot read {path}: {source}")]
+    Io {
+        path: String,
+        source: std::io::Error,
+    },
+    #[error("{path}:{line}:{column}: {message}")]
+    Syntax {
+        path: String,
+        line: usize,
+        column: usize,
+        message: String,
+    },
+    #[error("{path}: {message}")]
+    Version { path: String, message: String },
+}
+
+/// A `.kmat` file: a versioned, named graph (docs/NODES.md describes the format).
+#[derive(Clone, Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct MaterialFile {
+    pub version: u32,
+    #[serde(default)]
+    pub name: Option<String>,
+    pub nodes: std::collections::BTreeMap<String, Node>,
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub groups: std::collections::BTreeMap<String, Group>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output: Option<String>,
+}
+
+impl MaterialFile {
+    pub fn graph(&self) -> Graph {
+        Graph {
+            nodes: self.nodes.clone(),
+            groups: self.groups.clone(),
+            output: self.output.clone(),
+        }
+    }
+}
+
+/// Reads the version first, so a file from another version gets a clear message instead of
+/// a complaint about some field.
+#[derive(Deserialize)]
+struct VersionOnly {
+    version: Option<u32>,
+}
+
+fn ron_options() -> ron::Options {
+    ron::Options::default().with_default_extension(ron::extensions::Extensions::IMPLICIT_SOME)
+}
+
+/// Parses `.kmat` text; `path` is only used in messages.
+pub fn parse_material(text: &str, path: &str) -> Result<(String, Graph), MaterialFileError> {
+    let syntax = |e: ron::error::SpannedError| MaterialFileError::Syntax {
+        path: path.to_owned(),
+        line: e.span.start.line,
+        column: e.span.start.col,
+        message: e.code.to_string(),
+    };
+    let version = ron_options().from_str::<VersionOnly>(text).map_err(syntax)?.version;
+    match version {
+        Some(MATERIAL_FORMAT_VERSION) => {}
+        Some(v) if v > MATERIAL_FORMAT_VERSION => {
+            return Err(MaterialFileError::Version {
+                path: path.to_owned(),
+                message: format!(
+                    "written for material format version {v}; this Kiln reads version {MATERIAL_FORMAT_VERSION}: update Kiln"
+                ),
+            });
+        }
+        Some(v) => {
+            return Err(MaterialFileError::Version {
+                path: path.to_owned(),
+                message: format!("material format version {v} is no longer read; save it again from a Kiln that reads it"),
+            });
+        }
+        None => {
+            return Err(MaterialFileError::Version {
+                path: path.to_owned(),
+                message: format!("no `version:` field (this Kiln reads version {MATERIAL_FORMAT_VERSION})"),
+            });
+        }
+    }
+    let file: MaterialFile = ron_options().from_str(text).map_err(syntax)?;
+    let name = file.name.clone().unwrap_or_else(|| {
+        Path::new(path).file_stem().map_or("material".into(), |s| s.to_string_lossy().into_owned())
+    });
+    Ok((name, file.graph()))
+}
+
+pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> {
+    let text = std::fs::read_to_string(path).map_err(|source| MaterialFileError::Io {
+        path: path.display().to_string(),
+        source,
+    })?;
+    parse_material(&text, &path.display().to_string())
+}
+
+/// WGSL for a scene's compiled materials: the node-library items they need, each
+/// material's function, and the dispatcher `evaluate_material(id, sp)` the integrator
+/// calls. Materials not listed read their fixed parameters from the material buffer.
+pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
+    let mut roots: BTreeSet<String> = ["ShadingPoint", "MaterialEval"].map(String::from).into();
+    for (_, m) in materials {
+        roots.extend(m.calls.iter().cloned());
+    }
+    let mut out = String::from("// Node library items used by this scene's materials (shaders/nodes/).\n");
+    out.push_str(&library::closure(roots));
+    for (_, m) in materials {
+        out.push_str(&m.code);
+        out.push('\n');
+    }
+    out.push_str("fn evaluate_material(id: u32, sp: ShadingPoint) -> MaterialEval {\n");
+    if !materials.is_empty() {
+        out.push_str("    switch (id) {\n");
+        for (id, m) in materials {
+            out.push_str(&format!("        case {id}u: {{ return {}(sp); }}\n", m.function));
+        }
+        out.push_str("        default: {}\n    }\n");
+    }
+    out.push_str("    return material_from_buffer(id, sp);\n}\n");
+    out
+}
+
+/// [`materials_wgsl`] for a scene: its graph materials compiled, numbered by their index.
+pub fn scene_materials_wgsl(scene: &crate::scene::Scene) -> Result<String, GraphError> {
+    let mut compiled = Vec::new();
+    for (i, m) in scene.materials.iter().enumerate() {
+        if let Some(g) = &m.graph {
+            compiled.push((i as u32, compile(&m.name, &g.graph, &format!("material_{i}"))?));
+        }
+    }
+    let list: Vec<(u32, &CompiledMaterial)> = compiled.iter().map(|(i, c)| (*i, c)).collect();
+    Ok(materials_wgsl(&list))
+}
