@@ -7,7 +7,7 @@
 
 pub mod accel;
 pub mod bench;
-pub mod material;
 pub mod film;
+pub mod material;
 pub mod render;
 pub mod scene;

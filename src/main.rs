@@ -74,6 +74,24 @@ enum Command {
     Info,
     /// Measure samples/s, rays/s and BVH build time; prints a Markdown table.
     Bench(kiln::bench::BenchArgs),
+    /// Check material graphs (.kmat) and show the WGSL they compile to.
+    #[command(subcommand)]
+    Material(MaterialCommand),
+}
+
+#[derive(Subcommand)]
+enum MaterialCommand {
+    /// Compile a material and validate the kernel it makes; prints OK or the error.
+    Check { file: PathBuf },
+    /// Print the complete path-tracing kernel with the material spliced in.
+    Wgsl {
+        file: PathBuf,
+        /// Print only the material's own function(s).
+        #[arg(long)]
+        snippet: bool,
+    },
+    /// Print the node reference (docs/NODES.md) generated from the node library.
+    Nodes,
 }
 
 #[derive(clap::Args)]
@@ -176,6 +194,7 @@ fn main() -> ExitCode {
         Command::Render(args) => render(args, backend),
         Command::Info => info(backend),
         Command::Bench(args) => kiln::bench::run(&args, backend),
+        Command::Material(command) => material(command),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -184,6 +203,41 @@ fn main() -> ExitCode {
             ExitCode::FAILURE
         }
     }
+}
+
+/// A material file compiled as material 0 of a scene, and the kernel it makes.
+fn compile_material_file(
+    file: &std::path::Path,
+) -> Result<(String, kiln::material::CompiledMaterial, String)> {
+    use kiln::material::{compile, load_material, materials_wgsl};
+    use kiln::render::kernel::{KernelFeatures, path_tracing_kernel};
+    let (name, graph) = load_material(file)?;
+    let compiled = compile(&name, &graph, "material_0")?;
+    let kernel = path_tracing_kernel(
+        &KernelFeatures::default(),
+        &materials_wgsl(&[(0, &compiled)]),
+    );
+    kernel.validate()?;
+    Ok((name, compiled, kernel.text))
+}
+
+fn material(command: MaterialCommand) -> Result<()> {
+    match command {
+        MaterialCommand::Check { file } => {
+            let (name, compiled, kernel) = compile_material_file(&file)?;
+            println!(
+                "OK: material \"{name}\" ({} lines of WGSL; kernel {} lines, validated by naga)",
+                compiled.code.lines().count(),
+                kernel.lines().count()
+            );
+        }
+        MaterialCommand::Wgsl { file, snippet } => {
+            let (_, compiled, kernel) = compile_material_file(&file)?;
+            print!("{}", if snippet { &compiled.code } else { &kernel });
+        }
+        MaterialCommand::Nodes => print!("{}", kiln::material::docs::nodes_markdown()),
+    }
+    Ok(())
 }
 
 fn info(backend: Option<Backend>) -> Result<()> {

@@ -14,7 +14,10 @@ fn feeding_base_color(node: Node, output: &str) -> Graph {
         "surface",
         Node::new("principled_bsdf").input("base_color", link("n", output)),
     );
-    g.add("out", Node::new("material_output").input("surface", link("surface", "bsdf")));
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("surface", "bsdf")),
+    );
     g
 }
 
@@ -55,7 +58,10 @@ fn every_node_type_with_every_option_compiles_and_naga_accepts_the_kernel() {
                 }
                 let graph = feeding_base_color(node.clone(), output.name);
                 if let Err(e) = validate_kernel(&graph) {
-                    panic!("{} output {} ({:?}): {e}", def.kind, output.name, node.params);
+                    panic!(
+                        "{} output {} ({:?}): {e}",
+                        def.kind, output.name, node.params
+                    );
                 }
                 checked += 1;
             }
@@ -78,21 +84,42 @@ fn a_cycle_is_an_error_naming_a_node_on_it() {
 fn type_errors_name_node_and_socket() {
     // A BSDF cannot feed a colour.
     let mut g = feeding_base_color(Node::new("rgb"), "color");
-    g.add("bad", Node::new("invert").input("color", link("surface", "bsdf")));
-    g.nodes.get_mut("surface").unwrap().inputs.insert("coat_color".into(), link("bad", "color"));
+    g.add(
+        "bad",
+        Node::new("invert").input("color", link("surface", "bsdf")),
+    );
+    g.nodes
+        .get_mut("surface")
+        .unwrap()
+        .inputs
+        .insert("coat_color".into(), link("bad", "color"));
     let e = compile("typed", &g, "material_0").unwrap_err();
-    assert_eq!((e.node.as_deref(), e.socket.as_deref()), (Some("bad"), Some("color")), "{e}");
+    assert_eq!(
+        (e.node.as_deref(), e.socket.as_deref()),
+        (Some("bad"), Some("color")),
+        "{e}"
+    );
     assert!(e.to_string().contains("bsdf output"), "{e}");
 
     let g = feeding_base_color(Node::new("rgb").input("colour", 0.5), "color");
     let e = compile("typo", &g, "material_0").unwrap_err();
-    assert_eq!((e.node.as_deref(), e.socket.as_deref()), (Some("n"), Some("colour")), "{e}");
+    assert_eq!(
+        (e.node.as_deref(), e.socket.as_deref()),
+        (Some("n"), Some("colour")),
+        "{e}"
+    );
 
     let g = feeding_base_color(Node::new("no_such_node"), "color");
     let e = compile("unknown", &g, "material_0").unwrap_err();
-    assert!(e.to_string().contains("unknown node type \"no_such_node\""), "{e}");
+    assert!(
+        e.to_string().contains("unknown node type \"no_such_node\""),
+        "{e}"
+    );
 
-    let g = feeding_base_color(Node::new("math").param("operation", Param::Text("plus".into())), "value");
+    let g = feeding_base_color(
+        Node::new("math").param("operation", Param::Text("plus".into())),
+        "value",
+    );
     let e = compile("param", &g, "material_0").unwrap_err();
     assert_eq!(e.socket.as_deref(), Some("operation"), "{e}");
 
@@ -116,7 +143,10 @@ fn dead_branches_emit_no_code_and_constants_fold() {
     let code = validate_kernel(&g).unwrap();
     assert!(!code.contains("node_voronoi"), "dead node emitted:\n{code}");
     assert!(!code.contains("node_math"), "2 × 0.25 not folded:\n{code}");
-    assert!(code.contains("vec3<f32>(0.5, 0.5, 0.5)"), "folded value missing:\n{code}");
+    assert!(
+        code.contains("vec3<f32>(0.5, 0.5, 0.5)"),
+        "folded value missing:\n{code}"
+    );
 }
 
 #[test]

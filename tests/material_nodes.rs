@@ -53,9 +53,13 @@ fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
         };
         which.push(index);
     }
-    code.push_str("fn probe_value(which: u32, sp: ShadingPoint) -> vec4<f32> {\n    switch (which) {\n");
+    code.push_str(
+        "fn probe_value(which: u32, sp: ShadingPoint) -> vec4<f32> {\n    switch (which) {\n",
+    );
     for (_, i) in &functions {
-        code.push_str(&format!("        case {i}u: {{ return probe_value_{i}(sp); }}\n"));
+        code.push_str(&format!(
+            "        case {i}u: {{ return probe_value_{i}(sp); }}\n"
+        ));
     }
     code.push_str("        default: { return vec4<f32>(0.0); }\n    }\n}\n");
     let wgsl = library::closure(calls) + &code;
@@ -75,7 +79,10 @@ fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
             name: "node_probe",
             parts: &[
                 ("(generated) graph values", &wgsl),
-                ("shaders/tests/node_probe.wgsl", include_str!("../shaders/tests/node_probe.wgsl")),
+                (
+                    "shaders/tests/node_probe.wgsl",
+                    include_str!("../shaders/tests/node_probe.wgsl"),
+                ),
             ],
             entry: "node_probe",
             input: bytemuck::cast_slice(&input),
@@ -110,7 +117,10 @@ fn assert_near(what: &str, got: f32, want: f32, tolerance: f32) {
 fn x_of_position() -> Vec<(&'static str, Node)> {
     vec![
         ("geo", Node::new("geometry")),
-        ("x", Node::new("separate_xyz").input("vector", link("geo", "position"))),
+        (
+            "x",
+            Node::new("separate_xyz").input("vector", link("geo", "position")),
+        ),
     ]
 }
 
@@ -179,25 +189,43 @@ fn math_operations_match_blender_values() {
         .collect();
     let values = evaluate(&cases);
     for (&(op, a, b, c, want), got) in table.iter().zip(&values) {
-        assert_near(&format!("{op}({a}, {b}, {c})"), got[0], want, 2e-3 * want.abs().max(1.0));
+        assert_near(
+            &format!("{op}({a}, {b}, {c})"),
+            got[0],
+            want,
+            2e-3 * want.abs().max(1.0),
+        );
     }
     // Every operation is covered.
     let covered: BTreeSet<&str> = table.iter().map(|t| t.0).collect();
-    let missing: Vec<&&str> = MATH_OPERATIONS.iter().filter(|o| !covered.contains(**o)).collect();
+    let missing: Vec<&&str> = MATH_OPERATIONS
+        .iter()
+        .filter(|o| !covered.contains(**o))
+        .collect();
     assert!(missing.len() <= 3, "untested operations: {missing:?}");
 }
 
 #[test]
 fn checker_alternates_by_cell_parity() {
-    let g = graph(&[(
-        "c",
-        Node::new("checker_texture")
-            .input("vector", link("t", "object"))
-            .input("scale", 1.0)
-            .input("color1", [1.0, 0.0, 0.0])
-            .input("color2", [0.0, 0.0, 1.0]),
-    ), ("t", Node::new("texture_coordinate"))]);
-    let cells: [[i32; 3]; 6] = [[0, 0, 0], [1, 0, 0], [1, 1, 0], [1, 1, 1], [-1, 0, 0], [2, 3, -1]];
+    let g = graph(&[
+        (
+            "c",
+            Node::new("checker_texture")
+                .input("vector", link("t", "object"))
+                .input("scale", 1.0)
+                .input("color1", [1.0, 0.0, 0.0])
+                .input("color2", [0.0, 0.0, 1.0]),
+        ),
+        ("t", Node::new("texture_coordinate")),
+    ]);
+    let cells: [[i32; 3]; 6] = [
+        [0, 0, 0],
+        [1, 0, 0],
+        [1, 1, 0],
+        [1, 1, 1],
+        [-1, 0, 0],
+        [2, 3, -1],
+    ];
     let cases: Vec<Case> = cells
         .iter()
         .flat_map(|c| {
@@ -208,8 +236,16 @@ fn checker_alternates_by_cell_parity() {
     let v = evaluate(&cases);
     for (i, c) in cells.iter().enumerate() {
         let odd = (c[0] + c[1] + c[2]).rem_euclid(2) == 1;
-        assert_eq!(v[2 * i][0], if odd { 1.0 } else { 0.0 }, "fac in cell {c:?}");
-        let want = if odd { [1.0, 0.0, 0.0] } else { [0.0, 0.0, 1.0] };
+        assert_eq!(
+            v[2 * i][0],
+            if odd { 1.0 } else { 0.0 },
+            "fac in cell {c:?}"
+        );
+        let want = if odd {
+            [1.0, 0.0, 0.0]
+        } else {
+            [0.0, 0.0, 1.0]
+        };
         assert_eq!(&v[2 * i + 1][..3], &want, "colour in cell {c:?}");
     }
 }
@@ -225,9 +261,18 @@ fn color_ramp_interpolates_linearly_constantly_and_with_ease() {
                 .param(
                     "stops",
                     Param::Ramp(vec![
-                        RampStop { position: 0.2, color: [0.0, 0.0, 0.0, 1.0] },
-                        RampStop { position: 0.6, color: [1.0, 0.5, 0.0, 0.0] },
-                        RampStop { position: 1.0, color: [0.0, 1.0, 1.0, 1.0] },
+                        RampStop {
+                            position: 0.2,
+                            color: [0.0, 0.0, 0.0, 1.0],
+                        },
+                        RampStop {
+                            position: 0.6,
+                            color: [1.0, 0.5, 0.0, 0.0],
+                        },
+                        RampStop {
+                            position: 1.0,
+                            color: [0.0, 1.0, 1.0, 1.0],
+                        },
                     ]),
                 )
                 .input("fac", link("x", "x")),
@@ -293,14 +338,23 @@ fn hsv_round_trips_and_separates() {
     let colours: Vec<[f32; 3]> = (0..64)
         .map(|i| {
             let f = i as f32;
-            [(f * 0.37).fract(), (f * 0.61).fract(), (f * 0.13 + 0.05).fract()]
+            [
+                (f * 0.37).fract(),
+                (f * 0.61).fract(),
+                (f * 0.13 + 0.05).fract(),
+            ]
         })
         .collect();
     for c in &colours {
         // The colour comes in through the position, so nothing folds.
         let g = graph(&[
             ("geo", Node::new("geometry")),
-            ("sep", Node::new("separate_color").param("mode", text("hsv")).input("color", link("geo", "position"))),
+            (
+                "sep",
+                Node::new("separate_color")
+                    .param("mode", text("hsv"))
+                    .input("color", link("geo", "position")),
+            ),
             (
                 "comb",
                 Node::new("combine_color")
@@ -309,7 +363,13 @@ fn hsv_round_trips_and_separates() {
                     .input("green", link("sep", "green"))
                     .input("blue", link("sep", "blue")),
             ),
-            ("hsv", Node::new("combine_xyz").input("x", link("sep", "red")).input("y", link("sep", "green")).input("z", link("sep", "blue"))),
+            (
+                "hsv",
+                Node::new("combine_xyz")
+                    .input("x", link("sep", "red"))
+                    .input("y", link("sep", "green"))
+                    .input("z", link("sep", "blue")),
+            ),
         ]);
         cases.push(case(&g, "comb", "color", *c));
         cases.push(case(&g, "hsv", "vector", *c));
@@ -345,7 +405,14 @@ fn map_range_clamp_and_mapping() {
         graph(&nodes)
     };
     let mut nodes = x_of_position();
-    nodes.push(("c", Node::new("clamp").param("clamp_type", text("range")).input("value", link("x", "x")).input("min", 1.0).input("max", -1.0)));
+    nodes.push((
+        "c",
+        Node::new("clamp")
+            .param("clamp_type", text("range"))
+            .input("value", link("x", "x"))
+            .input("min", 1.0)
+            .input("max", -1.0),
+    ));
     let clamp = graph(&nodes);
     let mapping = graph(&[
         ("geo", Node::new("geometry")),
@@ -395,15 +462,24 @@ fn noise_is_deterministic_and_within_its_range() {
     let points: Vec<[f32; 3]> = (0..4096)
         .map(|i| {
             let f = i as f32;
-            [(f * 0.7548).fract() * 20.0 - 10.0, (f * 0.5698).fract() * 20.0 - 10.0, f * 0.01]
+            [
+                (f * 0.7548).fract() * 20.0 - 10.0,
+                (f * 0.5698).fract() * 20.0 - 10.0,
+                f * 0.01,
+            ]
         })
         .collect();
-    let cases: Vec<Case> = points.iter().map(|p| case(&g, "noise", "fac", *p)).collect();
+    let cases: Vec<Case> = points
+        .iter()
+        .map(|p| case(&g, "noise", "fac", *p))
+        .collect();
     let first = evaluate(&cases);
     let second = evaluate(&cases);
     assert_eq!(first, second, "noise differs between runs");
     let values: Vec<f32> = first.iter().map(|v| v[0]).collect();
-    let (lo, hi) = values.iter().fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
+    let (lo, hi) = values
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(l, h), &v| (l.min(v), h.max(v)));
     let mean = values.iter().sum::<f32>() / values.len() as f32;
     let var = values.iter().map(|v| (v - mean).powi(2)).sum::<f32>() / values.len() as f32;
     eprintln!("noise: range [{lo}, {hi}], mean {mean}, std {}", var.sqrt());
@@ -418,7 +494,11 @@ fn voronoi_distances_match_a_brute_force_search() {
     let points: Vec<[f32; 3]> = (0..200)
         .map(|i| {
             let f = i as f32;
-            [(f * 0.7548).fract() * 4.0 - 2.0, (f * 0.5698).fract() * 4.0 - 2.0, (f * 0.3141).fract() * 4.0]
+            [
+                (f * 0.7548).fract() * 4.0 - 2.0,
+                (f * 0.5698).fract() * 4.0 - 2.0,
+                (f * 0.3141).fract() * 4.0,
+            ]
         })
         .collect();
     for (m, metric) in metrics.iter().enumerate() {
@@ -430,10 +510,20 @@ fn voronoi_distances_match_a_brute_force_search() {
                 .input("scale", 3.0)
                 .input("randomness", 0.8)
         };
-        let g = graph(&[("t", Node::new("texture_coordinate")), ("f1", node("f1")), ("f2", node("f2"))]);
+        let g = graph(&[
+            ("t", Node::new("texture_coordinate")),
+            ("f1", node("f1")),
+            ("f2", node("f2")),
+        ]);
         let cases: Vec<Case> = points
             .iter()
-            .flat_map(|p| [case(&g, "f1", "distance", *p), case(&g, "f1", "position", *p), case(&g, "f2", "distance", *p)])
+            .flat_map(|p| {
+                [
+                    case(&g, "f1", "distance", *p),
+                    case(&g, "f1", "position", *p),
+                    case(&g, "f2", "distance", *p),
+                ]
+            })
             .collect();
         let v = evaluate(&cases);
         let mut f2_mismatches = 0;
@@ -441,14 +531,22 @@ fn voronoi_distances_match_a_brute_force_search() {
             let (d1, d2, pos) = reference::voronoi_brute_force(*p, 3.0, 0.8, m as u32, 0.5);
             assert_near(&format!("{metric} F1 at {p:?}"), v[3 * i][0], d1, 1e-4);
             for k in 0..3 {
-                assert_near(&format!("{metric} F1 position at {p:?}"), v[3 * i + 1][k], pos[k], 1e-4);
+                assert_near(
+                    &format!("{metric} F1 position at {p:?}"),
+                    v[3 * i + 1][k],
+                    pos[k],
+                    1e-4,
+                );
             }
             // Blender searches 3×3×3 cells for F2; the true F2 can lie further out.
             if (v[3 * i + 2][0] - d2).abs() > 1e-4 {
                 f2_mismatches += 1;
             }
         }
-        assert!(f2_mismatches <= points.len() / 50, "{metric}: F2 wrong at {f2_mismatches} points");
+        assert!(
+            f2_mismatches <= points.len() / 50,
+            "{metric}: F2 wrong at {f2_mismatches} points"
+        );
     }
 }
 
@@ -475,7 +573,11 @@ fn white_noise_gradient_wave_and_brick_take_their_stated_values() {
         case(&brick, "n", "fac", [0.25 / 5.0, 0.375 / 5.0, 0.0]),
         case(&brick, "n", "fac", [0.0, 0.375 / 5.0, 0.0]),
     ]);
-    assert_eq!(v[0][0], reference::hash_vec3_to_float(p), "white noise is the hash of p");
+    assert_eq!(
+        v[0][0],
+        reference::hash_vec3_to_float(p),
+        "white noise is the hash of p"
+    );
     assert_near("linear gradient", v[1][0], 0.3, 1e-6);
     assert_near("quadratic gradient", v[2][0], 0.09, 1e-6);
     // Blender's spherical gradient is 0.999999 - |p| (clamped), hence the tolerance.
@@ -494,16 +596,41 @@ fn colour_adjustments_and_inputs_take_their_stated_values() {
     let on = |node: Node| graph(&[geo.clone(), ("n", node)]);
     let colour_in = |node: Node| on(node.input("color", link("geo", "position")));
     let v = evaluate(&[
-        case(&colour_in(Node::new("hue_saturation_value")), "n", "color", c),
-        case(&colour_in(Node::new("hue_saturation_value").input("value", 0.5)), "n", "color", c),
+        case(
+            &colour_in(Node::new("hue_saturation_value")),
+            "n",
+            "color",
+            c,
+        ),
+        case(
+            &colour_in(Node::new("hue_saturation_value").input("value", 0.5)),
+            "n",
+            "color",
+            c,
+        ),
         case(&colour_in(Node::new("invert")), "n", "color", c),
-        case(&colour_in(Node::new("gamma").input("gamma", 2.0)), "n", "color", c),
-        case(&colour_in(Node::new("brightness_contrast").input("bright", 0.1)), "n", "color", c),
+        case(
+            &colour_in(Node::new("gamma").input("gamma", 2.0)),
+            "n",
+            "color",
+            c,
+        ),
+        case(
+            &colour_in(Node::new("brightness_contrast").input("bright", 0.1)),
+            "n",
+            "color",
+            c,
+        ),
         case(&colour_in(Node::new("rgb_to_bw")), "n", "value", c),
         case(&on(Node::new("fresnel")), "n", "fac", c),
         case(&on(Node::new("layer_weight")), "n", "fresnel", c),
         case(&on(Node::new("layer_weight")), "n", "facing", c),
-        case(&graph(&[("n", Node::new("texture_coordinate"))]), "n", "uv", c),
+        case(
+            &graph(&[("n", Node::new("texture_coordinate"))]),
+            "n",
+            "uv",
+            c,
+        ),
         case(&on(Node::new("normal_map")), "n", "normal", c),
         case(&graph(&[("n", Node::new("object_info"))]), "n", "random", c),
     ]);
@@ -517,7 +644,12 @@ fn colour_adjustments_and_inputs_take_their_stated_values() {
     near3("invert", v[2], c.map(|x| 1.0 - x));
     near3("gamma", v[3], c.map(|x| x * x));
     near3("brightness", v[4], c.map(|x| x + 0.1));
-    assert_near("luminance", v[5][0], 0.2126 * 0.2 + 0.7152 * 0.4 + 0.0722 * 0.8, 1e-5);
+    assert_near(
+        "luminance",
+        v[5][0],
+        0.2126 * 0.2 + 0.7152 * 0.4 + 0.0722 * 0.8,
+        1e-5,
+    );
     assert_near("fresnel at normal incidence", v[6][0], 0.04, 1e-4);
     assert_near("layer weight fresnel", v[7][0], 1.0 / 9.0, 1e-4);
     assert_near("layer weight facing", v[8][0], 0.0, 1e-4);
@@ -529,14 +661,26 @@ fn colour_adjustments_and_inputs_take_their_stated_values() {
 #[test]
 fn bump_tilts_the_normal_by_the_height_slope() {
     let mut nodes = x_of_position();
-    nodes.push(("bump", Node::new("bump").input("height", link("x", "x")).input("distance", 0.5)));
+    nodes.push((
+        "bump",
+        Node::new("bump")
+            .input("height", link("x", "x"))
+            .input("distance", 0.5),
+    ));
     nodes.push(("flat", Node::new("bump").input("height", 0.3)));
     let g = graph(&nodes);
-    let v = evaluate(&[case(&g, "bump", "normal", [0.4, 0.1, 0.0]), case(&g, "flat", "normal", [0.4, 0.1, 0.0])]);
+    let v = evaluate(&[
+        case(&g, "bump", "normal", [0.4, 0.1, 0.0]),
+        case(&g, "flat", "normal", [0.4, 0.1, 0.0]),
+    ]);
     // Height h = x along the tangent +x, scaled by 0.5: n ∝ (-0.5, 0, 1).
     let want = Vec3::new(-0.5, 0.0, 1.0).normalize();
     for k in 0..3 {
         assert_near("bumped normal", v[0][k], want[k], 2e-3);
     }
-    assert_eq!(&v[1][..3], &[0.0, 0.0, 1.0], "a constant height bumps nothing");
+    assert_eq!(
+        &v[1][..3],
+        &[0.0, 0.0, 1.0],
+        "a constant height bumps nothing"
+    );
 }

@@ -90,7 +90,11 @@ impl Ctx<'_> {
 }
 
 /// Compiles `graph` into a function called `function`.
-pub fn compile(material: &str, graph: &Graph, function: &str) -> Result<CompiledMaterial, GraphError> {
+pub fn compile(
+    material: &str,
+    graph: &Graph,
+    function: &str,
+) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
     let mut flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
@@ -121,7 +125,12 @@ pub fn compile(material: &str, graph: &Graph, function: &str) -> Result<Compiled
 /// Compiles the value of one output, `node.socket`, into `fn <function>(sp:
 /// ShadingPoint) -> vec4<f32>` (floats in x, vectors and colours in xyz): previews and
 /// the per-node tests evaluate single sockets this way.
-pub fn compile_value(material: &str, graph: &Graph, at: &Link, function: &str) -> Result<CompiledMaterial, GraphError> {
+pub fn compile_value(
+    material: &str,
+    graph: &Graph,
+    at: &Link,
+    function: &str,
+) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
     let mut flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
@@ -146,7 +155,13 @@ pub fn compile_value(material: &str, graph: &Graph, at: &Link, function: &str) -
         SocketType::Float => format!("vec4<f32>({}, 0.0, 0.0, 0.0)", body.roots[0]),
         SocketType::Vec2 => format!("vec4<f32>({}, 0.0, 0.0)", body.roots[0]),
         SocketType::Vector | SocketType::Color => format!("vec4<f32>({}, 0.0)", body.roots[0]),
-        SocketType::Bsdf => return Err(ctx.err(Some(&at.node), Some(&at.socket), "a BSDF has no value to preview".into())),
+        SocketType::Bsdf => {
+            return Err(ctx.err(
+                Some(&at.node),
+                Some(&at.socket),
+                "a BSDF has no value to preview".into(),
+            ));
+        }
     };
     let mut code = emitter.helpers.clone();
     let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> vec4<f32> {{");
@@ -204,7 +219,11 @@ impl<'a> Flattener<'a> {
         Ok(self.nodes)
     }
 
-    fn group(&self, id: &str, node: &Node) -> Result<(&'a str, &'a super::graph::Group), GraphError> {
+    fn group(
+        &self,
+        id: &str,
+        node: &Node,
+    ) -> Result<(&'a str, &'a super::graph::Group), GraphError> {
         let name = match node.params.get("group") {
             Some(Param::Text(name)) => name.as_str(),
             _ => {
@@ -217,7 +236,9 @@ impl<'a> Flattener<'a> {
         };
         match self.graph.groups.get_key_value(name) {
             Some((k, g)) => Ok((k.as_str(), g)),
-            None => Err(self.ctx.err(Some(id), None, format!("no group named \"{name}\""))),
+            None => Err(self
+                .ctx
+                .err(Some(id), None, format!("no group named \"{name}\""))),
         }
     }
 
@@ -253,14 +274,21 @@ impl<'a> Flattener<'a> {
                 }
                 kind => {
                     let Some(def) = nodes::find(kind) else {
-                        return Err(self.ctx.err(Some(&full), None, format!("unknown node type \"{kind}\"")));
+                        return Err(self.ctx.err(
+                            Some(&full),
+                            None,
+                            format!("unknown node type \"{kind}\""),
+                        ));
                     };
                     for name in node.inputs.keys() {
                         if def.input(name).is_none() {
                             return Err(self.ctx.err(
                                 Some(&full),
                                 Some(name),
-                                format!("{kind} has no input \"{name}\" (inputs: {})", names(def.inputs.iter().map(|s| s.name))),
+                                format!(
+                                    "{kind} has no input \"{name}\" (inputs: {})",
+                                    names(def.inputs.iter().map(|s| s.name))
+                                ),
                             ));
                         }
                     }
@@ -288,7 +316,11 @@ impl<'a> Flattener<'a> {
                 let (_, group) = self.group(&full, node)?;
                 for name in node.inputs.keys() {
                     if !group.inputs.iter().any(|s| &s.name == name) {
-                        return Err(self.ctx.err(Some(&full), Some(name), format!("the group has no input \"{name}\"")));
+                        return Err(self.ctx.err(
+                            Some(&full),
+                            Some(name),
+                            format!("the group has no input \"{name}\""),
+                        ));
                     }
                 }
                 self.resolve(&Scope {
@@ -299,7 +331,9 @@ impl<'a> Flattener<'a> {
                 })?;
                 continue;
             }
-            let Some(&index) = self.index.get(&full) else { continue };
+            let Some(&index) = self.index.get(&full) else {
+                continue;
+            };
             let def = self.nodes[index].def;
             for (i, socket) in def.inputs.iter().enumerate() {
                 if let Some(input) = node.inputs.get(socket.name) {
@@ -312,23 +346,43 @@ impl<'a> Flattener<'a> {
     }
 
     /// Where `input` (of node `at`, socket `socket`, in `scope`) gets its value.
-    fn source(&self, scope: &Scope<'a>, at: &str, socket: &str, input: &Input, hops: usize) -> Result<Src, GraphError> {
+    fn source(
+        &self,
+        scope: &Scope<'a>,
+        at: &str,
+        socket: &str,
+        input: &Input,
+        hops: usize,
+    ) -> Result<Src, GraphError> {
         if hops > 64 * MAX_GROUP_DEPTH {
-            return Err(self.ctx.err(Some(at), Some(socket), "links through groups loop".into()));
+            return Err(self
+                .ctx
+                .err(Some(at), Some(socket), "links through groups loop".into()));
         }
         let link = match input {
             Input::Value(v) => return Ok(Src::Const(v.clone())),
             Input::Link(link) => link,
         };
         let Some(target) = scope.nodes.get(&link.node) else {
-            return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": no node \"{}\"", link.node)));
+            return Err(self.ctx.err(
+                Some(at),
+                Some(socket),
+                format!("link to \"{link}\": no node \"{}\"", link.node),
+            ));
         };
         let full = format!("{}{}", scope.prefix, link.node);
         match target.kind.as_str() {
             "group" => {
                 let (_, group) = self.group(&full, target)?;
                 let Some(inner) = group.links.get(&link.socket) else {
-                    return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": the group has no output \"{}\"", link.socket)));
+                    return Err(self.ctx.err(
+                        Some(at),
+                        Some(socket),
+                        format!(
+                            "link to \"{link}\": the group has no output \"{}\"",
+                            link.socket
+                        ),
+                    ));
                 };
                 let inner_scope = Scope {
                     prefix: format!("{full}/"),
@@ -336,14 +390,31 @@ impl<'a> Flattener<'a> {
                     instance: Some((target, Box::new(scope.clone()), group)),
                     depth: scope.depth + 1,
                 };
-                self.source(&inner_scope, at, socket, &Input::Link(inner.clone()), hops + 1)
+                self.source(
+                    &inner_scope,
+                    at,
+                    socket,
+                    &Input::Link(inner.clone()),
+                    hops + 1,
+                )
             }
             "group_input" => {
                 let Some((instance, outer, group)) = &scope.instance else {
-                    return Err(self.ctx.err(Some(&full), None, "group_input outside a group".into()));
+                    return Err(self.ctx.err(
+                        Some(&full),
+                        None,
+                        "group_input outside a group".into(),
+                    ));
                 };
                 let Some(declared) = group.inputs.iter().find(|s| s.name == link.socket) else {
-                    return Err(self.ctx.err(Some(at), Some(socket), format!("link to \"{link}\": the group has no input \"{}\"", link.socket)));
+                    return Err(self.ctx.err(
+                        Some(at),
+                        Some(socket),
+                        format!(
+                            "link to \"{link}\": the group has no input \"{}\"",
+                            link.socket
+                        ),
+                    ));
                 };
                 match instance.inputs.get(&link.socket) {
                     Some(outer_input) => self.source(outer, at, socket, outer_input, hops + 1),
@@ -373,10 +444,20 @@ impl<'a> Flattener<'a> {
 
 fn names<'a>(it: impl Iterator<Item = &'a str>) -> String {
     let v: Vec<&str> = it.collect();
-    if v.is_empty() { "none".into() } else { v.join(", ") }
+    if v.is_empty() {
+        "none".into()
+    } else {
+        v.join(", ")
+    }
 }
 
-fn check_param(ctx: &Ctx, node: &str, def: &NodeDef, name: &str, value: &Param) -> Result<(), GraphError> {
+fn check_param(
+    ctx: &Ctx,
+    node: &str,
+    def: &NodeDef,
+    name: &str,
+    value: &Param,
+) -> Result<(), GraphError> {
     if def.kind == "group" {
         return Ok(());
     }
@@ -384,22 +465,37 @@ fn check_param(ctx: &Ctx, node: &str, def: &NodeDef, name: &str, value: &Param) 
         return Err(ctx.err(
             Some(node),
             Some(name),
-            format!("{} has no parameter \"{name}\" (parameters: {})", def.kind, names(def.params.iter().map(|p| p.name))),
+            format!(
+                "{} has no parameter \"{name}\" (parameters: {})",
+                def.kind,
+                names(def.params.iter().map(|p| p.name))
+            ),
         ));
     };
     let ok = match (&p.kind, value) {
         (ParamKind::Enum(options), Param::Text(t)) => {
             if !options.contains(&t.as_str()) {
-                return Err(ctx.err(Some(node), Some(name), format!("\"{t}\" is not one of {}", options.join(", "))));
+                return Err(ctx.err(
+                    Some(node),
+                    Some(name),
+                    format!("\"{t}\" is not one of {}", options.join(", ")),
+                ));
             }
             true
         }
         (ParamKind::Bool(_), Param::Bool(_)) => true,
         (ParamKind::Ramp, Param::Ramp(stops)) => {
             if stops.is_empty() {
-                return Err(ctx.err(Some(node), Some(name), "a colour ramp needs at least one stop".into()));
+                return Err(ctx.err(
+                    Some(node),
+                    Some(name),
+                    "a colour ramp needs at least one stop".into(),
+                ));
             }
-            if stops.iter().any(|s| !s.position.is_finite() || s.color.iter().any(|c| !c.is_finite())) {
+            if stops
+                .iter()
+                .any(|s| !s.position.is_finite() || s.color.iter().any(|c| !c.is_finite()))
+            {
                 return Err(ctx.err(Some(node), Some(name), "ramp stops must be finite".into()));
             }
             true
@@ -409,7 +505,11 @@ fn check_param(ctx: &Ctx, node: &str, def: &NodeDef, name: &str, value: &Param) 
     if ok {
         Ok(())
     } else {
-        Err(ctx.err(Some(node), Some(name), format!("wrong kind of value: {value:?}")))
+        Err(ctx.err(
+            Some(node),
+            Some(name),
+            format!("wrong kind of value: {value:?}"),
+        ))
     }
 }
 
@@ -439,12 +539,17 @@ fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
                 Src::Const(v) => {
                     let fits = matches!(
                         (v, socket.ty),
-                        (Value::Float(_), SocketType::Float | SocketType::Vector | SocketType::Color)
-                            | (Value::Vec2(_), SocketType::Vec2)
+                        (
+                            Value::Float(_),
+                            SocketType::Float | SocketType::Vector | SocketType::Color
+                        ) | (Value::Vec2(_), SocketType::Vec2)
                             | (Value::Vec3(_), SocketType::Vector | SocketType::Color)
                     );
                     if !fits {
-                        return fail(format!("the value {v:?} does not fit a {} input", socket.ty.name()));
+                        return fail(format!(
+                            "the value {v:?} does not fit a {} input",
+                            socket.ty.name()
+                        ));
                     }
                     let finite = match v {
                         Value::Float(x) => x.is_finite(),
@@ -466,7 +571,11 @@ fn find_output(ctx: &Ctx, graph: &Graph, flat: &[FlatNode]) -> Result<usize, Gra
     if let Some(id) = &graph.output {
         return match flat.iter().position(|n| &n.id == id) {
             Some(i) if flat[i].def.kind == "material_output" => Ok(i),
-            Some(_) => Err(ctx.err(Some(id), None, "the output must be a material_output node".into())),
+            Some(_) => Err(ctx.err(
+                Some(id),
+                None,
+                "the output must be a material_output node".into(),
+            )),
             None => Err(ctx.err(None, None, format!("output node \"{id}\" does not exist"))),
         };
     }
@@ -476,7 +585,11 @@ fn find_output(ctx: &Ctx, graph: &Graph, flat: &[FlatNode]) -> Result<usize, Gra
     match outputs.as_slice() {
         [one] => Ok(*one),
         [] => Err(ctx.err(None, None, "the graph has no material_output node".into())),
-        _ => Err(ctx.err(None, None, "several material_output nodes: say which with `output: \"id\"`".into())),
+        _ => Err(ctx.err(
+            None,
+            None,
+            "several material_output nodes: say which with `output: \"id\"`".into(),
+        )),
     }
 }
 
@@ -509,7 +622,11 @@ fn reject_cycles(ctx: &Ctx, flat: &[FlatNode], output: usize) -> Result<(), Grap
                 }
                 Mark::Open => {
                     let start = stack.iter().position(|(s, _)| *s == n).unwrap_or(0);
-                    let path: Vec<&str> = stack[start..].iter().map(|(s, _)| flat[*s].id.as_str()).chain([flat[n].id.as_str()]).collect();
+                    let path: Vec<&str> = stack[start..]
+                        .iter()
+                        .map(|(s, _)| flat[*s].id.as_str())
+                        .chain([flat[n].id.as_str()])
+                        .collect();
                     return Err(ctx.err(
                         Some(&flat[n].id),
                         Some(flat[node].def.inputs[i].name),
@@ -580,7 +697,9 @@ fn as_vec3(v: &Value) -> [f32; 3] {
 
 fn enum_index(node: &FlatNode, name: &str) -> usize {
     match (node.def.param(name).map(|p| &p.kind), node.params.get(name)) {
-        (Some(ParamKind::Enum(options)), Some(Param::Text(t))) => options.iter().position(|o| o == t).unwrap_or(0),
+        (Some(ParamKind::Enum(options)), Some(Param::Text(t))) => {
+            options.iter().position(|o| o == t).unwrap_or(0)
+        }
         _ => 0,
     }
 }
@@ -608,7 +727,11 @@ fn fold(node: &FlatNode, inputs: &[Value]) -> Option<Vec<Value>> {
             vec![Value::Float(a[0]), Value::Float(a[1]), Value::Float(a[2])]
         }
         "mix_float" => {
-            let t = if bool_param(node, "clamp_factor") { f(0).clamp(0.0, 1.0) } else { f(0) };
+            let t = if bool_param(node, "clamp_factor") {
+                f(0).clamp(0.0, 1.0)
+            } else {
+                f(0)
+            };
             vec![Value::Float(f(1) + (f(2) - f(1)) * t)]
         }
         "math" => {
@@ -631,12 +754,20 @@ fn fold(node: &FlatNode, inputs: &[Value]) -> Option<Vec<Value>> {
                 "ceil" => a.ceil(),
                 _ => return None,
             };
-            let r = if bool_param(node, "clamp") { r.clamp(0.0, 1.0) } else { r };
+            let r = if bool_param(node, "clamp") {
+                r.clamp(0.0, 1.0)
+            } else {
+                r
+            };
             vec![Value::Float(r)]
         }
         "clamp" => {
             let (x, lo, hi) = (f(0), f(1), f(2));
-            let (lo, hi) = if enum_index(node, "clamp_type") == 1 && lo > hi { (hi, lo) } else { (lo, hi) };
+            let (lo, hi) = if enum_index(node, "clamp_type") == 1 && lo > hi {
+                (hi, lo)
+            } else {
+                (lo, hi)
+            };
             vec![Value::Float(x.max(lo).min(hi))]
         }
         "invert" => {
@@ -659,11 +790,17 @@ fn fold_constants(flat: &mut [FlatNode], output: usize) {
                 if let Some(values) = folded.get(&m) {
                     let v = values[o].clone();
                     // Keep the consumer's socket type: a colour output folds into a vec3.
-                    flat[n].inputs[i] = Src::Const(convert_const(&v, output_type(flat, m, o), flat[n].def.inputs[i].ty));
+                    flat[n].inputs[i] = Src::Const(convert_const(
+                        &v,
+                        output_type(flat, m, o),
+                        flat[n].def.inputs[i].ty,
+                    ));
                 }
             }
         }
-        let inputs: Option<Vec<Value>> = (0..flat[n].inputs.len()).map(|i| constant(flat, &flat[n], i)).collect();
+        let inputs: Option<Vec<Value>> = (0..flat[n].inputs.len())
+            .map(|i| constant(flat, &flat[n], i))
+            .collect();
         if let Some(inputs) = inputs {
             if let Some(values) = fold(&flat[n], &inputs) {
                 folded.insert(n, values);
@@ -701,7 +838,10 @@ fn merge_identical(flat: &mut [FlatNode], root: usize) {
         if flat[n].def.kind == "material_output" {
             continue;
         }
-        let key = format!("{}|{:?}|{:?}", flat[n].def.kind, flat[n].params, flat[n].inputs);
+        let key = format!(
+            "{}|{:?}|{:?}",
+            flat[n].def.kind, flat[n].params, flat[n].inputs
+        );
         match first.get(&key) {
             Some(&f) => {
                 redirect.insert(n, f);
@@ -722,7 +862,13 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         _ => return MaterialTraits::default(),
     };
     let node = &flat[surface];
-    let input = |name: &str| node.def.inputs.iter().position(|s| s.name == name).expect("principled input");
+    let input = |name: &str| {
+        node.def
+            .inputs
+            .iter()
+            .position(|s| s.name == name)
+            .expect("principled input")
+    };
     let known = |name: &str| constant(flat, node, input(name));
     let transmission = known("transmission_weight").map(|v| as_f32(&v));
     let transmissive = bool_param(node, "thin_walled") || transmission != Some(0.0);
@@ -761,7 +907,11 @@ struct Body {
 fn literal(v: &Value, ty: SocketType) -> String {
     let f = |x: f32| {
         let s = format!("{x:?}");
-        if s.contains('.') || s.contains('e') { s } else { format!("{s}.0") }
+        if s.contains('.') || s.contains('e') {
+            s
+        } else {
+            format!("{s}.0")
+        }
     };
     match (v, ty) {
         (Value::Float(x), SocketType::Float) => f(*x),
@@ -835,7 +985,11 @@ impl Emitter<'_> {
         let socket = &node.def.inputs[i];
         match &node.inputs[i] {
             Src::Const(v) => literal(v, socket.ty),
-            Src::Out(m, o) => convert(self.output_expr(*m, *o), output_type(self.flat, *m, *o), socket.ty),
+            Src::Out(m, o) => convert(
+                self.output_expr(*m, *o),
+                output_type(self.flat, *m, *o),
+                socket.ty,
+            ),
             Src::Default => match &socket.default {
                 Default::Value(v) => literal(v, socket.ty),
                 Default::Implicit(expr, _) => {
@@ -863,11 +1017,16 @@ impl Emitter<'_> {
                 let mut rest = *t;
                 while let Some(start) = rest.find('{') {
                     code.push_str(&rest[..start]);
-                    let end = rest[start..].find('}').map(|e| start + e).expect("template brace");
+                    let end = rest[start..]
+                        .find('}')
+                        .map(|e| start + e)
+                        .expect("template brace");
                     let name = &rest[start + 1..end];
                     let value = match node.def.inputs.iter().position(|s| s.name == name) {
                         Some(i) => self.input_expr(n, i),
-                        None => self.param_expr(node, name).unwrap_or_else(|| panic!("template of {} names {name}", node.def.kind)),
+                        None => self.param_expr(node, name).unwrap_or_else(|| {
+                            panic!("template of {} names {name}", node.def.kind)
+                        }),
                     };
                     code.push_str(&value);
                     rest = &rest[end + 1..];
@@ -892,16 +1051,32 @@ impl Emitter<'_> {
         let mut stops: Vec<RampStop> = match node.params.get("stops") {
             Some(Param::Ramp(s)) => s.clone(),
             _ => vec![
-                RampStop { position: 0.0, color: [0.0, 0.0, 0.0, 1.0] },
-                RampStop { position: 1.0, color: [1.0; 4] },
+                RampStop {
+                    position: 0.0,
+                    color: [0.0, 0.0, 0.0, 1.0],
+                },
+                RampStop {
+                    position: 1.0,
+                    color: [1.0; 4],
+                },
             ],
         };
         stops.sort_by(|a, b| a.position.total_cmp(&b.position));
         let mode = enum_index(node, "interpolation");
         let name = format!("{}_ramp{n}", self.prefix);
-        let c = |s: &RampStop| format!("vec4<f32>({:?}, {:?}, {:?}, {:?})", s.color[0], s.color[1], s.color[2], s.color[3]);
+        let c = |s: &RampStop| {
+            format!(
+                "vec4<f32>({:?}, {:?}, {:?}, {:?})",
+                s.color[0], s.color[1], s.color[2], s.color[3]
+            )
+        };
         let mut f = format!("fn {name}(t: f32) -> vec4<f32> {{\n");
-        let _ = writeln!(f, "    if (!(t > {:?})) {{ return {}; }}", stops[0].position, c(&stops[0]));
+        let _ = writeln!(
+            f,
+            "    if (!(t > {:?})) {{ return {}; }}",
+            stops[0].position,
+            c(&stops[0])
+        );
         for w in stops.windows(2) {
             let _ = writeln!(
                 f,
@@ -922,7 +1097,12 @@ impl Emitter<'_> {
 
     fn bump(&mut self, n: usize) -> Result<String, GraphError> {
         let node = &self.flat[n];
-        let height = node.def.inputs.iter().position(|s| s.name == "height").expect("height");
+        let height = node
+            .def
+            .inputs
+            .iter()
+            .position(|s| s.name == "height")
+            .expect("height");
         let normal = self.input_expr(n, 3);
         let Src::Out(m, o) = node.inputs[height] else {
             // A constant height has no slope.
@@ -932,12 +1112,28 @@ impl Emitter<'_> {
         // point and one step along each tangent direction.
         let name = format!("{}_height{n}", self.prefix);
         let body = self.function_body(&[(m, o)])?;
-        let h = convert(body.roots[0].clone(), output_type(self.flat, m, o), SocketType::Float);
-        let _ = write!(self.helpers, "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n", body.statements);
+        let h = convert(
+            body.roots[0].clone(),
+            output_type(self.flat, m, o),
+            SocketType::Float,
+        );
+        let _ = write!(
+            self.helpers,
+            "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n",
+            body.statements
+        );
         let strength = self.input_expr(n, 0);
         let distance = self.input_expr(n, 1);
         let invert = bool_param(&self.flat[n], "invert");
-        self.calls.extend(["frame_from_normal_tangent", "nd_bump", "nd_bump_step", "nd_displaced"].map(String::from));
+        self.calls.extend(
+            [
+                "frame_from_normal_tangent",
+                "nd_bump",
+                "nd_bump_step",
+                "nd_displaced",
+            ]
+            .map(String::from),
+        );
         Ok(format!(
             "nd_bump({strength}, {distance}, {name}(sp), {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).t, nd_bump_step(sp))), \
              {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).b, nd_bump_step(sp))), nd_bump_step(sp), {normal}, \
@@ -948,7 +1144,12 @@ impl Emitter<'_> {
     fn principled(&mut self, n: usize) -> String {
         let thin = bool_param(&self.flat[n], "thin_walled");
         let mut e = |name: &str| {
-            let i = self.flat[n].def.inputs.iter().position(|s| s.name == name).expect("principled input");
+            let i = self.flat[n]
+                .def
+                .inputs
+                .iter()
+                .position(|s| s.name == name)
+                .expect("principled input");
             self.input_expr(n, i)
         };
         let code = format!(
@@ -985,7 +1186,16 @@ impl Emitter<'_> {
             normal = e("normal"),
             anisotropy_rotation = e("anisotropy_rotation"),
         );
-        self.calls.extend(["nd_unit", "nd_unit3", "nd_finite", "nd_finite3", "nd_safe_normal"].map(String::from));
+        self.calls.extend(
+            [
+                "nd_unit",
+                "nd_unit3",
+                "nd_finite",
+                "nd_finite3",
+                "nd_safe_normal",
+            ]
+            .map(String::from),
+        );
         code
     }
 }

@@ -57,7 +57,14 @@ pub fn nodes_markdown() -> String {
                     Default::Value(v) => value(v),
                     Default::Implicit(_, what) => (*what).to_owned(),
                 };
-                let _ = writeln!(out, "| `{}` | {} | {} | {} |", s.name, s.ty.name(), default, s.doc);
+                let _ = writeln!(
+                    out,
+                    "| `{}` | {} | {} | {} |",
+                    s.name,
+                    s.ty.name(),
+                    default,
+                    s.doc
+                );
             }
             out.push('\n');
         }
@@ -72,7 +79,11 @@ pub fn nodes_markdown() -> String {
             out.push_str("| parameter | values | |\n|---|---|---|\n");
             for p in &def.params {
                 let values = match &p.kind {
-                    ParamKind::Enum(options) => options.iter().map(|o| format!("`{o}`")).collect::<Vec<_>>().join(", "),
+                    ParamKind::Enum(options) => options
+                        .iter()
+                        .map(|o| format!("`{o}`"))
+                        .collect::<Vec<_>>()
+                        .join(", "),
                     ParamKind::Bool(d) => format!("`true`/`false` (default `{d}`)"),
                     ParamKind::Ramp => "`[(position: 0.0, color: (r, g, b, a)), …]`".into(),
                 };

@@ -10,7 +10,11 @@ macro_rules! node_file {
     ($path:literal) => {
         ShaderFile {
             path: concat!("shaders/nodes/", $path),
-            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/nodes/", $path)),
+            source: include_str!(concat!(
+                env!("CARGO_MANIFEST_DIR"),
+                "/shaders/nodes/",
+                $path
+            )),
         }
     };
 }
@@ -36,7 +40,12 @@ pub struct Item {
 
 pub fn items() -> &'static [Item] {
     static ITEMS: OnceLock<Vec<Item>> = OnceLock::new();
-    ITEMS.get_or_init(|| NODE_FILES.iter().flat_map(|f| split(f.path, f.source)).collect())
+    ITEMS.get_or_init(|| {
+        NODE_FILES
+            .iter()
+            .flat_map(|f| split(f.path, f.source))
+            .collect()
+    })
 }
 
 fn identifiers(text: &str) -> BTreeSet<String> {
@@ -70,7 +79,11 @@ fn split(file: &'static str, source: &str) -> Vec<Item> {
             let done = *depth <= 0 && (code.contains('}') || code.trim_end().ends_with(';'));
             if done {
                 let text = std::mem::take(text);
-                let body: String = text.lines().map(|l| l.split("//").next().unwrap_or("")).collect::<Vec<_>>().join("\n");
+                let body: String = text
+                    .lines()
+                    .map(|l| l.split("//").next().unwrap_or(""))
+                    .collect::<Vec<_>>()
+                    .join("\n");
                 let mut uses = identifiers(&body);
                 uses.remove(name.as_str());
                 items.push(Item {
@@ -83,7 +96,9 @@ fn split(file: &'static str, source: &str) -> Vec<Item> {
             }
             continue;
         }
-        let keyword = ["fn ", "struct ", "const "].into_iter().find(|k| line.starts_with(k));
+        let keyword = ["fn ", "struct ", "const "]
+            .into_iter()
+            .find(|k| line.starts_with(k));
         match keyword {
             Some(k) => {
                 let name: String = line[k.len()..]
@@ -98,7 +113,12 @@ fn split(file: &'static str, source: &str) -> Vec<Item> {
                 if single {
                     let mut uses = identifiers(code);
                     uses.remove(&name);
-                    items.push(Item { name, file, text, uses });
+                    items.push(Item {
+                        name,
+                        file,
+                        text,
+                        uses,
+                    });
                 } else {
                     current = Some((name, text, depth));
                 }
@@ -116,9 +136,16 @@ fn split(file: &'static str, source: &str) -> Vec<Item> {
 /// The items `roots` need, in library order, as WGSL.
 pub fn closure(roots: impl IntoIterator<Item = String>) -> String {
     let items = items();
-    let by_name: HashMap<&str, usize> = items.iter().enumerate().map(|(i, it)| (it.name.as_str(), i)).collect();
+    let by_name: HashMap<&str, usize> = items
+        .iter()
+        .enumerate()
+        .map(|(i, it)| (it.name.as_str(), i))
+        .collect();
     let mut needed = vec![false; items.len()];
-    let mut stack: Vec<usize> = roots.into_iter().filter_map(|r| by_name.get(r.as_str()).copied()).collect();
+    let mut stack: Vec<usize> = roots
+        .into_iter()
+        .filter_map(|r| by_name.get(r.as_str()).copied())
+        .collect();
     while let Some(i) = stack.pop() {
         if needed[i] {
             continue;

@@ -82,7 +82,10 @@ pub fn parse_material(text: &str, path: &str) -> Result<(String, Graph), Materia
         column: e.span.start.col,
         message: e.code.to_string(),
     };
-    let version = ron_options().from_str::<VersionOnly>(text).map_err(syntax)?.version;
+    let version = ron_options()
+        .from_str::<VersionOnly>(text)
+        .map_err(syntax)?
+        .version;
     match version {
         Some(MATERIAL_FORMAT_VERSION) => {}
         Some(v) if v > MATERIAL_FORMAT_VERSION => {
@@ -96,19 +99,25 @@ pub fn parse_material(text: &str, path: &str) -> Result<(String, Graph), Materia
         Some(v) => {
             return Err(MaterialFileError::Version {
                 path: path.to_owned(),
-                message: format!("material format version {v} is no longer read; save it again from a Kiln that reads it"),
+                message: format!(
+                    "material format version {v} is no longer read; save it again from a Kiln that reads it"
+                ),
             });
         }
         None => {
             return Err(MaterialFileError::Version {
                 path: path.to_owned(),
-                message: format!("no `version:` field (this Kiln reads version {MATERIAL_FORMAT_VERSION})"),
+                message: format!(
+                    "no `version:` field (this Kiln reads version {MATERIAL_FORMAT_VERSION})"
+                ),
             });
         }
     }
     let file: MaterialFile = ron_options().from_str(text).map_err(syntax)?;
     let name = file.name.clone().unwrap_or_else(|| {
-        Path::new(path).file_stem().map_or("material".into(), |s| s.to_string_lossy().into_owned())
+        Path::new(path)
+            .file_stem()
+            .map_or("material".into(), |s| s.to_string_lossy().into_owned())
     });
     Ok((name, file.graph()))
 }
@@ -129,7 +138,8 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
     for (_, m) in materials {
         roots.extend(m.calls.iter().cloned());
     }
-    let mut out = String::from("// Node library items used by this scene's materials (shaders/nodes/).\n");
+    let mut out =
+        String::from("// Node library items used by this scene's materials (shaders/nodes/).\n");
     out.push_str(&library::closure(roots));
     for (_, m) in materials {
         out.push_str(&m.code);
@@ -139,7 +149,10 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
     if !materials.is_empty() {
         out.push_str("    switch (id) {\n");
         for (id, m) in materials {
-            out.push_str(&format!("        case {id}u: {{ return {}(sp); }}\n", m.function));
+            out.push_str(&format!(
+                "        case {id}u: {{ return {}(sp); }}\n",
+                m.function
+            ));
         }
         out.push_str("        default: {}\n    }\n");
     }
@@ -152,7 +165,10 @@ pub fn scene_materials_wgsl(scene: &crate::scene::Scene) -> Result<String, Graph
     let mut compiled = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {
         if let Some(g) = &m.graph {
-            compiled.push((i as u32, compile(&m.name, &g.graph, &format!("material_{i}"))?));
+            compiled.push((
+                i as u32,
+                compile(&m.name, &g.graph, &format!("material_{i}"))?,
+            ));
         }
     }
     let list: Vec<(u32, &CompiledMaterial)> = compiled.iter().map(|(i, c)| (*i, c)).collect();

@@ -81,7 +81,10 @@ impl NodeDef {
     }
 
     pub fn output(&self, name: &str) -> Option<(usize, &OutputDef)> {
-        self.outputs.iter().enumerate().find(|(_, s)| s.name == name)
+        self.outputs
+            .iter()
+            .enumerate()
+            .find(|(_, s)| s.name == name)
     }
 
     pub fn param(&self, name: &str) -> Option<&ParamDef> {
@@ -278,12 +281,27 @@ fn build() -> Vec<NodeDef> {
             doc: "Coordinates of the shading point for texturing.",
             inputs: vec![],
             outputs: vec![
-                out("generated", Vector, ".generated", "object-space position scaled to the mesh's bounding box, 0 to 1"),
-                out("normal", Vector, ".normal", "shading normal in object space"),
+                out(
+                    "generated",
+                    Vector,
+                    ".generated",
+                    "object-space position scaled to the mesh's bounding box, 0 to 1",
+                ),
+                out(
+                    "normal",
+                    Vector,
+                    ".normal",
+                    "shading normal in object space",
+                ),
                 out("uv", Vector, ".uv", "the mesh's UV coordinates (z = 0)"),
                 out("object", Vector, ".object", "object-space position"),
                 out("world", Vector, ".world", "world-space position"),
-                out("reflection", Vector, ".reflection", "the view direction mirrored about the normal, world space"),
+                out(
+                    "reflection",
+                    Vector,
+                    ".reflection",
+                    "the view direction mirrored about the normal, world space",
+                ),
             ],
             params: vec![],
             code: Code::Template("nd_texture_coordinate(sp)"),
@@ -297,10 +315,30 @@ fn build() -> Vec<NodeDef> {
             outputs: vec![
                 out("position", Vector, ".p", "position"),
                 out("normal", Vector, ".n", "shading (interpolated) normal"),
-                out("true_normal", Vector, ".ng", "geometric normal of the triangle"),
-                out("tangent", Vector, ".tangent", "unit tangent along the UV u direction (an arbitrary one without UVs)"),
-                out("incoming", Vector, ".wo", "unit direction toward where the light goes (the viewer)"),
-                out("backfacing", Float, ".backfacing", "1 on the back side of the surface"),
+                out(
+                    "true_normal",
+                    Vector,
+                    ".ng",
+                    "geometric normal of the triangle",
+                ),
+                out(
+                    "tangent",
+                    Vector,
+                    ".tangent",
+                    "unit tangent along the UV u direction (an arbitrary one without UVs)",
+                ),
+                out(
+                    "incoming",
+                    Vector,
+                    ".wo",
+                    "unit direction toward where the light goes (the viewer)",
+                ),
+                out(
+                    "backfacing",
+                    Float,
+                    ".backfacing",
+                    "1 on the back side of the surface",
+                ),
             ],
             params: vec![],
             code: Code::Template("nd_geometry(sp)"),
@@ -325,8 +363,18 @@ fn build() -> Vec<NodeDef> {
             doc: "Properties of the instance the shading point belongs to.",
             inputs: vec![],
             outputs: vec![
-                out("random", Float, ".random", "a random number in [0, 1) per instance"),
-                out("location", Vector, ".location", "the instance's origin in world space"),
+                out(
+                    "random",
+                    Float,
+                    ".random",
+                    "a random number in [0, 1) per instance",
+                ),
+                out(
+                    "location",
+                    Vector,
+                    ".location",
+                    "the instance's origin in world space",
+                ),
             ],
             params: vec![],
             code: Code::Template("nd_object_info(sp)"),
@@ -354,7 +402,12 @@ fn build() -> Vec<NodeDef> {
                 implicit("normal", "sp.n", "the shading normal", "normal"),
             ],
             outputs: vec![
-                out("fresnel", Float, ".x", "Fresnel reflectance for IOR 1 / (1 - blend)"),
+                out(
+                    "fresnel",
+                    Float,
+                    ".x",
+                    "Fresnel reflectance for IOR 1 / (1 - blend)",
+                ),
                 out("facing", Float, ".y", "1 - |cos θ| biased by blend"),
             ],
             params: vec![],
@@ -397,7 +450,12 @@ fn build() -> Vec<NodeDef> {
             category: "Texture",
             doc: "A 3D checkerboard of two colours.",
             inputs: vec![
-                implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR),
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "generated coordinates",
+                    TEXTURE_VECTOR,
+                ),
                 color("color1", [0.8; 3], "colour of the cells where fac = 1"),
                 color("color2", [0.2; 3], "colour of the other cells"),
                 float("scale", 5.0, "cells per unit"),
@@ -411,11 +469,24 @@ fn build() -> Vec<NodeDef> {
             label: "Gradient Texture",
             category: "Texture",
             doc: "A gradient along x, or around or away from the origin.",
-            inputs: vec![implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR)],
+            inputs: vec![implicit(
+                "vector",
+                "sp.generated",
+                "generated coordinates",
+                TEXTURE_VECTOR,
+            )],
             outputs: tex_out(),
             params: vec![choice(
                 "gradient_type",
-                &["linear", "quadratic", "easing", "diagonal", "radial", "quadratic_sphere", "spherical"],
+                &[
+                    "linear",
+                    "quadratic",
+                    "easing",
+                    "diagonal",
+                    "radial",
+                    "quadratic_sphere",
+                    "spherical",
+                ],
                 "shape of the gradient",
             )],
             code: Code::Template("node_gradient({vector}, {gradient_type})"),
@@ -426,12 +497,25 @@ fn build() -> Vec<NodeDef> {
             category: "Texture",
             doc: "Gradient (Perlin) noise, summed over octaves (fBm); fac lies in [0, 1].",
             inputs: vec![
-                implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR),
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "generated coordinates",
+                    TEXTURE_VECTOR,
+                ),
                 float("scale", 5.0, "frequency of the base octave"),
-                float("detail", 2.0, "octaves beyond the first, 0 to 15 (fractions blend)"),
+                float(
+                    "detail",
+                    2.0,
+                    "octaves beyond the first, 0 to 15 (fractions blend)",
+                ),
                 float("roughness", 0.5, "amplitude ratio between octaves"),
                 float("lacunarity", 2.0, "frequency ratio between octaves"),
-                float("distortion", 0.0, "displaces the coordinates by noise first"),
+                float(
+                    "distortion",
+                    0.0,
+                    "displaces the coordinates by noise first",
+                ),
             ],
             outputs: tex_out(),
             params: vec![],
@@ -445,20 +529,52 @@ fn build() -> Vec<NodeDef> {
             category: "Texture",
             doc: "Worley noise: distance to the nearest feature points of a jittered grid.",
             inputs: vec![
-                implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR),
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "generated coordinates",
+                    TEXTURE_VECTOR,
+                ),
                 float("scale", 5.0, "cells per unit"),
                 float("smoothness", 1.0, "blend width of smooth F1"),
                 float("exponent", 0.5, "exponent of the Minkowski metric"),
-                float("randomness", 1.0, "how far feature points stray from the cell corner, 0 to 1"),
+                float(
+                    "randomness",
+                    1.0,
+                    "how far feature points stray from the cell corner, 0 to 1",
+                ),
             ],
             outputs: vec![
-                out("distance", Float, ".distance", "distance to the feature point"),
-                out("color", Color, ".color", "a random colour per feature point"),
-                out("position", Vector, ".position", "the feature point, in input coordinates"),
+                out(
+                    "distance",
+                    Float,
+                    ".distance",
+                    "distance to the feature point",
+                ),
+                out(
+                    "color",
+                    Color,
+                    ".color",
+                    "a random colour per feature point",
+                ),
+                out(
+                    "position",
+                    Vector,
+                    ".position",
+                    "the feature point, in input coordinates",
+                ),
             ],
             params: vec![
-                choice("feature", &["f1", "f2", "smooth_f1"], "nearest, second nearest, or a smooth blend of the nearest"),
-                choice("distance", &["euclidean", "manhattan", "chebyshev", "minkowski"], "the metric"),
+                choice(
+                    "feature",
+                    &["f1", "f2", "smooth_f1"],
+                    "nearest, second nearest, or a smooth blend of the nearest",
+                ),
+                choice(
+                    "distance",
+                    &["euclidean", "manhattan", "chebyshev", "minkowski"],
+                    "the metric",
+                ),
             ],
             code: Code::Template(
                 "node_voronoi({vector}, {scale}, {smoothness}, {exponent}, {randomness}, {feature}, {distance})",
@@ -470,7 +586,12 @@ fn build() -> Vec<NodeDef> {
             category: "Texture",
             doc: "Bands or rings, distorted by noise.",
             inputs: vec![
-                implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR),
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "generated coordinates",
+                    TEXTURE_VECTOR,
+                ),
                 float("scale", 5.0, "waves per unit"),
                 float("distortion", 0.0, "amount of noise added to the phase"),
                 float("detail", 2.0, "octaves of the distortion noise"),
@@ -480,8 +601,16 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: tex_out(),
             params: vec![
-                choice("wave_type", &["bands", "rings"], "straight bands or concentric rings"),
-                choice("direction", &["x", "y", "z", "diagonal"], "axis of the bands (for rings, diagonal means spherical)"),
+                choice(
+                    "wave_type",
+                    &["bands", "rings"],
+                    "straight bands or concentric rings",
+                ),
+                choice(
+                    "direction",
+                    &["x", "y", "z", "diagonal"],
+                    "axis of the bands (for rings, diagonal means spherical)",
+                ),
                 choice("profile", &["sine", "saw", "triangle"], "shape of one wave"),
             ],
             code: Code::Template(
@@ -494,17 +623,30 @@ fn build() -> Vec<NodeDef> {
             category: "Texture",
             doc: "Rows of bricks separated by mortar.",
             inputs: vec![
-                implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR),
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "generated coordinates",
+                    TEXTURE_VECTOR,
+                ),
                 color("color1", [0.8; 3], "brick colour"),
                 color("color2", [0.2; 3], "second brick colour, mixed in by bias"),
                 color("mortar", [0.0; 3], "mortar colour"),
                 float("scale", 5.0, "overall scale"),
                 float("mortar_size", 0.02, "mortar width"),
                 float("mortar_smooth", 0.1, "softness of the mortar's edge"),
-                float("bias", 0.0, "bias of the brick colour between colour 1 and 2, -1 to 1"),
+                float(
+                    "bias",
+                    0.0,
+                    "bias of the brick colour between colour 1 and 2, -1 to 1",
+                ),
                 float("brick_width", 0.5, "brick length"),
                 float("row_height", 0.25, "brick height"),
-                float("offset", 0.5, "offset of alternate rows, as a fraction of a brick"),
+                float(
+                    "offset",
+                    0.5,
+                    "offset of alternate rows, as a fraction of a brick",
+                ),
                 float("offset_frequency", 2.0, "every how many rows are offset"),
                 float("squash", 1.0, "scales the width of alternate rows"),
                 float("squash_frequency", 2.0, "every how many rows are squashed"),
@@ -523,7 +665,12 @@ fn build() -> Vec<NodeDef> {
             label: "White Noise Texture",
             category: "Texture",
             doc: "A random value per input point (a hash), in [0, 1).",
-            inputs: vec![implicit("vector", "sp.generated", "generated coordinates", TEXTURE_VECTOR)],
+            inputs: vec![implicit(
+                "vector",
+                "sp.generated",
+                "generated coordinates",
+                TEXTURE_VECTOR,
+            )],
             outputs: vec![
                 out("value", Float, ".fac", "random value"),
                 out("color", Color, ".color", "random colour"),
@@ -540,12 +687,20 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![
                 float("a", 0.5, "first operand"),
                 float("b", 0.5, "second operand"),
-                float("c", 0.5, "third operand (multiply_add, compare's epsilon, wrap, smooth min/max)"),
+                float(
+                    "c",
+                    0.5,
+                    "third operand (multiply_add, compare's epsilon, wrap, smooth min/max)",
+                ),
             ],
             outputs: vec![out("value", Float, "", "result")],
             params: vec![
                 choice("operation", MATH_OPERATIONS, "the operation"),
-                ParamDef { name: "clamp", kind: ParamKind::Bool(false), doc: "clamp the result to [0, 1]" },
+                ParamDef {
+                    name: "clamp",
+                    kind: ParamKind::Bool(false),
+                    doc: "clamp the result to [0, 1]",
+                },
             ],
             code: Code::Template("nd_clamp_if(node_math({operation}, {a}, {b}, {c}), {clamp})"),
         },
@@ -560,7 +715,11 @@ fn build() -> Vec<NodeDef> {
                 float("max", 1.0, "upper bound"),
             ],
             outputs: vec![out("result", Float, "", "clamped value")],
-            params: vec![choice("clamp_type", &["min_max", "range"], "range swaps min and max when min > max")],
+            params: vec![choice(
+                "clamp_type",
+                &["min_max", "range"],
+                "range swaps min and max when min > max",
+            )],
             code: Code::Template("node_clamp({clamp_type}, {value}, {min}, {max})"),
         },
         NodeDef {
@@ -578,8 +737,16 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("result", Float, "", "remapped value")],
             params: vec![
-                choice("interpolation", &["linear", "stepped", "smoothstep", "smootherstep"], "the mapping"),
-                ParamDef { name: "clamp", kind: ParamKind::Bool(true), doc: "clamp the result to the output range" },
+                choice(
+                    "interpolation",
+                    &["linear", "stepped", "smoothstep", "smootherstep"],
+                    "the mapping",
+                ),
+                ParamDef {
+                    name: "clamp",
+                    kind: ParamKind::Bool(true),
+                    doc: "clamp the result to the output range",
+                },
             ],
             code: Code::Template(
                 "node_map_range({interpolation}, {value}, {from_min}, {from_max}, {to_min}, {to_max}, {steps}, {clamp})",
@@ -593,12 +760,21 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![
                 vector("a", [0.0; 3], "first operand"),
                 vector("b", [0.0; 3], "second operand"),
-                vector("c", [0.0; 3], "third operand (multiply_add, wrap, faceforward)"),
+                vector(
+                    "c",
+                    [0.0; 3],
+                    "third operand (multiply_add, wrap, faceforward)",
+                ),
                 float("scale", 1.0, "scale factor (scale), IOR (refract)"),
             ],
             outputs: vec![
                 out("vector", Vector, ".vector", "vector result"),
-                out("value", Float, ".value", "scalar result (dot, distance, length)"),
+                out(
+                    "value",
+                    Float,
+                    ".value",
+                    "scalar result (dot, distance, length)",
+                ),
             ],
             params: vec![choice("operation", VECTOR_MATH_OPERATIONS, "the operation")],
             code: Code::Template("node_vector_math({operation}, {a}, {b}, {c}, {scale})"),
@@ -614,7 +790,11 @@ fn build() -> Vec<NodeDef> {
                 float("b", 1.0, "second value"),
             ],
             outputs: vec![out("result", Float, "", "mixed value")],
-            params: vec![ParamDef { name: "clamp_factor", kind: ParamKind::Bool(true), doc: "clamp the factor to [0, 1]" }],
+            params: vec![ParamDef {
+                name: "clamp_factor",
+                kind: ParamKind::Bool(true),
+                doc: "clamp the factor to [0, 1]",
+            }],
             code: Code::Template("mix({a}, {b}, nd_clamp_if({factor}, {clamp_factor}))"),
         },
         NodeDef {
@@ -628,7 +808,11 @@ fn build() -> Vec<NodeDef> {
                 vector("b", [0.0; 3], "second vector"),
             ],
             outputs: vec![out("result", Vector, "", "mixed vector")],
-            params: vec![ParamDef { name: "clamp_factor", kind: ParamKind::Bool(true), doc: "clamp the factor to [0, 1]" }],
+            params: vec![ParamDef {
+                name: "clamp_factor",
+                kind: ParamKind::Bool(true),
+                doc: "clamp the factor to [0, 1]",
+            }],
             code: Code::Template("mix({a}, {b}, vec3<f32>(nd_clamp_if({factor}, {clamp_factor})))"),
         },
         // ----------------------------------------------------------------- colour
@@ -645,7 +829,11 @@ fn build() -> Vec<NodeDef> {
             outputs: vec![out("result", Color, "", "blended colour")],
             params: vec![
                 choice("blend", BLEND_MODES, "the blend mode"),
-                ParamDef { name: "clamp_result", kind: ParamKind::Bool(false), doc: "clamp the result to [0, 1]" },
+                ParamDef {
+                    name: "clamp_result",
+                    kind: ParamKind::Bool(false),
+                    doc: "clamp the result to [0, 1]",
+                },
             ],
             code: Code::Template(
                 "nd_clamp3_if(node_mix_color({blend}, clamp({factor}, 0.0, 1.0), {a}, {b}), {clamp_result})",
@@ -662,8 +850,16 @@ fn build() -> Vec<NodeDef> {
                 out("alpha", Float, ".a", "alpha"),
             ],
             params: vec![
-                ParamDef { name: "stops", kind: ParamKind::Ramp, doc: "(position, (r, g, b, a)) stops; default black to white" },
-                choice("interpolation", &["linear", "constant", "ease"], "between stops"),
+                ParamDef {
+                    name: "stops",
+                    kind: ParamKind::Ramp,
+                    doc: "(position, (r, g, b, a)) stops; default black to white",
+                },
+                choice(
+                    "interpolation",
+                    &["linear", "constant", "ease"],
+                    "between stops",
+                ),
             ],
             code: Code::Special,
         },
@@ -681,14 +877,19 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "adjusted colour")],
             params: vec![],
-            code: Code::Template("node_hue_saturation_value({hue}, {saturation}, {value}, {fac}, {color})"),
+            code: Code::Template(
+                "node_hue_saturation_value({hue}, {saturation}, {value}, {fac}, {color})",
+            ),
         },
         NodeDef {
             kind: "invert",
             label: "Invert Color",
             category: "Color",
             doc: "1 - colour, by factor.",
-            inputs: vec![float("fac", 1.0, "strength"), color("color", [0.0; 3], "input colour")],
+            inputs: vec![
+                float("fac", 1.0, "strength"),
+                color("color", [0.0; 3], "input colour"),
+            ],
             outputs: vec![out("color", Color, "", "inverted colour")],
             params: vec![],
             code: Code::Template("node_invert({fac}, {color})"),
@@ -698,7 +899,10 @@ fn build() -> Vec<NodeDef> {
             label: "Gamma",
             category: "Color",
             doc: "Raises the colour to a power.",
-            inputs: vec![color("color", [1.0; 3], "input colour"), float("gamma", 1.0, "exponent")],
+            inputs: vec![
+                color("color", [1.0; 3], "input colour"),
+                float("gamma", 1.0, "exponent"),
+            ],
             outputs: vec![out("color", Color, "", "result")],
             params: vec![],
             code: Code::Template("node_gamma({color}, {gamma})"),
@@ -775,7 +979,11 @@ fn build() -> Vec<NodeDef> {
             label: "Combine XYZ",
             category: "Converter",
             doc: "Builds a vector from components.",
-            inputs: vec![float("x", 0.0, "x"), float("y", 0.0, "y"), float("z", 0.0, "z")],
+            inputs: vec![
+                float("x", 0.0, "x"),
+                float("y", 0.0, "y"),
+                float("z", 0.0, "z"),
+            ],
             outputs: vec![out("vector", Vector, "", "vector")],
             params: vec![],
             code: Code::Template("vec3<f32>({x}, {y}, {z})"),
@@ -797,7 +1005,9 @@ fn build() -> Vec<NodeDef> {
                 &["point", "texture", "vector", "normal"],
                 "point: scale, rotate, translate; texture: the inverse; vector: no translation; normal: inverse-transpose, normalised",
             )],
-            code: Code::Template("node_mapping({vector_type}, {vector}, {location}, {rotation}, {scale})"),
+            code: Code::Template(
+                "node_mapping({vector_type}, {vector}, {location}, {rotation}, {scale})",
+            ),
         },
         NodeDef {
             kind: "normal_map",
@@ -805,8 +1015,16 @@ fn build() -> Vec<NodeDef> {
             category: "Vector",
             doc: "Perturbs the shading normal by a tangent-space normal map colour.",
             inputs: vec![
-                float("strength", 1.0, "0 keeps the normal, 1 applies the map fully"),
-                color("color", [0.5, 0.5, 1.0], "tangent-space normal encoded as colour"),
+                float(
+                    "strength",
+                    1.0,
+                    "0 keeps the normal, 1 applies the map fully",
+                ),
+                color(
+                    "color",
+                    [0.5, 0.5, 1.0],
+                    "tangent-space normal encoded as colour",
+                ),
             ],
             outputs: vec![out("normal", Vector, "", "world-space normal")],
             params: vec![],
@@ -818,13 +1036,21 @@ fn build() -> Vec<NodeDef> {
             category: "Vector",
             doc: "Perturbs the shading normal by the slope of a height field, found by evaluating the height at two displaced points.",
             inputs: vec![
-                float("strength", 1.0, "0 keeps the normal, 1 applies the bump fully"),
+                float(
+                    "strength",
+                    1.0,
+                    "0 keeps the normal, 1 applies the bump fully",
+                ),
                 float("distance", 1.0, "height multiplier"),
                 float("height", 0.0, "height; connect a texture"),
                 implicit("normal", "sp.n", "the shading normal", "normal to perturb"),
             ],
             outputs: vec![out("normal", Vector, "", "world-space normal")],
-            params: vec![ParamDef { name: "invert", kind: ParamKind::Bool(false), doc: "bump inward" }],
+            params: vec![ParamDef {
+                name: "invert",
+                kind: ParamKind::Bool(false),
+                doc: "bump inward",
+            }],
             code: Code::Special,
         },
         // ---------------------------------------------------------------- shaders
@@ -836,17 +1062,29 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![
                 color("base_color", [0.8; 3], "diffuse albedo or metal colour"),
                 float("base_weight", 1.0, "scales the base colour"),
-                float("diffuse_roughness", 0.0, "Oren–Nayar roughness of the diffuse base"),
+                float(
+                    "diffuse_roughness",
+                    0.0,
+                    "Oren–Nayar roughness of the diffuse base",
+                ),
                 float("metallic", 0.0, "0 dielectric, 1 metal"),
                 float("roughness", 0.5, "perceptual roughness"),
                 float("anisotropy", 0.0, "stretches highlights along the tangent"),
                 float("anisotropy_rotation", 0.0, "turns the tangent, in turns"),
                 float("ior", 1.5, "index of refraction"),
                 float("specular_weight", 1.0, "scales dielectric reflection"),
-                color("specular_color", [1.0; 3], "tints dielectric reflection; metal edge tint"),
+                color(
+                    "specular_color",
+                    [1.0; 3],
+                    "tints dielectric reflection; metal edge tint",
+                ),
                 float("transmission_weight", 0.0, "0 opaque, 1 glass"),
                 color("transmission_color", [1.0; 3], "glass tint"),
-                float("transmission_depth", 0.0, "depth at which light inside reaches the transmission colour (0: tint at the surface)"),
+                float(
+                    "transmission_depth",
+                    0.0,
+                    "depth at which light inside reaches the transmission colour (0: tint at the surface)",
+                ),
                 float("coat_weight", 0.0, "clear coat amount"),
                 float("coat_roughness", 0.03, "coat roughness"),
                 float("coat_ior", 1.5, "coat index of refraction"),
@@ -857,10 +1095,19 @@ fn build() -> Vec<NodeDef> {
                 color("emission_color", [1.0; 3], "emitted colour"),
                 float("emission_strength", 0.0, "emitted radiance scale"),
                 float("alpha", 1.0, "opacity; below 1 light passes through"),
-                implicit("normal", "sp.n", "the shading normal", "shading normal (world space)"),
+                implicit(
+                    "normal",
+                    "sp.n",
+                    "the shading normal",
+                    "shading normal (world space)",
+                ),
             ],
             outputs: vec![out("bsdf", Bsdf, "", "the surface")],
-            params: vec![ParamDef { name: "thin_walled", kind: ParamKind::Bool(false), doc: "a surface with no inside" }],
+            params: vec![ParamDef {
+                name: "thin_walled",
+                kind: ParamKind::Bool(false),
+                doc: "a surface with no inside",
+            }],
             code: Code::Special,
         },
         NodeDef {

@@ -241,7 +241,8 @@ impl SceneArrays {
                 let n = normals.get(v).map_or(0, |&n| encode_octahedral(n));
                 let uv = mesh.uvs.get(v).copied().unwrap_or(Vec2::ZERO);
                 // w: the vertex colour as RGBA8 (white: meshes carry no colours yet).
-                a.vertices.push([n, uv.x.to_bits(), uv.y.to_bits(), u32::MAX]);
+                a.vertices
+                    .push([n, uv.x.to_bits(), uv.y.to_bits(), u32::MAX]);
             }
             mesh_flags[m] = if mesh.normals.is_empty() {
                 0

@@ -47,6 +47,14 @@ pub fn run_probe(
         invocations,
     } = *probe;
     let device = &ctx.device;
+    // A binding over the limit would not fail loudly everywhere: refuse it here.
+    let limit = ctx.limits().max_storage_buffer_binding_size as u64;
+    if input.len() as u64 > limit || output_bytes > limit {
+        return Err(RenderError::Scene(format!(
+            "probe \"{name}\": {} bytes in, {output_bytes} out, over the adapter's {limit}-byte binding limit",
+            input.len()
+        )));
+    }
     let accel = build_scene_accel(scene)?;
     let gpu_scene = GpuScene::upload(ctx, scene, &accel, settings.page_bytes)?;
     let scene_layout = scene_bind_group_layout(device, &gpu_scene.features());
