@@ -212,3 +212,161 @@ fn material_files_check_their_version() {
     let typo = parse_material("(version: 1, nodez: {})", "typo.kmat").unwrap_err();
     assert!(typo.to_string().starts_with("typo.kmat:1:"), "{typo}");
 }
+
+#[test]
+fn nodes_md_is_generated_from_the_declarations() {
+    let committed = std::fs::read_to_string(concat!(env!("CARGO_MANIFEST_DIR"), "/docs/NODES.md"))
+        .expect("docs/NODES.md");
+    assert!(
+        committed == kiln::material::docs::nodes_markdown(),
+        "docs/NODES.md is stale: run `cargo run -- material nodes > docs/NODES.md`"
+    );
+}
+
+#[test]
+fn the_example_materials_compile() {
+    let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/materials");
+    let mut count = 0;
+    for entry in std::fs::read_dir(dir).unwrap() {
+        let path = entry.unwrap().path();
+        let (name, graph) = kiln::material::load_material(&path).unwrap_or_else(|e| panic!("{e}"));
+        validate_kernel(&graph).unwrap_or_else(|e| panic!("{name}: {e}"));
+        count += 1;
+    }
+    assert!(count >= 8, "{count} example materials");
+}
+
+mod random_graphs {
+    //! Random graphs from the whole node library: well-typed ones always compile to WGSL
+    //! naga accepts; ill-typed or cyclic ones always fail with an error naming a node.
+
+    use super::*;
+    use proptest::prelude::*;
+
+    /// A recipe: per node, a type index and, per input, a choice of what feeds it.
+    #[derive(Clone, Debug)]
+    struct Recipe {
+        nodes: Vec<(usize, Vec<u32>)>,
+        surface_input: u32,
+    }
+
+    fn recipe() -> impl Strategy<Value = Recipe> {
+        let kinds = library()
+            .iter()
+            .filter(|d| d.kind != "material_output" && d.kind != "principled_bsdf")
+            .count();
+        (
+            prop::collection::vec((0..kinds, prop::collection::vec(any::<u32>(), 16)), 1..12),
+            any::<u32>(),
+        )
+            .prop_map(|(nodes, surface_input)| Recipe {
+                nodes,
+                surface_input,
+            })
+    }
+
+    /// Builds the graph: each input links, when the choice says so, to an earlier node's
+    /// output of a convertible type; otherwise it keeps its default.
+    fn build(r: &Recipe) -> Graph {
+        let defs: Vec<_> = library()
+            .iter()
+            .filter(|d| d.kind != "material_output" && d.kind != "principled_bsdf")
+            .collect();
+        let mut g = Graph::default();
+        let mut outputs: Vec<(String, &str, SocketType)> = Vec::new();
+        for (i, (kind, choices)) in r.nodes.iter().enumerate() {
+            let def = defs[*kind];
+            let mut node = Node::new(def.kind);
+            for (k, socket) in def.inputs.iter().enumerate() {
+                let choice = choices[k % choices.len()];
+                let usable: Vec<_> = outputs
+                    .iter()
+                    .filter(|o| o.2.converts_to(socket.ty).is_some())
+                    .collect();
+                if choice % 3 != 0 && !usable.is_empty() {
+                    let o = usable[choice as usize % usable.len()];
+                    node = node.input(socket.name, link(&o.0, o.1));
+                }
+            }
+            for p in &def.params {
+                if let ParamKind::Enum(options) = &p.kind {
+                    let o = options[choices[p.name.len() % choices.len()] as usize % options.len()];
+                    node = node.param(p.name, Param::Text(o.into()));
+                }
+            }
+            let id = format!("n{i}");
+            outputs.extend(def.outputs.iter().map(|o| (id.clone(), o.name, o.ty)));
+            g.add(&id, node);
+        }
+        let colour: Vec<_> = outputs
+            .iter()
+            .filter(|o| o.2.converts_to(SocketType::Color).is_some())
+            .collect();
+        let mut surface = Node::new("principled_bsdf");
+        if !colour.is_empty() {
+            let o = colour[r.surface_input as usize % colour.len()];
+            surface = surface.input("base_color", link(&o.0, o.1));
+            let f = colour[(r.surface_input / 7) as usize % colour.len()];
+            surface = surface.input("roughness", link(&f.0, f.1));
+        }
+        g.add("surface", surface);
+        g.add(
+            "out",
+            Node::new("material_output").input("surface", link("surface", "bsdf")),
+        );
+        g
+    }
+
+    proptest! {
+        #![proptest_config(ProptestConfig { cases: 300, failure_persistence: None, ..ProptestConfig::default() })]
+
+        #[test]
+        fn well_typed_graphs_compile_to_wgsl_naga_accepts(r in recipe()) {
+            let g = build(&r);
+            if let Err(e) = validate_kernel(&g) {
+                panic!("{e}\n{g:#?}");
+            }
+        }
+
+        #[test]
+        fn cycles_are_errors_naming_a_node(r in recipe(), from in any::<usize>()) {
+            let mut g = build(&r);
+            // Feed the last node's first output back into an input of an earlier node
+            // (or itself) that the output reaches.
+            let last = r.nodes.len() - 1;
+            let defs: Vec<_> = library().iter().filter(|d| d.kind != "material_output" && d.kind != "principled_bsdf").collect();
+            let out_def = defs[r.nodes[last].0];
+            prop_assume!(!out_def.outputs.is_empty());
+            // Make the last node read the surface's input chain: link the chosen earlier
+            // node's first input to the last node, and the last node's first input to it.
+            let target = from % (last + 1);
+            let t_def = defs[r.nodes[target].0];
+            prop_assume!(!t_def.inputs.is_empty() && !out_def.inputs.is_empty());
+            let o = &out_def.outputs[0];
+            prop_assume!(o.ty.converts_to(t_def.inputs[0].ty).is_some());
+            let t_out = t_def.outputs.first();
+            prop_assume!(t_out.is_some_and(|t| t.ty.converts_to(out_def.inputs[0].ty).is_some()));
+            g.nodes.get_mut(&format!("n{target}")).unwrap().inputs.insert(t_def.inputs[0].name.into(), link(&format!("n{last}"), o.name));
+            g.nodes.get_mut(&format!("n{last}")).unwrap().inputs.insert(out_def.inputs[0].name.into(), link(&format!("n{target}"), t_out.unwrap().name));
+            // Route the cycle to the output so it is not pruned.
+            g.nodes.get_mut("surface").unwrap().inputs.insert("coat_weight".into(), link(&format!("n{last}"), o.name));
+            let e = compile("random", &g, "m").unwrap_err();
+            prop_assert!(e.node.is_some(), "{}", e);
+            prop_assert!(e.to_string().contains("cycle"), "{}", e);
+        }
+
+        #[test]
+        fn ill_typed_links_are_errors_naming_node_and_socket(r in recipe(), pick in any::<usize>()) {
+            let mut g = build(&r);
+            // A BSDF fed into any non-BSDF input.
+            let ids: Vec<String> = g.nodes.iter().filter(|(_, n)| n.kind != "material_output" && n.kind != "principled_bsdf").map(|(k, _)| k.clone()).collect();
+            let id = &ids[pick % ids.len()];
+            let def = kiln::material::nodes::find(&g.nodes[id].kind).unwrap();
+            prop_assume!(!def.inputs.is_empty());
+            let socket = def.inputs[pick % def.inputs.len()].name;
+            g.nodes.get_mut(id).unwrap().inputs.insert(socket.into(), link("surface", "bsdf"));
+            let e = compile("random", &g, "m").unwrap_err();
+            prop_assert!(e.node.is_some() && e.socket.is_some(), "{}", e);
+        }
+    }
+}

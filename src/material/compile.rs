@@ -107,6 +107,7 @@ pub fn compile(
         flat: &flat,
         prefix: function,
         helpers: String::new(),
+        helper_names: BTreeSet::new(),
         calls: BTreeSet::new(),
     };
     let body = emitter.function_body(&[(output, 0)])?;
@@ -148,6 +149,7 @@ pub fn compile_value(
         flat: &flat,
         prefix: function,
         helpers: String::new(),
+        helper_names: BTreeSet::new(),
         calls: BTreeSet::new(),
     };
     let body = emitter.function_body(&[(node, output)])?;
@@ -896,6 +898,9 @@ struct Emitter<'a> {
     /// Names of helper functions start with the material function's name.
     prefix: &'a str,
     helpers: String,
+    /// Helper functions already in `helpers` (a ramp inside a bump's height function may
+    /// also be used directly).
+    helper_names: BTreeSet<String>,
     calls: BTreeSet<String>,
 }
 
@@ -1089,7 +1094,9 @@ impl Emitter<'_> {
             );
         }
         let _ = writeln!(f, "    return {};\n}}\n", c(stops.last().expect("stops")));
-        self.helpers.push_str(&f);
+        if self.helper_names.insert(name.clone()) {
+            self.helpers.push_str(&f);
+        }
         self.calls.insert("nd_ramp_mix".into());
         let fac = self.input_expr(n, 0);
         format!("{name}({fac})")
@@ -1111,17 +1118,20 @@ impl Emitter<'_> {
         // The height's subgraph becomes a function of the shading point, evaluated at the
         // point and one step along each tangent direction.
         let name = format!("{}_height{n}", self.prefix);
-        let body = self.function_body(&[(m, o)])?;
-        let h = convert(
-            body.roots[0].clone(),
-            output_type(self.flat, m, o),
-            SocketType::Float,
-        );
-        let _ = write!(
-            self.helpers,
-            "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n",
-            body.statements
-        );
+        if !self.helper_names.contains(&name) {
+            let body = self.function_body(&[(m, o)])?;
+            let h = convert(
+                body.roots[0].clone(),
+                output_type(self.flat, m, o),
+                SocketType::Float,
+            );
+            let _ = write!(
+                self.helpers,
+                "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n",
+                body.statements
+            );
+            self.helper_names.insert(name.clone());
+        }
         let strength = self.input_expr(n, 0);
         let distance = self.input_expr(n, 1);
         let invert = bool_param(&self.flat[n], "invert");
