@@ -174,3 +174,48 @@ pub fn scene_materials_wgsl(scene: &crate::scene::Scene) -> Result<String, Graph
     let list: Vec<(u32, &CompiledMaterial)> = compiled.iter().map(|(i, c)| (*i, c)).collect();
     Ok(materials_wgsl(&list))
 }
+
+/// The graph of a fixed-parameter material: one principled node holding its values, so
+/// the editor (and importers) can start from any material.
+pub fn graph_from_principled(m: &crate::scene::Material) -> Graph {
+    let v = |c: glam::Vec3| Input::Value(Value::Vec3(c.to_array()));
+    let f = |x: f32| Input::Value(Value::Float(x));
+    let strength = m.emission.max_element();
+    let emission_color = if strength > 0.0 { m.emission / strength } else { glam::Vec3::ONE };
+    let inputs = [
+        ("base_color", v(m.base_color)),
+        ("base_weight", f(m.base_weight)),
+        ("diffuse_roughness", f(m.diffuse_roughness)),
+        ("metallic", f(m.metallic)),
+        ("roughness", f(m.roughness)),
+        ("anisotropy", f(m.anisotropy)),
+        ("anisotropy_rotation", f(m.anisotropy_rotation)),
+        ("ior", f(m.ior)),
+        ("specular_weight", f(m.specular_weight)),
+        ("specular_color", v(m.specular_color)),
+        ("transmission_weight", f(m.transmission_weight)),
+        ("transmission_color", v(m.transmission_color)),
+        ("transmission_depth", f(m.transmission_depth)),
+        ("coat_weight", f(m.coat_weight)),
+        ("coat_roughness", f(m.coat_roughness)),
+        ("coat_ior", f(m.coat_ior)),
+        ("coat_color", v(m.coat_color)),
+        ("sheen_weight", f(m.sheen_weight)),
+        ("sheen_color", v(m.sheen_color)),
+        ("sheen_roughness", f(m.sheen_roughness)),
+        ("emission_color", v(emission_color)),
+        ("emission_strength", f(strength)),
+        ("alpha", f(m.opacity)),
+    ];
+    let mut surface = Node::new("principled_bsdf").param("thin_walled", Param::Bool(m.thin_walled));
+    for (name, input) in inputs {
+        surface = surface.input(name, input);
+    }
+    let mut g = Graph::default();
+    g.add("surface", surface);
+    g.add(
+        "output",
+        Node::new("material_output").input("surface", Input::Link(Link::new("surface", "bsdf"))),
+    );
+    g
+}
