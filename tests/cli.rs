@@ -155,3 +155,57 @@ fn info_lists_the_chosen_adapter() {
     assert!(out.status.success());
     assert!(String::from_utf8_lossy(&out.stdout).contains("would use:"));
 }
+
+#[test]
+fn material_check_accepts_the_examples_and_names_the_node_of_an_error() {
+    let out = kiln()
+        .args(["material", "check", "assets/materials/marble.kmat"])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(String::from_utf8_lossy(&out.stdout).starts_with("OK: material \"Marble\""));
+
+    let dir = tempfile::tempdir().unwrap();
+    let broken = dir.path().join("broken.kmat");
+    std::fs::write(
+        &broken,
+        r#"(version: 1, nodes: {
+            "a": (type: "math", inputs: { "a": "b.value" }),
+            "b": (type: "math", inputs: { "a": "a.value" }),
+            "s": (type: "principled_bsdf", inputs: { "roughness": "a.value" }),
+            "out": (type: "material_output", inputs: { "surface": "s.bsdf" }),
+        })"#,
+    )
+    .unwrap();
+    let (code, err) = run(&["material", "check", broken.to_str().unwrap()]);
+    assert_clean_error(code, &err, 1, "cycle");
+    assert!(err.contains("node \"a\"") || err.contains("node \"b\""), "{err}");
+
+    let typo = dir.path().join("typo.kmat");
+    std::fs::write(&typo, "(version: 1, nodes: { \"x\": (type: \"math\", inputs: { \"a\": 1.0 }, colour: 1) })").unwrap();
+    let (code, err) = run(&["material", "check", typo.to_str().unwrap()]);
+    assert_clean_error(code, &err, 1, "typo.kmat:1:");
+}
+
+#[test]
+fn material_wgsl_prints_a_kernel_naga_accepts() {
+    let out = kiln()
+        .args(["material", "wgsl", "assets/materials/wood.kmat"])
+        .output()
+        .unwrap();
+    assert!(out.status.success());
+    let text = String::from_utf8(out.stdout).unwrap();
+    let module = naga::front::wgsl::parse_str(&text).expect("the printed kernel parses");
+    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
+        .validate(&module)
+        .expect("the printed kernel validates");
+    assert!(text.contains("@compute"));
+
+    let out = kiln()
+        .args(["material", "wgsl", "--snippet", "assets/materials/wood.kmat"])
+        .output()
+        .unwrap();
+    let snippet = String::from_utf8(out.stdout).unwrap();
+    assert!(snippet.contains("fn material_0(sp: ShadingPoint) -> MaterialEval"), "{snippet}");
+    assert!(!snippet.contains("@compute"));
+}
