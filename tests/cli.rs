@@ -162,7 +162,11 @@ fn material_check_accepts_the_examples_and_names_the_node_of_an_error() {
         .args(["material", "check", "assets/materials/marble.kmat"])
         .output()
         .unwrap();
-    assert!(out.status.success(), "{}", String::from_utf8_lossy(&out.stderr));
+    assert!(
+        out.status.success(),
+        "{}",
+        String::from_utf8_lossy(&out.stderr)
+    );
     assert!(String::from_utf8_lossy(&out.stdout).starts_with("OK: material \"Marble\""));
 
     let dir = tempfile::tempdir().unwrap();
@@ -179,10 +183,17 @@ fn material_check_accepts_the_examples_and_names_the_node_of_an_error() {
     .unwrap();
     let (code, err) = run(&["material", "check", broken.to_str().unwrap()]);
     assert_clean_error(code, &err, 1, "cycle");
-    assert!(err.contains("node \"a\"") || err.contains("node \"b\""), "{err}");
+    assert!(
+        err.contains("node \"a\"") || err.contains("node \"b\""),
+        "{err}"
+    );
 
     let typo = dir.path().join("typo.kmat");
-    std::fs::write(&typo, "(version: 1, nodes: { \"x\": (type: \"math\", inputs: { \"a\": 1.0 }, colour: 1) })").unwrap();
+    std::fs::write(
+        &typo,
+        "(version: 1, nodes: { \"x\": (type: \"math\", inputs: { \"a\": 1.0 }, colour: 1) })",
+    )
+    .unwrap();
     let (code, err) = run(&["material", "check", typo.to_str().unwrap()]);
     assert_clean_error(code, &err, 1, "typo.kmat:1:");
 }
@@ -196,16 +207,27 @@ fn material_wgsl_prints_a_kernel_naga_accepts() {
     assert!(out.status.success());
     let text = String::from_utf8(out.stdout).unwrap();
     let module = naga::front::wgsl::parse_str(&text).expect("the printed kernel parses");
-    naga::valid::Validator::new(naga::valid::ValidationFlags::all(), naga::valid::Capabilities::all())
-        .validate(&module)
-        .expect("the printed kernel validates");
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::all(),
+    )
+    .validate(&module)
+    .expect("the printed kernel validates");
     assert!(text.contains("@compute"));
 
     let out = kiln()
-        .args(["material", "wgsl", "--snippet", "assets/materials/wood.kmat"])
+        .args([
+            "material",
+            "wgsl",
+            "--snippet",
+            "assets/materials/wood.kmat",
+        ])
         .output()
         .unwrap();
     let snippet = String::from_utf8(out.stdout).unwrap();
-    assert!(snippet.contains("fn material_0(sp: ShadingPoint) -> MaterialEval"), "{snippet}");
+    assert!(
+        snippet.contains("fn material_0(sp: ShadingPoint) -> MaterialEval"),
+        "{snippet}"
+    );
     assert!(!snippet.contains("@compute"));
 }

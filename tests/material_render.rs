@@ -11,7 +11,11 @@ use kiln::scene::{Camera, Light, Material, Scene, shapes};
 
 /// Spheres of the given materials on a floor, under an area light, a sphere light and a sky.
 fn spheres(materials: Vec<Material>) -> Scene {
-    let mut scene = Scene::empty(Camera::look_at(Vec3::new(0.0, 1.2, 5.0), Vec3::new(0.0, 0.4, 0.0), 40.0));
+    let mut scene = Scene::empty(Camera::look_at(
+        Vec3::new(0.0, 1.2, 5.0),
+        Vec3::new(0.0, 0.4, 0.0),
+        40.0,
+    ));
     scene.environment = Vec3::new(0.2, 0.25, 0.3);
     let floor = scene.add_material(Material::diffuse("floor", Vec3::splat(0.5)));
     let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(8.0)));
@@ -21,23 +25,52 @@ fn spheres(materials: Vec<Material>) -> Scene {
     scene.add_instance(
         quad,
         lamp,
-        Affine3A::from_translation(Vec3::new(0.0, 3.0, 1.0)) * Affine3A::from_rotation_x(std::f32::consts::PI),
+        Affine3A::from_translation(Vec3::new(0.0, 3.0, 1.0))
+            * Affine3A::from_rotation_x(std::f32::consts::PI),
     );
-    scene.lights.push(Light::Point { position: Vec3::new(2.0, 2.0, 2.0), intensity: Vec3::splat(3.0), radius: 0.2 });
+    scene.lights.push(Light::Point {
+        position: Vec3::new(2.0, 2.0, 2.0),
+        intensity: Vec3::splat(3.0),
+        radius: 0.2,
+    });
     let n = materials.len();
     for (i, m) in materials.into_iter().enumerate() {
         let id = scene.add_material(m);
         let x = (i as f32 - (n - 1) as f32 / 2.0) * 1.1;
-        scene.add_instance(ball, id, Affine3A::from_scale_rotation_translation(Vec3::splat(0.5), Default::default(), Vec3::new(x, 0.5, 0.0)));
+        scene.add_instance(
+            ball,
+            id,
+            Affine3A::from_scale_rotation_translation(
+                Vec3::splat(0.5),
+                Default::default(),
+                Vec3::new(x, 0.5, 0.0),
+            ),
+        );
     }
     scene
 }
 
 fn fixed_materials() -> Vec<Material> {
     vec![
-        Material { name: "plastic".into(), base_color: Vec3::new(0.1, 0.35, 0.8), roughness: 0.25, ..Material::default() },
-        Material { name: "gold".into(), base_color: Vec3::new(1.0, 0.78, 0.34), metallic: 1.0, roughness: 0.35, ..Material::default() },
-        Material { name: "glass".into(), transmission_weight: 1.0, roughness: 0.2, ..Material::default() },
+        Material {
+            name: "plastic".into(),
+            base_color: Vec3::new(0.1, 0.35, 0.8),
+            roughness: 0.25,
+            ..Material::default()
+        },
+        Material {
+            name: "gold".into(),
+            base_color: Vec3::new(1.0, 0.78, 0.34),
+            metallic: 1.0,
+            roughness: 0.35,
+            ..Material::default()
+        },
+        Material {
+            name: "glass".into(),
+            transmission_weight: 1.0,
+            roughness: 0.2,
+            ..Material::default()
+        },
         Material {
             name: "coated velvet".into(),
             base_color: Vec3::new(0.15, 0.02, 0.25),
@@ -69,13 +102,29 @@ fn a_graph_of_constants_renders_like_the_same_fixed_parameters() {
 #[test]
 fn a_constant_graph_emitter_is_sampled_as_a_light() {
     let mut g = Graph::default();
-    g.add("e", Node::new("principled_bsdf").input("base_color", [0.0; 3]).input("emission_strength", 8.0).input("specular_weight", 0.0));
-    g.add("out", Node::new("material_output").input("surface", link("e", "bsdf")));
+    g.add(
+        "e",
+        Node::new("principled_bsdf")
+            .input("base_color", [0.0; 3])
+            .input("emission_strength", 8.0)
+            .input("specular_weight", 0.0),
+    );
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("e", "bsdf")),
+    );
     let emitter = Material::from_graph("lamp", g).unwrap();
-    assert_eq!(emitter.emission, Vec3::splat(8.0), "constant emission known in advance");
+    assert_eq!(
+        emitter.emission,
+        Vec3::splat(8.0),
+        "constant emission known in advance"
+    );
     let lit = |lamp: Material| {
         let mut scene = spheres(vec![Material::diffuse("white", Vec3::splat(0.8))]);
-        scene.materials[1] = Material { name: "lamp".into(), ..lamp };
+        scene.materials[1] = Material {
+            name: "lamp".into(),
+            ..lamp
+        };
         scene.environment = Vec3::ZERO;
         scene.lights.clear();
         render(&gpu(), &scene, settings(32, 24, 64)).radiance()

@@ -71,26 +71,28 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     var w: LobeWeights;
     let cos_o = abs(wo.z);
     // Coat: its Fresnel reflectance stands in for its albedo (exact when smooth).
-    let coat = clamp(p.coat_weight, 0.0, 1.0);
+    // Lobes the kernel was built without (src/render/kernel.rs, KernelFeatures) have no
+    // weight, so the driver drops their code.
+    let coat = select(0.0, clamp(p.coat_weight, 0.0, 1.0), FEATURE_COAT);
     let coat_albedo = fresnel_dielectric(cos_o, max(p.coat_ior, 1.0));
     w.scale[LOBE_COAT] = vec3<f32>(coat);
     var below = (1.0 - coat * coat_albedo) * mix(vec3<f32>(1.0), p.coat_color, coat);
     // Sheen: normalised where the Charlie lobe would reflect more than it receives.
-    let sheen = clamp(p.sheen_weight, 0.0, 1.0);
+    let sheen = select(0.0, clamp(p.sheen_weight, 0.0, 1.0), FEATURE_SHEEN);
     let sheen_e = sheen_albedo(cos_o, p.sheen_roughness);
     w.scale[LOBE_SHEEN] = below * sheen * p.sheen_color / max(sheen_e, 1.0);
     below *= 1.0 - sheen * min(sheen_e, 1.0) * max(p.sheen_color.r, max(p.sheen_color.g, p.sheen_color.b));
-    let metal = clamp(p.metallic, 0.0, 1.0);
+    let metal = select(0.0, clamp(p.metallic, 0.0, 1.0), FEATURE_METAL);
     w.scale[LOBE_METAL] = below * metal;
     w.scale[LOBE_METAL_MS] = below * metal;
     let dielectric = below * (1.0 - metal);
-    let glass = clamp(p.transmission_weight, 0.0, 1.0);
+    let glass = select(0.0, clamp(p.transmission_weight, 0.0, 1.0), FEATURE_GLASS);
     w.scale[LOBE_GLASS] = dielectric * glass;
     let opaque = dielectric * (1.0 - glass);
-    let spec = max(p.specular_weight, 0.0) * p.specular_color;
+    let spec = select(0.0, max(p.specular_weight, 0.0), FEATURE_SPECULAR) * p.specular_color;
     w.scale[LOBE_SPECULAR] = opaque * spec;
     let spec_albedo = fresnel_dielectric(cos_o, max(p.ior, 1.0)) * min(max(spec.r, max(spec.g, spec.b)), 1.0);
-    w.scale[LOBE_DIFFUSE] = opaque * (1.0 - spec_albedo);
+    w.scale[LOBE_DIFFUSE] = select(vec3<f32>(0.0), opaque * (1.0 - spec_albedo), FEATURE_DIFFUSE);
 
     // Selection by estimated albedo toward wo.
     var e: array<f32, 7>;
@@ -119,7 +121,22 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     return w;
 }
 
+// Whether the kernel has the code of `lobe`.
+fn principled_lobe_compiled(lobe: u32) -> bool {
+    switch (lobe) {
+        case LOBE_COAT: { return FEATURE_COAT; }
+        case LOBE_SHEEN: { return FEATURE_SHEEN; }
+        case LOBE_METAL, LOBE_METAL_MS: { return FEATURE_METAL; }
+        case LOBE_GLASS: { return FEATURE_GLASS; }
+        case LOBE_SPECULAR: { return FEATURE_SPECULAR; }
+        default: { return FEATURE_DIFFUSE; }
+    }
+}
+
 fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    if (!principled_lobe_compiled(lobe)) {
+        return vec3<f32>(0.0);
+    }
     let alpha = ggx_alpha(p.roughness, p.anisotropy);
     switch (lobe) {
         case LOBE_COAT: {
@@ -142,6 +159,9 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
 }
 
 fn principled_lobe_pdf(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if (!principled_lobe_compiled(lobe)) {
+        return 0.0;
+    }
     let alpha = ggx_alpha(p.roughness, p.anisotropy);
     switch (lobe) {
         case LOBE_COAT: { return dielectric_reflection_pdf(wo, wi, ggx_alpha(p.coat_roughness, 0.0)); }
@@ -162,6 +182,9 @@ struct PrincipledEval {
 // Only the diffuse lobe has weight: the common matte case skips the layering arithmetic
 // (which is exact here too, only slower).
 fn principled_is_diffuse(p: Principled) -> bool {
+    if (!FEATURE_COAT && !FEATURE_SHEEN && !FEATURE_METAL && !FEATURE_GLASS && !FEATURE_SPECULAR) {
+        return true;
+    }
     return p.metallic == 0.0 && p.specular_weight == 0.0 && p.coat_weight == 0.0
         && p.sheen_weight == 0.0 && p.transmission_weight == 0.0;
 }
@@ -216,7 +239,7 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
             }
         }
     }
-    if (!found) {
+    if (!found || !principled_lobe_compiled(lobe)) {
         return no_sample();
     }
     let alpha = ggx_alpha(p.roughness, p.anisotropy);

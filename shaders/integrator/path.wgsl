@@ -88,11 +88,11 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     if (u_pick < p_env) {
         ls = sample_environment(u);
         ls.pdf *= p_env;
-    } else if (u_pick < p_env + p_tri) {
+    } else if (FEATURE_EMISSIVE_TRIANGLES && u_pick < p_env + p_tri) {
         ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / p_tri, u);
         ls.pdf *= p_tri;
     } else {
-        if (params.light_totals.z < 1.0) {
+        if (!FEATURE_ANALYTIC_LIGHTS || params.light_totals.z < 1.0) {
             return vec3<f32>(0.0);
         }
         ls = sample_analytic_light(pick_analytic_light(u_pick), s.pe.p, u);
@@ -139,7 +139,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let t_scene = select(3.0e38, hit.t, hit.hit);
         // Sphere lights and sun disks in front of the surface (or the sky).
         var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
-        if (params.light_totals.z >= 1.0) {
+        if (FEATURE_ANALYTIC_LIGHTS && params.light_totals.z >= 1.0) {
             light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
         }
         if (any(extinction > vec3<f32>(0.0))) {

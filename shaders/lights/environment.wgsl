@@ -9,7 +9,7 @@
 // whose x is the inclusive marginal CDF over rows.
 
 fn has_environment_map() -> bool {
-    return (params.flags & FLAG_ENVIRONMENT_MAP) != 0u;
+    return FEATURE_ENVIRONMENT_MAP && (params.flags & FLAG_ENVIRONMENT_MAP) != 0u;
 }
 
 fn environment_uv(d: vec3<f32>) -> vec2<f32> {

@@ -44,6 +44,8 @@ pub struct MaterialTraits {
     pub constant_emission: Option<[f32; 3]>,
     /// Emission that varies over the surface (not sampled as a light).
     pub varying_emission: bool,
+    /// Principled lobes the material can reach (`render::kernel::lobes`).
+    pub lobes: u32,
 }
 
 #[derive(Clone, Debug)]
@@ -861,7 +863,18 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
     let surface = match &flat[output].inputs[0] {
         Src::Out(n, _) => *n,
         // The default surface: grey, opaque, not emissive.
-        _ => return MaterialTraits::default(),
+        _ => {
+            return MaterialTraits {
+                lobes: super::principled_lobes(
+                    Some(0.0),
+                    Some(0.0),
+                    Some(0.0),
+                    Some(0.0),
+                    Some(1.0),
+                ),
+                ..MaterialTraits::default()
+            };
+        }
     };
     let node = &flat[surface];
     let input = |name: &str| {
@@ -884,10 +897,19 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         (None, Some(c)) if as_vec3(&c) == [0.0; 3] => (None, false),
         _ => (None, true),
     };
+    let weight = |name: &str| known(name).map(|v| as_f32(&v));
+    let lobes = super::principled_lobes(
+        weight("coat_weight"),
+        weight("sheen_weight"),
+        weight("metallic"),
+        transmission,
+        weight("specular_weight"),
+    );
     MaterialTraits {
         transmissive,
         constant_emission,
         varying_emission,
+        lobes,
     }
 }
 

@@ -181,7 +181,11 @@ pub fn graph_from_principled(m: &crate::scene::Material) -> Graph {
     let v = |c: glam::Vec3| Input::Value(Value::Vec3(c.to_array()));
     let f = |x: f32| Input::Value(Value::Float(x));
     let strength = m.emission.max_element();
-    let emission_color = if strength > 0.0 { m.emission / strength } else { glam::Vec3::ONE };
+    let emission_color = if strength > 0.0 {
+        m.emission / strength
+    } else {
+        glam::Vec3::ONE
+    };
     let inputs = [
         ("base_color", v(m.base_color)),
         ("base_weight", f(m.base_weight)),
@@ -218,4 +222,39 @@ pub fn graph_from_principled(m: &crate::scene::Material) -> Graph {
         Node::new("material_output").input("surface", Input::Link(Link::new("surface", "bsdf"))),
     );
     g
+}
+
+/// The principled lobes a surface with these weights can reach (`render::kernel::lobes`);
+/// `None` is a weight that varies over the surface.
+pub fn principled_lobes(
+    coat: Option<f32>,
+    sheen: Option<f32>,
+    metallic: Option<f32>,
+    transmission: Option<f32>,
+    specular: Option<f32>,
+) -> u32 {
+    use crate::render::kernel::lobes;
+    let some = |w: Option<f32>| w.is_none_or(|w| w > 0.0);
+    let below_one = |w: Option<f32>| w.is_none_or(|w| w < 1.0);
+    let mut set = 0;
+    if some(coat) {
+        set |= lobes::COAT;
+    }
+    if some(sheen) {
+        set |= lobes::SHEEN;
+    }
+    if some(metallic) {
+        set |= lobes::METAL;
+    }
+    let dielectric = below_one(metallic);
+    if dielectric && some(transmission) {
+        set |= lobes::GLASS;
+    }
+    if dielectric && below_one(transmission) {
+        set |= lobes::DIFFUSE;
+        if some(specular) {
+            set |= lobes::SPECULAR;
+        }
+    }
+    set
 }

@@ -44,6 +44,10 @@ pub struct GpuContext {
     pub device: wgpu::Device,
     pub queue: wgpu::Queue,
     pub info: wgpu::AdapterInfo,
+    /// Compiled pipelines by kernel source and entry point (`KernelSource::create_pipeline`):
+    /// a scene rendered again with the same features and materials, or a restarted
+    /// render, skips naga and the driver's compile.
+    pub(crate) pipelines: std::sync::Mutex<std::collections::HashMap<u64, wgpu::ComputePipeline>>,
 }
 
 fn instance(backend: Option<Backend>) -> wgpu::Instance {
@@ -141,6 +145,7 @@ impl GpuContext {
             device,
             queue,
             info,
+            pipelines: Default::default(),
         }))
     }
 

@@ -53,6 +53,8 @@ pub struct GpuScene {
     pub analytic_light_count: u32,
     pub environment_data: wgpu::Buffer,
     pub has_environment_map: bool,
+    /// Principled lobes the scene's instanced materials can reach.
+    pub lobes: u32,
     /// Probability that next-event estimation samples an emissive triangle.
     pub triangle_pick: f32,
     pub instance_count: u32,
@@ -551,6 +553,11 @@ impl GpuScene {
                 &mut bytes,
             )?,
             has_environment_map: !a.environment_data.is_empty(),
+            lobes: scene
+                .instances
+                .iter()
+                .map(|i| scene.materials[i.material].lobes())
+                .fold(0, |all, l| all | l),
             triangle_pick: a.triangle_pick,
             instance_count: a.instances.len() as u32,
             light_count: a.light_triangles.len() as u32,
@@ -629,6 +636,10 @@ impl GpuScene {
         KernelFeatures {
             node_pages: self.node_pages,
             triangle_pages: self.triangle_pages,
+            lobes: self.lobes,
+            environment_map: self.has_environment_map,
+            analytic_lights: self.analytic_light_count > 0,
+            emissive_triangles: self.light_count > 0,
         }
     }
 

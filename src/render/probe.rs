@@ -73,7 +73,8 @@ pub fn run_probe(
             count: None,
         }),
     });
-    let mut source = KernelSource::with_library(name, &gpu_scene.features());
+    // Test kernels call every lobe and light type, whatever the scene holds.
+    let mut source = KernelSource::with_library(name, &gpu_scene.features().everything());
     for (path, wgsl) in parts {
         source.push(path, wgsl);
     }

@@ -62,6 +62,9 @@ pub struct RenderSettings {
     /// Page size in bytes of the paged scene arrays (BVH nodes, triangles); default: the
     /// largest binding the adapter allows. Tests lower it to exercise paging.
     pub page_bytes: Option<u64>,
+    /// Compile only the lobes and light types the scene uses (the default); off builds
+    /// the kernel with everything, for comparison.
+    pub specialize: bool,
 }
 
 impl RenderSettings {
@@ -74,6 +77,7 @@ impl RenderSettings {
             seed: 0,
             light_sampling: true,
             page_bytes: None,
+            specialize: true,
         }
     }
 }
@@ -197,7 +201,12 @@ impl Renderer {
         let device = &ctx.device;
         let layout = scene_bind_group_layout(device, &gpu_scene.features());
         let materials = crate::material::scene_materials_wgsl(scene)?;
-        let pipeline = path_tracing_kernel(&gpu_scene.features(), &materials).create_pipeline(
+        let features = if settings.specialize {
+            gpu_scene.features()
+        } else {
+            gpu_scene.features().everything()
+        };
+        let pipeline = path_tracing_kernel(&features, &materials).create_pipeline(
             &ctx,
             &[&layout],
             "render",

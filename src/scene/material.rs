@@ -126,6 +126,20 @@ impl Material {
         })
     }
 
+    /// The principled lobes this material can reach (`render::kernel::lobes`).
+    pub fn lobes(&self) -> u32 {
+        if let Some(g) = &self.graph {
+            return g.traits.lobes;
+        }
+        crate::material::principled_lobes(
+            Some(self.coat_weight),
+            Some(self.sheen_weight),
+            Some(self.metallic),
+            Some(self.transmission_weight),
+            Some(self.specular_weight),
+        )
+    }
+
     pub fn is_emissive(&self) -> bool {
         self.emission.max_element() > 0.0
     }

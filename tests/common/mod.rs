@@ -24,6 +24,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         seed: 1,
         light_sampling: true,
         page_bytes: None,
+        specialize: true,
     }
 }
 

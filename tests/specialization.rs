@@ -1,0 +1,77 @@
+//! Kernel specialisation: the kernel compiles only the lobes and light types a scene
+//! uses, and renders the same image as the kernel with everything.
+
+mod common;
+
+use common::{gpu, mean, render, rmse, settings};
+use kiln::accel::build_scene_accel;
+use kiln::render::gpu_scene::GpuScene;
+use kiln::render::kernel::{KernelFeatures, features_wgsl, lobes};
+use kiln::scene::{Material, Scene, default_scene};
+
+fn features(scene: &Scene) -> KernelFeatures {
+    let accel = build_scene_accel(scene).unwrap();
+    GpuScene::upload(&gpu(), scene, &accel, None)
+        .unwrap()
+        .features()
+}
+
+#[test]
+fn the_cornell_box_compiles_only_diffuse_and_its_area_light() {
+    let f = features(&default_scene().unwrap());
+    assert_eq!(f.lobes, lobes::DIFFUSE);
+    assert!(
+        !f.environment_map && !f.analytic_lights && f.emissive_triangles,
+        "{f:?}"
+    );
+    let consts = features_wgsl(&f);
+    assert!(
+        consts.contains("const FEATURE_GLASS: bool = false;"),
+        "{consts}"
+    );
+    assert!(
+        consts.contains("const FEATURE_DIFFUSE: bool = true;"),
+        "{consts}"
+    );
+}
+
+#[test]
+fn lobes_follow_the_materials_and_graphs() {
+    let mut scene = default_scene().unwrap();
+    let glass = scene.add_material(Material {
+        name: "glass".into(),
+        transmission_weight: 1.0,
+        ..Material::default()
+    });
+    scene.instances[0].material = glass;
+    assert_eq!(features(&scene).lobes & lobes::GLASS, lobes::GLASS);
+    // A graph whose metallic varies could be metal anywhere.
+    let text = r#"(version: 1, nodes: {
+        "n": (type: "noise_texture"),
+        "s": (type: "principled_bsdf", inputs: { "metallic": "n.fac" }),
+        "o": (type: "material_output", inputs: { "surface": "s.bsdf" }),
+    })"#;
+    let (_, graph) = kiln::material::parse_material(text, "m.kmat").unwrap();
+    let m = Material::from_graph("varying metal", graph).unwrap();
+    assert_eq!(m.lobes(), lobes::METAL | lobes::DIFFUSE | lobes::SPECULAR);
+}
+
+#[test]
+fn specialised_and_everything_kernels_render_the_same_image() {
+    let scenes = [
+        default_scene().unwrap(),
+        kiln::scene::load_scene(std::path::Path::new(concat!(
+            env!("CARGO_MANIFEST_DIR"),
+            "/assets/scenes/materials.kiln"
+        )))
+        .unwrap(),
+    ];
+    for scene in scenes {
+        let mut s = settings(48, 32, 16);
+        let special = render(&gpu(), &scene, s).radiance();
+        s.specialize = false;
+        let everything = render(&gpu(), &scene, s).radiance();
+        let error = rmse(&special, &everything) / mean(&everything).max_element() as f64;
+        assert!(error < 1e-4, "images differ: relative RMSE {error}");
+    }
+}
