@@ -231,7 +231,7 @@ fn main() -> anyhow::Result<()> {
          // [outside, inside][(η-1)/(η+1) 0..0.6][roughness 0..1][cos θo 0..1], 2^15 samples each.\n",
     );
     text.push_str(&format!(
-        "pub const DIELECTRIC_ENERGY: [f32; {}] = [",
+        "pub static DIELECTRIC_ENERGY: [f32; {}] = [",
         values.len()
     ));
     for (i, v) in values.iter().enumerate() {

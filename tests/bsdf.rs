@@ -608,8 +608,8 @@ fn refine_pdfs(lobes: &[Lobe], bins: SphereBins, stats: &[SampleStats], expected
         }
         let half_sample = 0.5 / s.samples as f64;
         let mut flagged = vec![false; rows * cols];
-        for cell in 0..rows * cols {
-            if s.histogram[cell] == 0 && e[cell] < half_sample {
+        for (cell, (&count, &p)) in s.histogram.iter().zip(e.iter()).enumerate() {
+            if count == 0 && p < half_sample {
                 continue;
             }
             let (r, k) = ((cell / cols) as isize, (cell % cols) as isize);

@@ -684,3 +684,238 @@ fn bump_tilts_the_normal_by_the_height_slope() {
         "a constant height bumps nothing"
     );
 }
+
+/// Evaluates cases in a scene holding `materials` (so their textures are bound).
+fn evaluate_with_textures(materials: Vec<kiln::scene::Material>, cases: &[Case]) -> Vec<[f32; 4]> {
+    let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+    scene.materials = materials;
+    let mut code = String::new();
+    let mut calls = BTreeSet::from(["ShadingPoint".to_owned(), "MaterialEval".to_owned()]);
+    let mut textures = kiln::material::scene_textures(&scene).index;
+    for (i, c) in cases.iter().enumerate() {
+        let compiled = kiln::material::compile::compile_value_with_textures(
+            "test",
+            &c.graph,
+            &c.at,
+            &format!("probe_value_{i}"),
+            &mut textures,
+        )
+        .unwrap_or_else(|e| panic!("{e}"));
+        code.push_str(&compiled.code);
+        calls.extend(compiled.calls);
+    }
+    code.push_str(
+        "fn probe_value(which: u32, sp: ShadingPoint) -> vec4<f32> {\n    switch (which) {\n",
+    );
+    for i in 0..cases.len() {
+        code.push_str(&format!(
+            "        case {i}u: {{ return probe_value_{i}(sp); }}\n"
+        ));
+    }
+    code.push_str("        default: { return vec4<f32>(0.0); }\n    }\n}\n");
+    let wgsl = library::closure(calls) + &code;
+    let mut input: Vec<[f32; 4]> = vec![[cases.len() as f32, 0.0, 0.0, 0.0]];
+    for (i, c) in cases.iter().enumerate() {
+        input.push([c.p[0], c.p[1], c.p[2], c.p[0]]);
+        input.push([0.0, 0.0, 1.0, c.p[1]]);
+        input.push([i as f32, 0.0, 0.0, 0.0]);
+    }
+    let out = run_probe(
+        &gpu(),
+        &scene,
+        &settings(1, 1, 1),
+        &Probe {
+            name: "node_probe",
+            parts: &[
+                ("(generated) graph values", &wgsl),
+                (
+                    "shaders/tests/node_probe.wgsl",
+                    include_str!("../shaders/tests/node_probe.wgsl"),
+                ),
+            ],
+            entry: "node_probe",
+            input: bytemuck::cast_slice(&input),
+            output_bytes: 16 * cases.len() as u64,
+            invocations: cases.len() as u32,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    bytemuck::cast_slice::<u8, [f32; 4]>(&out).to_vec()
+}
+
+fn image_graph(file: &str, params: &[(&str, &str)]) -> Graph {
+    let mut node = Node::new("image_texture").param("file", text(file));
+    for (k, v) in params {
+        node = node.param(k, text(v));
+    }
+    let mut g = graph(&[("img", node)]);
+    g.add(
+        "s",
+        Node::new("principled_bsdf").input("base_color", link("img", "color")),
+    );
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("s", "bsdf")),
+    );
+    g
+}
+
+fn srgb_to_linear(c: f32) -> f32 {
+    if c <= 0.04045 {
+        c / 12.92
+    } else {
+        ((c + 0.055) / 1.055).powf(2.4)
+    }
+}
+
+#[test]
+fn image_textures_decode_wrap_and_filter() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("texels.png");
+    // Row 0 (top, v near 1): red, green, blue, white; row 1: black, grey 128, magenta at
+    // alpha 128, cyan.
+    let texels: [[u8; 4]; 8] = [
+        [255, 0, 0, 255],
+        [0, 255, 0, 255],
+        [0, 0, 255, 255],
+        [255, 255, 255, 255],
+        [0, 0, 0, 255],
+        [128, 128, 128, 255],
+        [255, 0, 255, 128],
+        [0, 255, 255, 255],
+    ];
+    image::RgbaImage::from_raw(4, 2, texels.concat())
+        .unwrap()
+        .save(&png)
+        .unwrap();
+    let file = png.to_str().unwrap();
+    let material = |params: &[(&str, &str)]| {
+        kiln::scene::Material::from_graph("textured", image_graph(file, params)).unwrap()
+    };
+    let closest = image_graph(file, &[("interpolation", "closest")]);
+    let linear = image_graph(file, &[]);
+    let clip = image_graph(file, &[("extension", "clip"), ("interpolation", "closest")]);
+    let extend = image_graph(
+        file,
+        &[("extension", "extend"), ("interpolation", "closest")],
+    );
+    let mirror = image_graph(
+        file,
+        &[("extension", "mirror"), ("interpolation", "closest")],
+    );
+    let data = image_graph(
+        file,
+        &[("color_space", "linear"), ("interpolation", "closest")],
+    );
+    let centre = |x: f32, row: f32| [(x + 0.5) / 4.0, 1.0 - (row + 0.5) / 2.0, 0.0];
+    let v = evaluate_with_textures(
+        vec![material(&[])],
+        &[
+            case(&closest, "img", "color", centre(0.0, 0.0)),
+            case(&closest, "img", "color", centre(1.0, 1.0)),
+            case(&closest, "img", "alpha", centre(2.0, 1.0)),
+            case(&linear, "img", "color", [0.25, 0.75, 0.0]),
+            case(&closest, "img", "color", [1.125, 0.75, 0.0]),
+            case(&clip, "img", "color", [1.125, 0.75, 0.0]),
+            case(&extend, "img", "color", [1.5, 0.75, 0.0]),
+            case(&mirror, "img", "color", [1.125, 0.75, 0.0]),
+            case(&data, "img", "color", centre(1.0, 1.0)),
+        ],
+    );
+    let near3 = |what: &str, got: [f32; 4], want: [f32; 3]| {
+        for k in 0..3 {
+            assert_near(what, got[k], want[k], 1e-4);
+        }
+    };
+    let grey = srgb_to_linear(128.0 / 255.0);
+    near3("top-left texel", v[0], [1.0, 0.0, 0.0]);
+    near3("sRGB grey decoded", v[1], [grey; 3]);
+    assert_near("alpha", v[2][0], 128.0 / 255.0, 1e-4);
+    near3("halfway between red and green", v[3], [0.5, 0.5, 0.0]);
+    near3("repeat", v[4], [1.0, 0.0, 0.0]);
+    near3("clip", v[5], [0.0, 0.0, 0.0]);
+    near3("extend", v[6], [1.0, 1.0, 1.0]);
+    near3("mirror", v[7], [1.0, 1.0, 1.0]);
+    near3("linear data is not decoded", v[8], [128.0 / 255.0; 3]);
+}
+
+#[test]
+fn float_images_keep_their_range() {
+    let dir = tempfile::tempdir().unwrap();
+    let exr = dir.path().join("hdr.exr");
+    image::Rgba32FImage::from_raw(2, 1, vec![5.0, 0.25, 100.0, 1.0, 0.0, 0.0, 0.0, 1.0])
+        .unwrap()
+        .save(&exr)
+        .unwrap();
+    let file = exr.to_str().unwrap();
+    let g = image_graph(
+        file,
+        &[("color_space", "linear"), ("interpolation", "closest")],
+    );
+    let m = kiln::scene::Material::from_graph("hdr", g.clone()).unwrap();
+    let v = evaluate_with_textures(vec![m], &[case(&g, "img", "color", [0.25, 0.5, 0.0])]);
+    assert_near("hdr red", v[0][0], 5.0, 5e-3);
+    assert_near("hdr green", v[0][1], 0.25, 1e-3);
+    assert_near("hdr blue", v[0][2], 100.0, 0.1);
+}
+
+#[test]
+fn bad_images_are_errors_naming_the_node() {
+    let dir = tempfile::tempdir().unwrap();
+    let missing = dir.path().join("missing.png");
+    let e = kiln::scene::Material::from_graph("m", image_graph(missing.to_str().unwrap(), &[]))
+        .unwrap_err();
+    assert_eq!(
+        (e.node.as_deref(), e.socket.as_deref()),
+        (Some("img"), Some("file")),
+        "{e}"
+    );
+    assert!(e.to_string().contains("missing.png"), "{e}");
+
+    // A PNG header claiming 100000 × 100000 pixels is refused before any allocation.
+    let huge = dir.path().join("huge.png");
+    std::fs::write(&huge, png_header(100_000, 100_000)).unwrap();
+    let e = kiln::scene::Material::from_graph("m", image_graph(huge.to_str().unwrap(), &[]))
+        .unwrap_err();
+    assert_eq!(e.node.as_deref(), Some("img"), "{e}");
+
+    let g = graph(&[("img", Node::new("image_texture"))]);
+    let mut g2 = g.clone();
+    g2.add(
+        "s",
+        Node::new("principled_bsdf").input("base_color", link("img", "color")),
+    );
+    g2.add(
+        "out",
+        Node::new("material_output").input("surface", link("s", "bsdf")),
+    );
+    let e = kiln::material::compile("m", &g2, "m").unwrap_err();
+    assert_eq!(e.socket.as_deref(), Some("file"), "{e}");
+}
+
+/// The signature and IHDR chunk of a PNG with the given size (no image data).
+fn png_header(width: u32, height: u32) -> Vec<u8> {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(width.to_be_bytes());
+    ihdr.extend(height.to_be_bytes());
+    ihdr.extend([8, 6, 0, 0, 0]);
+    let crc = {
+        let mut c = !0u32;
+        for &b in &ihdr {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    };
+    let mut out = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    out.extend(13u32.to_be_bytes());
+    out.extend(ihdr);
+    out.extend(crc.to_be_bytes());
+    out
+}

@@ -147,3 +147,28 @@ fn the_example_materials_render_finite_images() {
     let px = render(&gpu(), &spheres(materials), settings(64, 24, 8)).radiance();
     assert!(mean(&px).max_element() > 0.0);
 }
+
+#[test]
+fn an_image_textured_material_renders_its_image() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("red.png");
+    image::RgbImage::from_pixel(8, 8, image::Rgb([230, 20, 10]))
+        .save(&png)
+        .unwrap();
+    let text = format!(
+        r#"(version: 1, nodes: {{
+            "img": (type: "image_texture", params: {{ "file": "{}" }}),
+            "s": (type: "principled_bsdf", inputs: {{ "base_color": "img.color", "specular_weight": 0.0 }}),
+            "o": (type: "material_output", inputs: {{ "surface": "s.bsdf" }}),
+        }})"#,
+        png.file_name().unwrap().to_str().unwrap()
+    );
+    let kmat = dir.path().join("red.kmat");
+    std::fs::write(&kmat, text).unwrap();
+    let (name, graph) = kiln::material::load_material(&kmat).unwrap();
+    let m = Material::from_graph(&name, graph).unwrap();
+    let px = render(&gpu(), &spheres(vec![m]), settings(32, 24, 16)).radiance();
+    // The centre of the sphere is red.
+    let c = px[12 * 32 + 16];
+    assert!(c.x > 4.0 * c.y && c.x > 4.0 * c.z, "centre pixel {c}");
+}

@@ -57,6 +57,8 @@ pub struct CompiledMaterial {
     /// they call in turn).
     pub calls: BTreeSet<String>,
     pub traits: MaterialTraits,
+    /// Image files the material reads, with the node that reads each.
+    pub images: BTreeMap<String, String>,
 }
 
 /// Where an input's value comes from after flattening.
@@ -97,6 +99,17 @@ pub fn compile(
     graph: &Graph,
     function: &str,
 ) -> Result<CompiledMaterial, GraphError> {
+    compile_with_textures(material, graph, function, &mut BTreeMap::new())
+}
+
+/// [`compile`] with the scene's texture indices by file; files not yet in `textures` get
+/// the next free index.
+pub fn compile_with_textures(
+    material: &str,
+    graph: &Graph,
+    function: &str,
+    textures: &mut BTreeMap<String, u32>,
+) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
     let mut flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
@@ -111,6 +124,8 @@ pub fn compile(
         helpers: String::new(),
         helper_names: BTreeSet::new(),
         calls: BTreeSet::new(),
+        textures,
+        images: BTreeMap::new(),
     };
     let body = emitter.function_body(&[(output, 0)])?;
     let mut code = emitter.helpers.clone();
@@ -122,6 +137,7 @@ pub fn compile(
         code,
         calls: emitter.calls,
         traits,
+        images: emitter.images,
     })
 }
 
@@ -133,6 +149,17 @@ pub fn compile_value(
     graph: &Graph,
     at: &Link,
     function: &str,
+) -> Result<CompiledMaterial, GraphError> {
+    compile_value_with_textures(material, graph, at, function, &mut BTreeMap::new())
+}
+
+/// [`compile_value`] with the scene's texture indices (see [`compile_with_textures`]).
+pub fn compile_value_with_textures(
+    material: &str,
+    graph: &Graph,
+    at: &Link,
+    function: &str,
+    textures: &mut BTreeMap<String, u32>,
 ) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
     let mut flat = Flattener::new(&ctx, graph).run()?;
@@ -153,6 +180,8 @@ pub fn compile_value(
         helpers: String::new(),
         helper_names: BTreeSet::new(),
         calls: BTreeSet::new(),
+        textures,
+        images: BTreeMap::new(),
     };
     let body = emitter.function_body(&[(node, output)])?;
     let value = match ty {
@@ -176,6 +205,7 @@ pub fn compile_value(
         code,
         calls: emitter.calls,
         traits: MaterialTraits::default(),
+        images: emitter.images,
     })
 }
 
@@ -298,6 +328,18 @@ impl<'a> Flattener<'a> {
                     }
                     for (name, value) in &node.params {
                         check_param(self.ctx, &full, def, name, value)?;
+                    }
+                    for p in &def.params {
+                        if matches!(p.kind, ParamKind::File) && !node.params.contains_key(p.name) {
+                            return Err(self.ctx.err(
+                                Some(&full),
+                                Some(p.name),
+                                format!(
+                                    "{kind} needs params: {{ \"{}\": \"image file\" }}",
+                                    p.name
+                                ),
+                            ));
+                        }
                     }
                     self.index.insert(full.clone(), self.nodes.len());
                     self.nodes.push(FlatNode {
@@ -488,6 +530,7 @@ fn check_param(
             true
         }
         (ParamKind::Bool(_), Param::Bool(_)) => true,
+        (ParamKind::File, Param::Text(_)) => true,
         (ParamKind::Ramp, Param::Ramp(stops)) => {
             if stops.is_empty() {
                 return Err(ctx.err(
@@ -924,6 +967,10 @@ struct Emitter<'a> {
     /// also be used directly).
     helper_names: BTreeSet<String>,
     calls: BTreeSet<String>,
+    /// Texture index by image file, shared by a scene's materials.
+    textures: &'a mut BTreeMap<String, u32>,
+    /// Image files read, with the node reading each.
+    images: BTreeMap<String, String>,
 }
 
 struct Body {
@@ -1027,12 +1074,22 @@ impl Emitter<'_> {
         }
     }
 
-    fn param_expr(&self, node: &FlatNode, name: &str) -> Option<String> {
+    fn param_expr(&mut self, n: usize, name: &str) -> Option<String> {
+        let node = &self.flat[n];
         let def = node.def.param(name)?;
         Some(match &def.kind {
             ParamKind::Enum(_) => format!("{}u", enum_index(node, name)),
             ParamKind::Bool(_) => bool_param(node, name).to_string(),
             ParamKind::Ramp => return None,
+            ParamKind::File => {
+                let file = match node.params.get(name) {
+                    Some(Param::Text(f)) => f.clone(),
+                    _ => String::new(),
+                };
+                self.images.insert(file.clone(), node.id.clone());
+                let next = self.textures.len() as u32;
+                format!("{}u", *self.textures.entry(file).or_insert(next))
+            }
         })
     }
 
@@ -1051,7 +1108,7 @@ impl Emitter<'_> {
                     let name = &rest[start + 1..end];
                     let value = match node.def.inputs.iter().position(|s| s.name == name) {
                         Some(i) => self.input_expr(n, i),
-                        None => self.param_expr(node, name).unwrap_or_else(|| {
+                        None => self.param_expr(n, name).unwrap_or_else(|| {
                             panic!("template of {} names {name}", node.def.kind)
                         }),
                     };

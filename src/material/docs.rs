@@ -86,6 +86,7 @@ pub fn nodes_markdown() -> String {
                         .join(", "),
                     ParamKind::Bool(d) => format!("`true`/`false` (default `{d}`)"),
                     ParamKind::Ramp => "`[(position: 0.0, color: (r, g, b, a)), …]`".into(),
+                    ParamKind::File => "a file path".into(),
                 };
                 let _ = writeln!(out, "| `{}` | {} | {} |", p.name, values, p.doc);
             }

@@ -8,6 +8,7 @@ pub mod docs;
 pub mod graph;
 pub mod library;
 pub mod nodes;
+pub mod texture;
 
 use std::collections::BTreeSet;
 use std::path::Path;
@@ -119,7 +120,12 @@ pub fn parse_material(text: &str, path: &str) -> Result<(String, Graph), Materia
             .file_stem()
             .map_or("material".into(), |s| s.to_string_lossy().into_owned())
     });
-    Ok((name, file.graph()))
+    let mut graph = file.graph();
+    resolve_files(
+        &mut graph,
+        Path::new(path).parent().unwrap_or(Path::new("")),
+    );
+    Ok((name, graph))
 }
 
 pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> {
@@ -162,12 +168,18 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
 
 /// [`materials_wgsl`] for a scene: its graph materials compiled, numbered by their index.
 pub fn scene_materials_wgsl(scene: &crate::scene::Scene) -> Result<String, GraphError> {
+    let mut textures = scene_textures(scene).index;
     let mut compiled = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {
         if let Some(g) = &m.graph {
             compiled.push((
                 i as u32,
-                compile(&m.name, &g.graph, &format!("material_{i}"))?,
+                compile::compile_with_textures(
+                    &m.name,
+                    &g.graph,
+                    &format!("material_{i}"),
+                    &mut textures,
+                )?,
             ));
         }
     }
@@ -257,4 +269,40 @@ pub fn principled_lobes(
         }
     }
     set
+}
+
+/// Makes image paths of `image_texture` nodes (in the graph and its groups) relative to
+/// `base`, the directory of the file the graph came from.
+pub fn resolve_files(graph: &mut Graph, base: &Path) {
+    let fix = |nodes: &mut std::collections::BTreeMap<String, Node>| {
+        for node in nodes.values_mut() {
+            if node.kind != "image_texture" {
+                continue;
+            }
+            if let Some(Param::Text(file)) = node.params.get_mut("file") {
+                if Path::new(file.as_str()).is_relative() {
+                    *file = base.join(&*file).to_string_lossy().into_owned();
+                }
+            }
+        }
+    };
+    fix(&mut graph.nodes);
+    for group in graph.groups.values_mut() {
+        fix(&mut group.nodes);
+    }
+}
+
+/// The images of a scene's graph materials, indexed in material order.
+pub fn scene_textures(scene: &crate::scene::Scene) -> texture::TextureTable {
+    let mut table = texture::TextureTable::default();
+    for m in &scene.materials {
+        let Some(g) = &m.graph else { continue };
+        for (file, image) in &g.images {
+            if !table.index.contains_key(file) {
+                table.index.insert(file.clone(), table.images.len() as u32);
+                table.images.push(std::sync::Arc::clone(image));
+            }
+        }
+    }
+    table
 }

@@ -45,6 +45,9 @@ pub enum ParamKind {
     Bool(bool),
     /// Colour-ramp stops.
     Ramp,
+    /// An image file, relative to the material file (the compiler turns it into the
+    /// scene's texture index).
+    File,
 }
 
 #[derive(Clone, Debug)]
@@ -444,6 +447,47 @@ fn build() -> Vec<NodeDef> {
             code: Code::Template("{vector}"),
         },
         // -------------------------------------------------------------- textures
+        NodeDef {
+            kind: "image_texture",
+            label: "Image Texture",
+            category: "Texture",
+            doc: "An image file (PNG, JPEG, EXR, HDR, …) looked up by UV, filtered bilinearly or by nearest texel. Transform the UVs with a Mapping node (texture type).",
+            inputs: vec![implicit(
+                "vector",
+                "vec3<f32>(sp.uv, 0.0)",
+                "the mesh's UVs",
+                "texture coordinates (x, y used)",
+            )],
+            outputs: vec![
+                out("color", Color, ".rgb", "colour, linear"),
+                out("alpha", Float, ".a", "alpha (1 for images without)"),
+            ],
+            params: vec![
+                ParamDef {
+                    name: "file",
+                    kind: ParamKind::File,
+                    doc: "the image, relative to the material (or scene) file",
+                },
+                choice(
+                    "color_space",
+                    &["srgb", "linear"],
+                    "srgb decodes 8-bit colour to linear; linear for data (normal, roughness maps) and float images",
+                ),
+                choice(
+                    "extension",
+                    &["repeat", "extend", "clip", "mirror"],
+                    "outside [0, 1]: tile, stretch the edge, transparent black, or mirror",
+                ),
+                choice(
+                    "interpolation",
+                    &["linear", "closest"],
+                    "bilinear, or the nearest texel",
+                ),
+            ],
+            code: Code::Template(
+                "node_image({file}, {vector}.xy, {color_space}, {extension}, {interpolation})",
+            ),
+        },
         NodeDef {
             kind: "checker_texture",
             label: "Checker Texture",

@@ -55,6 +55,9 @@ pub struct GpuScene {
     pub has_environment_map: bool,
     /// Principled lobes the scene's instanced materials can reach.
     pub lobes: u32,
+    /// The image textures (`material::texture::TextureTable::gpu_words`).
+    pub textures: wgpu::Buffer,
+    pub texture_count: u32,
     /// Probability that next-event estimation samples an emissive triangle.
     pub triangle_pick: f32,
     pub instance_count: u32,
@@ -509,6 +512,7 @@ impl GpuScene {
         page_bytes: Option<u64>,
     ) -> Result<Self, UploadError> {
         let a = SceneArrays::build(scene, accel);
+        let texture_table = crate::material::scene_textures(scene);
         let limit = binding_limit(ctx);
         let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
         let mut bytes = 0;
@@ -553,6 +557,14 @@ impl GpuScene {
                 &mut bytes,
             )?,
             has_environment_map: !a.environment_data.is_empty(),
+            textures: storage_buffer(
+                ctx,
+                "textures",
+                &texture_table.gpu_words(),
+                limit,
+                &mut bytes,
+            )?,
+            texture_count: texture_table.images.len() as u32,
             lobes: scene
                 .instances
                 .iter()
@@ -610,6 +622,9 @@ pub fn scene_bind_group_layout(
         entries.push(entry(b, read_only));
     }
     entries.push(entry(BSDF_TABLES_BINDING, wgpu::BufferBindingType::Uniform));
+    if features.textures {
+        entries.push(entry(super::kernel::TEXTURE_BINDING, read_only));
+    }
     for p in 1..features.node_pages {
         entries.push(entry(NODE_PAGE_BINDING + p - 1, read_only));
     }
@@ -640,6 +655,7 @@ impl GpuScene {
             environment_map: self.has_environment_map,
             analytic_lights: self.analytic_light_count > 0,
             emissive_triangles: self.light_count > 0,
+            textures: self.texture_count > 0,
         }
     }
 
@@ -665,6 +681,9 @@ impl GpuScene {
             (20, &self.environment_data),
             (BSDF_TABLES_BINDING, &self.bsdf_tables),
         ];
+        if self.texture_count > 0 {
+            buffers.push((super::kernel::TEXTURE_BINDING, &self.textures));
+        }
         // Page 0 of each paged array has its own binding; further pages exist only when
         // used (see `scene_bind_group_layout`).
         buffers.push((6, &self.blas_nodes[0]));

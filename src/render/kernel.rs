@@ -248,6 +248,8 @@ pub struct KernelFeatures {
     /// Point, spot and distant lights.
     pub analytic_lights: bool,
     pub emissive_triangles: bool,
+    /// Image textures: binds `texture_data`.
+    pub textures: bool,
 }
 
 impl Default for KernelFeatures {
@@ -260,6 +262,7 @@ impl Default for KernelFeatures {
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,
+            textures: true,
         }
     }
 }
@@ -274,6 +277,9 @@ impl KernelFeatures {
         }
     }
 }
+
+/// The binding of the image textures (`src/material/texture.rs`), when a scene has any.
+pub const TEXTURE_BINDING: u32 = 22;
 
 /// The `FEATURE_*` constants the shaders test.
 pub fn features_wgsl(features: &KernelFeatures) -> String {
@@ -290,6 +296,11 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
         ("EMISSIVE_TRIANGLES", features.emissive_triangles),
     ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
+    }
+    if features.textures {
+        text.push_str(&format!(
+            "@group(0) @binding({TEXTURE_BINDING}) var<storage, read> texture_data: array<u32>;\n"
+        ));
     }
     text
 }

@@ -48,7 +48,7 @@ pub fn run_probe(
     } = *probe;
     let device = &ctx.device;
     // A binding over the limit would not fail loudly everywhere: refuse it here.
-    let limit = ctx.limits().max_storage_buffer_binding_size as u64;
+    let limit = ctx.limits().max_storage_buffer_binding_size;
     if input.len() as u64 > limit || output_bytes > limit {
         return Err(RenderError::Scene(format!(
             "probe \"{name}\": {} bytes in, {output_bytes} out, over the adapter's {limit}-byte binding limit",

@@ -286,7 +286,11 @@ impl MaterialDesc {
     fn to_material(&self, name: &str, base_dir: &Path) -> Result<Material, String> {
         let graph = match (&self.graph, &self.graph_file) {
             (Some(_), Some(_)) => return Err("give `graph` or `graph_file`, not both".into()),
-            (Some(g), None) => Some(g.clone()),
+            (Some(g), None) => {
+                let mut g = g.clone();
+                crate::material::resolve_files(&mut g, base_dir);
+                Some(g)
+            }
             (None, Some(file)) => {
                 let (_, g) = crate::material::load_material(&base_dir.join(file))
                     .map_err(|e| e.to_string())?;

@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use glam::Vec3;
 
+use crate::material::texture::{TextureImage, load_texture};
 use crate::material::{Graph, GraphError, MaterialTraits};
 
 #[derive(Clone, Debug, PartialEq)]
@@ -59,6 +60,8 @@ pub struct Material {
 pub struct GraphMaterial {
     pub graph: Graph,
     pub traits: MaterialTraits,
+    /// The images its image-texture nodes read, by file.
+    pub images: std::collections::BTreeMap<String, Arc<TextureImage>>,
 }
 
 impl Default for Material {
@@ -117,11 +120,25 @@ impl Material {
     /// surface when the material is made, naming the node and socket.
     pub fn from_graph(name: &str, graph: Graph) -> Result<Self, GraphError> {
         let compiled = crate::material::compile(name, &graph, "material")?;
+        let mut images = std::collections::BTreeMap::new();
+        for (file, node) in &compiled.images {
+            let image = load_texture(std::path::Path::new(file)).map_err(|message| GraphError {
+                material: name.to_owned(),
+                node: Some(node.clone()),
+                socket: Some("file".into()),
+                message,
+            })?;
+            images.insert(file.clone(), Arc::new(image));
+        }
         let traits = compiled.traits;
         Ok(Self {
             name: name.to_owned(),
             emission: traits.constant_emission.map_or(Vec3::ZERO, Vec3::from),
-            graph: Some(Arc::new(GraphMaterial { graph, traits })),
+            graph: Some(Arc::new(GraphMaterial {
+                graph,
+                traits,
+                images,
+            })),
             ..Self::default()
         })
     }

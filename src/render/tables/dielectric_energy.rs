@@ -2,7 +2,7 @@
 #![allow(clippy::approx_constant)]
 // Energy albedo of the white rough dielectric (shaders/bsdf/dielectric_energy.wgsl):
 // [outside, inside][(η-1)/(η+1) 0..0.6][roughness 0..1][cos θo 0..1], 2^15 samples each.
-pub const DIELECTRIC_ENERGY: [f32; 8192] = [
+pub static DIELECTRIC_ENERGY: [f32; 8192] = [
     1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000,
     1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000,
     1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000, 1.00000,

@@ -1,0 +1,116 @@
+//! Image textures for the image-texture node: loaded with bounded memory, converted to
+//! the GPU layout `shaders/nodes/image.wgsl` reads (8-bit sources as RGBA8, deeper ones as
+//! RGBA16F), and gathered per scene into one storage buffer.
+
+use std::collections::BTreeMap;
+use std::path::Path;
+use std::sync::Arc;
+
+/// The largest width or height accepted: bigger claims are refused before decoding.
+pub const MAX_TEXTURE_SIZE: u32 = 16384;
+
+/// A decoded image in the GPU's texel layout.
+#[derive(Debug, PartialEq)]
+pub struct TextureImage {
+    pub width: u32,
+    pub height: u32,
+    /// 0: one u32 per texel, RGBA8; 1: two u32 per texel, RGBA16F.
+    pub format: u32,
+    pub texels: Vec<u32>,
+}
+
+pub fn load_texture(path: &Path) -> Result<TextureImage, String> {
+    let mut reader = image::ImageReader::open(path)
+        .map_err(|e| format!("cannot open {}: {e}", path.display()))?
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    let mut limits = image::Limits::default();
+    limits.max_image_width = Some(MAX_TEXTURE_SIZE);
+    limits.max_image_height = Some(MAX_TEXTURE_SIZE);
+    limits.max_alloc = Some(2 << 30);
+    reader.limits(limits);
+    let img = reader
+        .decode()
+        .map_err(|e| format!("cannot decode {}: {e}", path.display()))?;
+    let (width, height) = (img.width(), img.height());
+    let eight_bit = matches!(
+        img.color(),
+        image::ColorType::L8
+            | image::ColorType::La8
+            | image::ColorType::Rgb8
+            | image::ColorType::Rgba8
+    );
+    let texels = if eight_bit {
+        img.to_rgba8()
+            .pixels()
+            .map(|p| u32::from_le_bytes(p.0))
+            .collect()
+    } else {
+        img.to_rgba32f()
+            .pixels()
+            .flat_map(|p| {
+                let h = |v: f32| half_bits(v) as u32;
+                [h(p.0[0]) | h(p.0[1]) << 16, h(p.0[2]) | h(p.0[3]) << 16]
+            })
+            .collect()
+    };
+    Ok(TextureImage {
+        width,
+        height,
+        format: if eight_bit { 0 } else { 1 },
+        texels,
+    })
+}
+
+/// f32 → IEEE half bits (round to nearest even; overflow to infinity is clamped to the
+/// largest half, NaN to 0), as WGSL's `unpack2x16float` reads them.
+fn half_bits(v: f32) -> u16 {
+    if v.is_nan() {
+        return 0;
+    }
+    let v = v.clamp(-65504.0, 65504.0);
+    let bits = v.to_bits();
+    let sign = ((bits >> 16) & 0x8000) as u16;
+    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
+    let mantissa = bits & 0x7f_ffff;
+    if exp <= 0 {
+        if exp < -10 {
+            return sign;
+        }
+        let m = mantissa | 0x80_0000;
+        let shift = (14 - exp) as u32;
+        let half = m >> shift;
+        let rest = m & ((1 << shift) - 1);
+        let halfway = 1 << (shift - 1);
+        let round = (rest > halfway || (rest == halfway && half & 1 == 1)) as u32;
+        return sign | (half + round) as u16;
+    }
+    let half = ((exp as u32) << 10) | (mantissa >> 13);
+    let rest = mantissa & 0x1fff;
+    let round = (rest > 0x1000 || (rest == 0x1000 && half & 1 == 1)) as u32;
+    sign | (half + round).min(0x7bff) as u16
+}
+
+/// A scene's textures, in the order of their indices, and the index of each file.
+#[derive(Debug, Default)]
+pub struct TextureTable {
+    pub index: BTreeMap<String, u32>,
+    pub images: Vec<Arc<TextureImage>>,
+}
+
+impl TextureTable {
+    /// The buffer `texture_data`: per texture (offset in words, width, height, format),
+    /// then the texels.
+    pub fn gpu_words(&self) -> Vec<u32> {
+        let mut words = Vec::new();
+        let mut offset = 4 * self.images.len() as u32;
+        for img in &self.images {
+            words.extend([offset, img.width, img.height, img.format]);
+            offset += img.texels.len() as u32;
+        }
+        for img in &self.images {
+            words.extend_from_slice(&img.texels);
+        }
+        words
+    }
+}
