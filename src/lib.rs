@@ -9,5 +9,6 @@ pub mod accel;
 pub mod bench;
 pub mod film;
 pub mod material;
+pub mod plugin;
 pub mod render;
 pub mod scene;

@@ -919,3 +919,104 @@ fn png_header(width: u32, height: u32) -> Vec<u8> {
     out.extend(crc.to_be_bytes());
     out
 }
+
+#[test]
+fn vector_math_and_mixes_take_their_stated_values() {
+    // a = the position (1, 2, 3); b = (4, -5, 6) and c = (0.5, 0.5, 0.5) constants.
+    let op = |name: &str| {
+        graph(&[
+            ("geo", Node::new("geometry")),
+            (
+                "v",
+                Node::new("vector_math")
+                    .param("operation", text(name))
+                    .input("a", link("geo", "position"))
+                    .input("b", [4.0, -5.0, 6.0])
+                    .input("c", [0.5, 0.5, 0.5])
+                    .input("scale", 2.0),
+            ),
+        ])
+    };
+    let p = [1.0, 2.0, 3.0];
+    let table: &[(&str, &str, [f32; 3])] = &[
+        ("add", "vector", [5.0, -3.0, 9.0]),
+        ("subtract", "vector", [-3.0, 7.0, -3.0]),
+        ("multiply", "vector", [4.0, -10.0, 18.0]),
+        ("cross", "vector", [27.0, 6.0, -13.0]),
+        ("scale", "vector", [2.0, 4.0, 6.0]),
+        ("minimum", "vector", [1.0, -5.0, 3.0]),
+        ("absolute", "vector", [1.0, 2.0, 3.0]),
+        ("dot", "value", [12.0, 0.0, 0.0]),
+        ("length", "value", [14f32.sqrt(), 0.0, 0.0]),
+        (
+            "distance",
+            "value",
+            [(9.0f32 + 49.0 + 9.0).sqrt(), 0.0, 0.0],
+        ),
+    ];
+    let mut cases: Vec<Case> = table
+        .iter()
+        .map(|(o, s, _)| case(&op(o), "v", s, p))
+        .collect();
+    let mixes = graph(&[
+        ("geo", Node::new("geometry")),
+        (
+            "x",
+            Node::new("separate_xyz").input("vector", link("geo", "position")),
+        ),
+        (
+            "f",
+            Node::new("mix_float")
+                .input("factor", 0.25)
+                .input("a", link("x", "x"))
+                .input("b", 5.0),
+        ),
+        (
+            "v",
+            Node::new("mix_vector")
+                .input("factor", 0.5)
+                .input("a", link("geo", "position"))
+                .input("b", [3.0, 4.0, 5.0]),
+        ),
+        (
+            "c",
+            Node::new("combine_xyz")
+                .input("x", link("x", "z"))
+                .input("y", link("x", "y"))
+                .input("z", link("x", "x")),
+        ),
+        ("vc", Node::new("vertex_color")),
+        (
+            "rgb",
+            Node::new("separate_color").input("color", link("geo", "position")),
+        ),
+    ]);
+    cases.push(case(&mixes, "f", "result", p));
+    cases.push(case(&mixes, "v", "result", p));
+    cases.push(case(&mixes, "c", "vector", p));
+    cases.push(case(&mixes, "vc", "color", p));
+    cases.push(case(&mixes, "rgb", "green", p));
+    let v = evaluate(&cases);
+    for (i, (o, _, want)) in table.iter().enumerate() {
+        for k in 0..3 {
+            assert_near(&format!("vector math {o}"), v[i][k], want[k], 1e-4);
+        }
+    }
+    let n = table.len();
+    assert_near("mix float", v[n][0], 2.0, 1e-5);
+    for (k, want) in [2.0, 3.0, 4.0].iter().enumerate() {
+        assert_near("mix vector", v[n + 1][k], *want, 1e-5);
+    }
+    for (k, want) in [3.0, 2.0, 1.0].iter().enumerate() {
+        assert_near("combine xyz", v[n + 2][k], *want, 1e-6);
+    }
+    for k in 0..3 {
+        assert_near(
+            "vertex colour of a mesh without colours",
+            v[n + 3][k],
+            1.0,
+            0.0,
+        );
+    }
+    assert_near("separate rgb", v[n + 4][0], 2.0, 0.0);
+}

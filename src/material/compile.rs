@@ -50,6 +50,8 @@ pub struct MaterialTraits {
 
 #[derive(Clone, Debug)]
 pub struct CompiledMaterial {
+    /// The material's name, for messages.
+    pub material: String,
     pub function: String,
     /// The material's WGSL: helper functions, then `function`.
     pub code: String,
@@ -133,6 +135,7 @@ pub fn compile_with_textures(
     code.push_str(&body.statements);
     let _ = writeln!(code, "    return {};\n}}", body.roots[0]);
     Ok(CompiledMaterial {
+        material: material.to_owned(),
         function: function.to_owned(),
         code,
         calls: emitter.calls,
@@ -201,6 +204,7 @@ pub fn compile_value_with_textures(
     code.push_str(&body.statements);
     let _ = writeln!(code, "    return {value};\n}}");
     Ok(CompiledMaterial {
+        material: material.to_owned(),
         function: function.to_owned(),
         code,
         calls: emitter.calls,

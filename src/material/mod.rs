@@ -144,13 +144,18 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
     for (_, m) in materials {
         roots.extend(m.calls.iter().cloned());
     }
-    let mut out =
-        String::from("// Node library items used by this scene's materials (shaders/nodes/).\n");
+    // `// @part` lines start the parts kernel assembly names in its errors.
+    let mut out = String::from("// @part node library items used (shaders/nodes/)\n");
     out.push_str(&library::closure(roots));
     for (_, m) in materials {
+        out.push_str(&format!(
+            "// @part material \"{}\" (generated)\n",
+            m.material
+        ));
         out.push_str(&m.code);
         out.push('\n');
     }
+    out.push_str("// @part material dispatcher (generated)\n");
     out.push_str("fn evaluate_material(id: u32, sp: ShadingPoint) -> MaterialEval {\n");
     if !materials.is_empty() {
         out.push_str("    switch (id) {\n");
@@ -280,7 +285,8 @@ pub fn resolve_files(graph: &mut Graph, base: &Path) {
                 continue;
             }
             if let Some(Param::Text(file)) = node.params.get_mut("file") {
-                if Path::new(file.as_str()).is_relative() {
+                // `image:N` names an image an importer handed over in memory.
+                if !file.starts_with("image:") && Path::new(file.as_str()).is_relative() {
                     *file = base.join(&*file).to_string_lossy().into_owned();
                 }
             }

@@ -20,10 +20,26 @@ pub struct TextureImage {
 }
 
 pub fn load_texture(path: &Path) -> Result<TextureImage, String> {
-    let mut reader = image::ImageReader::open(path)
+    let reader = image::ImageReader::open(path)
         .map_err(|e| format!("cannot open {}: {e}", path.display()))?
         .with_guessed_format()
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
+    decode(reader, &path.display().to_string())
+}
+
+/// An encoded image held in memory (embedded in an imported file); `what` names it.
+pub fn decode_texture(bytes: &[u8], what: &str) -> Result<TextureImage, String> {
+    let reader = image::ImageReader::new(std::io::Cursor::new(bytes))
+        .with_guessed_format()
+        .map_err(|e| format!("cannot read {what}: {e}"))?;
+    decode(reader, what)
+}
+
+fn decode<R: std::io::BufRead + std::io::Seek>(
+    mut reader: image::ImageReader<R>,
+    what: &str,
+) -> Result<TextureImage, String> {
+    let path = what;
     let mut limits = image::Limits::default();
     limits.max_image_width = Some(MAX_TEXTURE_SIZE);
     limits.max_image_height = Some(MAX_TEXTURE_SIZE);
@@ -31,7 +47,7 @@ pub fn load_texture(path: &Path) -> Result<TextureImage, String> {
     reader.limits(limits);
     let img = reader
         .decode()
-        .map_err(|e| format!("cannot decode {}: {e}", path.display()))?;
+        .map_err(|e| format!("cannot decode {path}: {e}"))?;
     let (width, height) = (img.width(), img.height());
     let eight_bit = matches!(
         img.color(),

@@ -371,7 +371,23 @@ pub const TRIANGLE_PAGE_BINDING: u32 = 16;
 /// (`crate::material::scene_materials_wgsl`) spliced in before the integrator.
 pub fn path_tracing_kernel(features: &KernelFeatures, materials: &str) -> KernelSource {
     let mut source = KernelSource::with_library("path tracer", features);
-    source.push("(generated) scene materials", materials);
+    // Each `// @part LABEL` line of the materials starts a part of that name.
+    let mut label = "(generated) scene materials".to_owned();
+    let mut part = String::new();
+    for line in materials.lines() {
+        if let Some(next) = line.strip_prefix("// @part ") {
+            if !part.is_empty() {
+                source.push(&label, &part);
+            }
+            label = next.to_owned();
+            part.clear();
+        }
+        part.push_str(line);
+        part.push('\n');
+    }
+    if !part.is_empty() {
+        source.push(&label, &part);
+    }
     source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
     source
 }

@@ -119,10 +119,22 @@ impl Material {
     /// A material computed by a node graph. The graph is compiled once here, so errors
     /// surface when the material is made, naming the node and socket.
     pub fn from_graph(name: &str, graph: Graph) -> Result<Self, GraphError> {
+        Self::from_graph_with(name, graph, &|file| {
+            load_texture(std::path::Path::new(file))
+        })
+    }
+
+    /// [`Material::from_graph`] with images loaded by `load` (importers resolve images
+    /// embedded in the imported file).
+    pub fn from_graph_with(
+        name: &str,
+        graph: Graph,
+        load: &dyn Fn(&str) -> Result<TextureImage, String>,
+    ) -> Result<Self, GraphError> {
         let compiled = crate::material::compile(name, &graph, "material")?;
         let mut images = std::collections::BTreeMap::new();
         for (file, node) in &compiled.images {
-            let image = load_texture(std::path::Path::new(file)).map_err(|message| GraphError {
+            let image = load(file).map_err(|message| GraphError {
                 material: name.to_owned(),
                 node: Some(node.clone()),
                 socket: Some("file".into()),

@@ -1,0 +1,332 @@
+//! The plugin host: finds importer and exporter libraries, checks their ABI version
+//! before calling anything, and runs them so that a broken plugin or a broken file gives
+//! an error instead of taking Kiln down (plugins built with `kiln-plugin-api` turn their
+//! panics into errors; the host's own callbacks never unwind into a plugin).
+//!
+//! Discovery order: `--plugin-dir` folders, `$KILN_PLUGIN_PATH`, the executable's folder,
+//! and its `deps` folder, where `cargo build` leaves the workspace's plugins (there only
+//! files named `libkiln_*`/`kiln_*` are considered). The first plugin of a name wins.
+
+mod builder;
+
+use std::ffi::{CStr, CString, c_char};
+use std::path::{Path, PathBuf};
+
+use kiln_plugin_api as api;
+use thiserror::Error;
+
+pub use builder::Imported;
+
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum PluginKind {
+    Importer,
+    Exporter,
+}
+
+impl std::fmt::Display for PluginKind {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(match self {
+            PluginKind::Importer => "importer",
+            PluginKind::Exporter => "exporter",
+        })
+    }
+}
+
+#[derive(Clone, Debug)]
+pub struct PluginInfo {
+    pub name: String,
+    pub version: String,
+    pub kind: PluginKind,
+    pub extensions: Vec<String>,
+    pub path: PathBuf,
+}
+
+/// A library that was not loaded, and why.
+#[derive(Clone, Debug)]
+pub struct Rejected {
+    pub path: PathBuf,
+    pub reason: String,
+}
+
+#[derive(Debug, Error)]
+pub enum PluginError {
+    #[error("no {kind} plugin handles \".{extension}\" files (see `kiln plugins`)")]
+    NoPlugin { kind: PluginKind, extension: String },
+    #[error("{plugin} failed on {path}: {message}")]
+    Failed {
+        plugin: String,
+        path: String,
+        message: String,
+    },
+    #[error("{0}")]
+    Invalid(String),
+}
+
+struct Loaded {
+    info: PluginInfo,
+    import: Option<api::ImportFn>,
+    export: Option<api::ExportFn>,
+    // Last: the functions above point into it.
+    _library: libloading::Library,
+}
+
+#[derive(Default)]
+pub struct PluginHost {
+    loaded: Vec<Loaded>,
+    pub rejected: Vec<Rejected>,
+}
+
+fn is_library(path: &Path) -> bool {
+    matches!(
+        path.extension().and_then(|e| e.to_str()),
+        Some("so") | Some("dylib") | Some("dll")
+    )
+}
+
+/// Reads a descriptor string; `what` names it in errors.
+unsafe fn descriptor_str(p: *const c_char, what: &str) -> Result<String, String> {
+    if p.is_null() {
+        return Err(format!("the descriptor's {what} is null"));
+    }
+    unsafe { CStr::from_ptr(p) }
+        .to_str()
+        .map(str::to_owned)
+        .map_err(|_| format!("the descriptor's {what} is not UTF-8"))
+}
+
+impl PluginHost {
+    /// Loads the plugins of the standard places and of `extra_dirs` (searched first).
+    pub fn discover(extra_dirs: &[PathBuf]) -> Self {
+        let mut host = Self::default();
+        for dir in extra_dirs {
+            host.load_dir(dir, false);
+        }
+        if let Some(paths) = std::env::var_os("KILN_PLUGIN_PATH") {
+            for dir in std::env::split_paths(&paths) {
+                host.load_dir(&dir, false);
+            }
+        }
+        if let Some(exe_dir) = std::env::current_exe()
+            .ok()
+            .and_then(|e| e.parent().map(Path::to_owned))
+        {
+            host.load_dir(&exe_dir, true);
+            host.load_dir(&exe_dir.join("deps"), true);
+        }
+        host
+    }
+
+    /// Loads every library in `dir`; with `kiln_only`, only those named `libkiln_*` or
+    /// `kiln_*` (a build folder holds unrelated libraries).
+    pub fn load_dir(&mut self, dir: &Path, kiln_only: bool) {
+        let Ok(entries) = std::fs::read_dir(dir) else {
+            return;
+        };
+        let mut files: Vec<PathBuf> = entries
+            .filter_map(|e| e.ok().map(|e| e.path()))
+            .filter(|p| is_library(p))
+            .collect();
+        files.sort();
+        for path in files {
+            let name = path.file_name().and_then(|n| n.to_str()).unwrap_or("");
+            if kiln_only && !(name.starts_with("libkiln_") || name.starts_with("kiln_")) {
+                continue;
+            }
+            if let Err(reason) = self.load_file(&path) {
+                tracing::warn!("plugin {} skipped: {reason}", path.display());
+                self.rejected.push(Rejected { path, reason });
+            }
+        }
+    }
+
+    /// Loads one library; the reason it was not loaded otherwise.
+    pub fn load_file(&mut self, path: &Path) -> Result<(), String> {
+        // Loading runs the library's initialisers: only libraries put where plugins go
+        // are loaded.
+        let library =
+            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load: {e}"))?;
+        let descriptor_fn = unsafe {
+            library.get::<unsafe extern "C" fn() -> *const api::PluginDescriptor>(
+                api::DESCRIPTOR_SYMBOL,
+            )
+        }
+        .map_err(|_| "not a Kiln plugin: no kiln_plugin_descriptor symbol".to_owned())?;
+        let descriptor = unsafe { descriptor_fn() };
+        if descriptor.is_null() {
+            return Err("kiln_plugin_descriptor returned null".into());
+        }
+        // Only the version field is read before the version is known to match.
+        let version = unsafe { std::ptr::addr_of!((*descriptor).abi_version).read() };
+        if version != api::ABI_VERSION {
+            return Err(format!(
+                "plugin ABI version {version}, this Kiln speaks version {}",
+                api::ABI_VERSION
+            ));
+        }
+        let d = unsafe { &*descriptor };
+        let kind = match d.kind {
+            api::KIND_IMPORTER if d.import.is_some() => PluginKind::Importer,
+            api::KIND_EXPORTER if d.export.is_some() => PluginKind::Exporter,
+            k => return Err(format!("kind {k} without its function")),
+        };
+        let info = PluginInfo {
+            name: unsafe { descriptor_str(d.name, "name") }?,
+            version: unsafe { descriptor_str(d.version, "version") }?,
+            kind,
+            extensions: unsafe { descriptor_str(d.extensions, "extensions") }?
+                .split(',')
+                .map(|e| e.trim().trim_start_matches('.').to_ascii_lowercase())
+                .filter(|e| !e.is_empty())
+                .collect(),
+            path: path.to_owned(),
+        };
+        if let Some(other) = self
+            .loaded
+            .iter()
+            .find(|l| l.info.name == info.name && l.info.kind == info.kind)
+        {
+            return Err(format!(
+                "{} {} is already loaded from {}",
+                info.kind,
+                info.name,
+                other.info.path.display()
+            ));
+        }
+        self.loaded.push(Loaded {
+            info,
+            import: d.import,
+            export: d.export,
+            _library: library,
+        });
+        Ok(())
+    }
+
+    pub fn plugins(&self) -> impl Iterator<Item = &PluginInfo> {
+        self.loaded.iter().map(|l| &l.info)
+    }
+
+    fn find(&self, kind: PluginKind, path: &Path) -> Result<&Loaded, PluginError> {
+        let extension = path
+            .extension()
+            .and_then(|e| e.to_str())
+            .unwrap_or("")
+            .to_ascii_lowercase();
+        self.loaded
+            .iter()
+            .find(|l| l.info.kind == kind && l.info.extensions.contains(&extension))
+            .ok_or(PluginError::NoPlugin { kind, extension })
+    }
+
+    /// Whether a plugin of `kind` handles `path`'s extension.
+    pub fn handles(&self, kind: PluginKind, path: &Path) -> bool {
+        self.find(kind, path).is_ok()
+    }
+
+    /// Imports `path` with the importer for its extension.
+    pub fn import(&self, path: &Path) -> Result<Imported, PluginError> {
+        let plugin = self.find(PluginKind::Importer, path)?;
+        let import = plugin.import.expect("importers have an import function");
+        let c_path = CString::new(path.to_string_lossy().as_bytes()).map_err(|_| {
+            PluginError::Invalid(format!("{}: the path holds a NUL", path.display()))
+        })?;
+        let mut state = builder::ImportState::new(path);
+        let raw = state.raw_builder();
+        let mut message = vec![0 as c_char; 4096];
+        let mut error = api::ErrorBuffer {
+            data: message.as_mut_ptr(),
+            capacity: message.len(),
+        };
+        let status = unsafe { import(c_path.as_ptr(), &raw, &mut error) };
+        if status != api::STATUS_OK {
+            let text = unsafe { CStr::from_ptr(message.as_ptr()) }
+                .to_string_lossy()
+                .into_owned();
+            return Err(PluginError::Failed {
+                plugin: plugin.info.name.clone(),
+                path: path.display().to_string(),
+                message: if text.is_empty() {
+                    format!("error status {status}")
+                } else {
+                    text
+                },
+            });
+        }
+        state.finish().map_err(|message| PluginError::Failed {
+            plugin: plugin.info.name.clone(),
+            path: path.display().to_string(),
+            message,
+        })
+    }
+
+    /// Writes `film` to `path` with the exporter for its extension.
+    pub fn export(&self, path: &Path, film: &ExportFilm, options: &str) -> Result<(), PluginError> {
+        let plugin = self.find(PluginKind::Exporter, path)?;
+        let export = plugin.export.expect("exporters have an export function");
+        let c_path = CString::new(path.to_string_lossy().as_bytes()).map_err(|_| {
+            PluginError::Invalid(format!("{}: the path holds a NUL", path.display()))
+        })?;
+        let c_options = CString::new(options.replace('\0', " ")).expect("NULs replaced");
+        let names: Vec<CString> = film
+            .layers
+            .iter()
+            .map(|l| CString::new(l.name.replace('\0', " ")).expect("NULs replaced"))
+            .collect();
+        let layers: Vec<api::LayerView> = film
+            .layers
+            .iter()
+            .zip(&names)
+            .map(|(l, n)| api::LayerView {
+                name: n.as_ptr(),
+                channels: l.channels,
+                data: l.data.as_ptr(),
+            })
+            .collect();
+        let view = api::FilmView {
+            width: film.width,
+            height: film.height,
+            radiance: film.radiance.as_ptr(),
+            display: film.display.as_ptr(),
+            layer_count: layers.len() as u32,
+            layers: layers.as_ptr(),
+        };
+        let mut message = vec![0 as c_char; 4096];
+        let mut error = api::ErrorBuffer {
+            data: message.as_mut_ptr(),
+            capacity: message.len(),
+        };
+        let status = unsafe { export(c_path.as_ptr(), &view, c_options.as_ptr(), &mut error) };
+        if status != api::STATUS_OK {
+            let text = unsafe { CStr::from_ptr(message.as_ptr()) }
+                .to_string_lossy()
+                .into_owned();
+            return Err(PluginError::Failed {
+                plugin: plugin.info.name.clone(),
+                path: path.display().to_string(),
+                message: if text.is_empty() {
+                    format!("error status {status}")
+                } else {
+                    text
+                },
+            });
+        }
+        Ok(())
+    }
+}
+
+/// A named AOV layer of an exported film.
+pub struct ExportLayer {
+    pub name: String,
+    pub channels: u32,
+    pub data: Vec<f32>,
+}
+
+/// The film as exporters receive it.
+pub struct ExportFilm {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGBA.
+    pub radiance: Vec<f32>,
+    /// Tonemapped, sRGB-encoded RGBA in [0, 1].
+    pub display: Vec<f32>,
+    pub layers: Vec<ExportLayer>,
+}
