@@ -12,6 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
+use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
@@ -24,6 +25,10 @@ struct Cli {
     /// Graphics API to run on (default: the best the system offers).
     #[arg(long, global = true, value_enum)]
     backend: Option<BackendArg>,
+    /// Also load plugins from this folder (searched before $KILN_PLUGIN_PATH and the
+    /// folder of the executable); may be given several times.
+    #[arg(long = "plugin-dir", global = true, value_name = "DIR")]
+    plugin_dirs: Vec<PathBuf>,
     #[command(subcommand)]
     command: Command,
 }
@@ -74,6 +79,15 @@ enum Command {
     Info,
     /// Measure samples/s, rays/s and BVH build time; prints a Markdown table.
     Bench(kiln::bench::BenchArgs),
+    /// List the importer and exporter plugins found, and the libraries refused.
+    Plugins,
+    /// Convert a file an importer plugin reads (glTF, OBJ, …) into a Kiln scene.
+    Import {
+        file: PathBuf,
+        /// The scene file to write; meshes and images go to `<stem>.assets/` beside it.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
     /// Check material graphs (.kmat) and show the WGSL they compile to.
     #[command(subcommand)]
     Material(MaterialCommand),
@@ -190,8 +204,11 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let backend = cli.backend.map(Backend::from);
+    let plugins = || PluginHost::discover(&cli.plugin_dirs);
     let result = match cli.command {
-        Command::Render(args) => render(args, backend),
+        Command::Render(args) => render(args, backend, &plugins()),
+        Command::Plugins => list_plugins(&plugins()),
+        Command::Import { file, output } => import(&plugins(), &file, &output),
         Command::Info => info(backend),
         Command::Bench(args) => kiln::bench::run(&args, backend),
         Command::Material(command) => material(command),
@@ -260,8 +277,20 @@ fn info(backend: Option<Backend>) -> Result<()> {
     Ok(())
 }
 
-fn load(path: Option<&Path>) -> Result<(Scene, String)> {
+fn load(path: Option<&Path>, plugins: &PluginHost) -> Result<(Scene, String)> {
     match path {
+        Some(p) if plugins.handles(PluginKind::Importer, p) => {
+            let imported = import_file(plugins, p)?;
+            let mut scene = imported.scene;
+            if !imported.has_camera {
+                scene.camera = kiln::scene::frame_camera(&scene);
+            }
+            if !imported.has_lights && scene.environment == Vec3::ZERO {
+                // A file without lights is shown under a neutral white sky.
+                scene.environment = Vec3::splat(0.8);
+            }
+            Ok((scene, p.display().to_string()))
+        }
         Some(p) => Ok((scene::load_scene(p)?, p.display().to_string())),
         None => Ok((
             scene::default_scene()?,
@@ -270,9 +299,61 @@ fn load(path: Option<&Path>) -> Result<(Scene, String)> {
     }
 }
 
-fn render(args: RenderArgs, backend: Option<Backend>) -> Result<()> {
+fn import_file(plugins: &PluginHost, file: &Path) -> Result<kiln::plugin::Imported> {
+    let imported = plugins.import(file)?;
+    for w in &imported.warnings {
+        eprintln!("warning: {}: {w}", file.display());
+    }
+    Ok(imported)
+}
+
+fn import(plugins: &PluginHost, file: &Path, output: &Path) -> Result<()> {
+    let imported = import_file(plugins, file)?;
+    let mut scene = imported.scene;
+    if !imported.has_camera {
+        scene.camera = kiln::scene::frame_camera(&scene);
+    }
+    scene::save_scene(&scene, output, &imported.images)?;
+    eprintln!(
+        "wrote {}: {} meshes, {} materials, {} instances, {} lights",
+        output.display(),
+        scene.meshes.len(),
+        scene.materials.len(),
+        scene.instances.len(),
+        scene.lights.len()
+    );
+    Ok(())
+}
+
+fn list_plugins(plugins: &PluginHost) -> Result<()> {
+    let mut any = false;
+    for p in plugins.plugins() {
+        any = true;
+        println!(
+            "{} {} ({}; .{}): {}",
+            p.name,
+            p.version,
+            p.kind,
+            p.extensions.join(", ."),
+            p.path.display()
+        );
+    }
+    if !any {
+        println!(
+            "no plugins found (looked in --plugin-dir, $KILN_PLUGIN_PATH and next to the executable)"
+        );
+    }
+    for r in &plugins.rejected {
+        println!("refused {}: {}", r.path.display(), r.reason);
+    }
+    Ok(())
+}
+
+fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> Result<()> {
     // Refuse an unwritable format before spending minutes on the render.
-    kiln::film::output::OutputFormat::from_path(&args.output)?;
+    if !plugins.handles(PluginKind::Exporter, &args.output) {
+        kiln::film::output::OutputFormat::from_path(&args.output)?;
+    }
     if let Some(t) = args.time_limit
         && !(t.is_finite() && t > 0.0)
     {
@@ -281,7 +362,7 @@ fn render(args: RenderArgs, backend: Option<Backend>) -> Result<()> {
     if !args.exposure.is_finite() {
         bail!("--exposure must be a finite number of stops");
     }
-    let (mut scene, name) = load(args.scene.as_deref())?;
+    let (mut scene, name) = load(args.scene.as_deref(), plugins)?;
     match args.environment {
         Some(EnvironmentArg::Uniform(colour)) => {
             scene.environment = colour;
@@ -372,7 +453,15 @@ fn render(args: RenderArgs, backend: Option<Backend>) -> Result<()> {
         exposure_ev: args.exposure,
         tonemap: args.tonemap.into(),
     };
-    write_image(&args.output, &film, view)?;
+    if plugins.handles(PluginKind::Exporter, &args.output) {
+        plugins.export(
+            &args.output,
+            &ExportFilm::from_film(&film, view, Vec::new()),
+            "",
+        )?;
+    } else {
+        write_image(&args.output, &film, view)?;
+    }
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     let reason = if stats.completed {
         ""

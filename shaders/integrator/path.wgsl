@@ -20,6 +20,11 @@ fn is_finite3(v: vec3<f32>) -> bool {
 
 var<private> rays_traced: u32;
 
+// The AOVs of the current sample: what the camera ray's first surface looks like.
+var<private> aov_albedo: vec3<f32>;
+var<private> aov_normal: vec3<f32>;
+var<private> aov_depth: f32;
+
 // Surfaces a path may pass through (alpha cut-outs) before it counts as lost.
 const MAX_PASS_THROUGH: u32 = 64u;
 
@@ -214,6 +219,12 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             frame = frame_from_normal_tangent(ns, s.dpdu, me.anisotropy_rotation);
         }
         let wo = to_local(frame, -ray.dir);
+        if (FEATURE_AOVS && depth == 0u) {
+            let dielectric = 1.0 - p.metallic;
+            aov_albedo = mix(p.base_color * mix(p.base_weight, 1.0, p.metallic), p.transmission_color, p.transmission_weight * dielectric);
+            aov_normal = ns;
+            aov_depth = hit.t;
+        }
 
         if (nee) {
             radiance += throughput * sample_direct(s, ng, frame, wo, p);
@@ -264,13 +275,22 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     var compensation = film_compensation[pixel];
     var non_finite = 0u;
     rays_traced = 0u;
+    var aov_a = vec4<f32>(0.0);
+    var aov_n = vec4<f32>(0.0);
     for (var i = 0u; i < params.sample_count; i++) {
         rng_seed(pixel, params.sample_start + i, params.seed);
+        aov_albedo = vec3<f32>(0.0);
+        aov_normal = vec3<f32>(0.0);
+        aov_depth = 0.0;
         let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + vec2<f32>(sample_tent(rand()), sample_tent(rand()));
         var l = trace_path(camera_ray(film_pos, rand2()));
         if (!is_finite3(l)) {
             non_finite++;
             l = vec3<f32>(0.0);
+        }
+        if (FEATURE_AOVS) {
+            aov_a += vec4<f32>(aov_albedo, aov_depth);
+            aov_n += vec4<f32>(aov_normal, select(0.0, 1.0, aov_depth > 0.0));
         }
         // Kahan summation; w counts samples.
         let y = vec4<f32>(l, 1.0) - compensation;
@@ -280,6 +300,10 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     film_sum[pixel] = sum;
     film_compensation[pixel] = compensation;
+    if (FEATURE_AOVS) {
+        film_aov[2u * pixel] += aov_a;
+        film_aov[2u * pixel + 1u] += aov_n;
+    }
     atomicAdd(&stats.rays, rays_traced);
     if (non_finite > 0u) {
         atomicAdd(&stats.non_finite, non_finite);

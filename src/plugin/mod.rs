@@ -132,6 +132,15 @@ impl PluginHost {
             if kiln_only && !(name.starts_with("libkiln_") || name.starts_with("kiln_")) {
                 continue;
             }
+            // Cargo leaves the same library in the output folder and in its deps/: a
+            // standard place's copy of a library already seen is not loaded twice.
+            let seen = |p: &Path| p.file_name() == path.file_name();
+            if kiln_only
+                && (self.loaded.iter().any(|l| seen(&l.info.path))
+                    || self.rejected.iter().any(|r| seen(&r.path)))
+            {
+                continue;
+            }
             if let Err(reason) = self.load_file(&path) {
                 tracing::warn!("plugin {} skipped: {reason}", path.display());
                 self.rejected.push(Rejected { path, reason });
@@ -329,4 +338,32 @@ pub struct ExportFilm {
     /// Tonemapped, sRGB-encoded RGBA in [0, 1].
     pub display: Vec<f32>,
     pub layers: Vec<ExportLayer>,
+}
+
+impl ExportFilm {
+    /// The film's mean radiance, and its display rendering under `view`.
+    pub fn from_film(
+        film: &crate::film::Film,
+        view: crate::film::output::ViewSettings,
+        layers: Vec<ExportLayer>,
+    ) -> Self {
+        let mut radiance = Vec::with_capacity(film.width as usize * film.height as usize * 4);
+        let mut display = Vec::with_capacity(radiance.capacity());
+        for y in 0..film.height {
+            for x in 0..film.width {
+                let c = film.pixel(x, y);
+                radiance.extend([c.x, c.y, c.z, 1.0]);
+                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
+                display.extend(d.to_array().map(crate::film::tonemap::srgb_encode));
+                display.push(1.0);
+            }
+        }
+        Self {
+            width: film.width,
+            height: film.height,
+            radiance,
+            display,
+            layers,
+        }
+    }
 }

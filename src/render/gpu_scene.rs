@@ -625,6 +625,12 @@ pub fn scene_bind_group_layout(
     if features.textures {
         entries.push(entry(super::kernel::TEXTURE_BINDING, read_only));
     }
+    if features.aovs {
+        entries.push(entry(
+            super::kernel::AOV_BINDING,
+            wgpu::BufferBindingType::Storage { read_only: false },
+        ));
+    }
     for p in 1..features.node_pages {
         entries.push(entry(NODE_PAGE_BINDING + p - 1, read_only));
     }
@@ -643,6 +649,8 @@ pub struct FrameBuffers<'a> {
     pub film_sum: &'a wgpu::Buffer,
     pub film_compensation: &'a wgpu::Buffer,
     pub stats: &'a wgpu::Buffer,
+    /// The AOV film, when AOVs are rendered.
+    pub film_aov: Option<&'a wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -656,6 +664,7 @@ impl GpuScene {
             analytic_lights: self.analytic_light_count > 0,
             emissive_triangles: self.light_count > 0,
             textures: self.texture_count > 0,
+            aovs: false,
         }
     }
 
@@ -683,6 +692,9 @@ impl GpuScene {
         ];
         if self.texture_count > 0 {
             buffers.push((super::kernel::TEXTURE_BINDING, &self.textures));
+        }
+        if let Some(aov) = frame.film_aov {
+            buffers.push((super::kernel::AOV_BINDING, aov));
         }
         // Page 0 of each paged array has its own binding; further pages exist only when
         // used (see `scene_bind_group_layout`).

@@ -250,6 +250,8 @@ pub struct KernelFeatures {
     pub emissive_triangles: bool,
     /// Image textures: binds `texture_data`.
     pub textures: bool,
+    /// AOV layers (albedo, normal, depth): binds `film_aov`.
+    pub aovs: bool,
 }
 
 impl Default for KernelFeatures {
@@ -263,6 +265,7 @@ impl Default for KernelFeatures {
             analytic_lights: true,
             emissive_triangles: true,
             textures: true,
+            aovs: true,
         }
     }
 }
@@ -273,6 +276,7 @@ impl KernelFeatures {
         Self {
             node_pages: self.node_pages,
             triangle_pages: self.triangle_pages,
+            aovs: self.aovs,
             ..Self::default()
         }
     }
@@ -280,6 +284,8 @@ impl KernelFeatures {
 
 /// The binding of the image textures (`src/material/texture.rs`), when a scene has any.
 pub const TEXTURE_BINDING: u32 = 22;
+/// The binding of the AOV film, when AOVs are rendered.
+pub const AOV_BINDING: u32 = 23;
 
 /// The `FEATURE_*` constants the shaders test.
 pub fn features_wgsl(features: &KernelFeatures) -> String {
@@ -296,6 +302,17 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
         ("EMISSIVE_TRIANGLES", features.emissive_triangles),
     ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
+    }
+    text.push_str(&format!("const FEATURE_AOVS: bool = {};\n", features.aovs));
+    if features.aovs {
+        text.push_str(&format!(
+            "// Per pixel: (albedo sum, depth sum), (normal sum, hits).\n\
+             @group(0) @binding({AOV_BINDING}) var<storage, read_write> film_aov: array<vec4<f32>>;\n"
+        ));
+    } else {
+        // The integrator's AOV writes are behind FEATURE_AOVS; this stands in for the
+        // binding so the code still names a variable.
+        text.push_str("var<private> film_aov: array<vec4<f32>, 2>;\n");
     }
     if features.textures {
         text.push_str(&format!(

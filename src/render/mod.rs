@@ -14,4 +14,6 @@ mod renderer;
 pub mod tables;
 
 pub use context::{Backend, GpuContext, GpuError};
-pub use renderer::{Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer};
+pub use renderer::{
+    Aovs, Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer,
+};

@@ -105,6 +105,7 @@ pub fn run_probe(
             film_sum: &film,
             film_compensation: &compensation,
             stats: &stats,
+            film_aov: None,
         },
     );
     let padded_input = if input.is_empty() {

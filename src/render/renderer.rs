@@ -17,7 +17,7 @@ use thiserror::Error;
 use super::context::{GpuContext, GpuError};
 use super::gpu_scene::{FrameBuffers, GpuScene, UploadError, scene_bind_group_layout};
 use super::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
-use super::kernel::{KernelError, path_tracing_kernel};
+use super::kernel::{KernelError, KernelFeatures, path_tracing_kernel};
 use super::readback::{map_and_read, read_buffer};
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
@@ -65,6 +65,8 @@ pub struct RenderSettings {
     /// Compile only the lobes and light types the scene uses (the default); off builds
     /// the kernel with everything, for comparison.
     pub specialize: bool,
+    /// Also render the albedo, normal and depth AOVs ([`Renderer::read_aovs`]).
+    pub aovs: bool,
 }
 
 impl RenderSettings {
@@ -78,8 +80,18 @@ impl RenderSettings {
             light_sampling: true,
             page_bytes: None,
             specialize: true,
+            aovs: false,
         }
     }
+}
+
+/// Auxiliary images of the first surface each camera path meets (see
+/// [`Renderer::read_aovs`]): 3, 3 and 1 floats per pixel.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Aovs {
+    pub albedo: Vec<f32>,
+    pub normal: Vec<f32>,
+    pub depth: Vec<f32>,
 }
 
 /// Reported after every dispatch.
@@ -131,6 +143,7 @@ pub struct Renderer {
     params_buffer: wgpu::Buffer,
     film_sum: wgpu::Buffer,
     film_compensation: wgpu::Buffer,
+    film_aov: Option<wgpu::Buffer>,
     stats_buffer: wgpu::Buffer,
     stats_staging: wgpu::Buffer,
     base_params: GpuParams,
@@ -199,13 +212,20 @@ impl Renderer {
 
         let kernel_start = Instant::now();
         let device = &ctx.device;
-        let layout = scene_bind_group_layout(device, &gpu_scene.features());
+        let layout = scene_bind_group_layout(
+            device,
+            &KernelFeatures {
+                aovs: settings.aovs,
+                ..gpu_scene.features()
+            },
+        );
         let materials = crate::material::scene_materials_wgsl(scene)?;
-        let features = if settings.specialize {
+        let mut features = if settings.specialize {
             gpu_scene.features()
         } else {
             gpu_scene.features().everything()
         };
+        features.aovs = settings.aovs;
         let pipeline = path_tracing_kernel(&features, &materials).create_pipeline(
             &ctx,
             &[&layout],
@@ -236,6 +256,9 @@ impl Renderer {
         let film_sum = storage("film sum", film_bytes, wgpu::BufferUsages::empty());
         let film_compensation =
             storage("film compensation", film_bytes, wgpu::BufferUsages::empty());
+        let film_aov = settings
+            .aovs
+            .then(|| storage("film AOVs", 2 * film_bytes, wgpu::BufferUsages::empty()));
         let stats_size = std::mem::size_of::<GpuStats>() as u64;
         let stats_buffer = storage("stats", stats_size, wgpu::BufferUsages::empty());
         let stats_staging = device.create_buffer(&wgpu::BufferDescriptor {
@@ -258,6 +281,7 @@ impl Renderer {
                 film_sum: &film_sum,
                 film_compensation: &film_compensation,
                 stats: &stats_buffer,
+                film_aov: film_aov.as_ref(),
             },
         );
         let base_params = base_params(scene, &gpu_scene, &settings);
@@ -277,6 +301,7 @@ impl Renderer {
             params_buffer,
             film_sum,
             film_compensation,
+            film_aov,
             stats_buffer,
             stats_staging,
             base_params,
@@ -304,6 +329,9 @@ impl Renderer {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         encoder.clear_buffer(&self.film_sum, 0, None);
         encoder.clear_buffer(&self.film_compensation, 0, None);
+        if let Some(aov) = &self.film_aov {
+            encoder.clear_buffer(aov, 0, None);
+        }
         self.ctx.queue.submit([encoder.finish()]);
     }
 
@@ -417,6 +445,30 @@ impl Renderer {
         }
         stats.elapsed = start.elapsed();
         Ok(stats)
+    }
+
+    /// The AOVs averaged over the samples taken, per pixel from the top-left: albedo
+    /// (RGB), shading normal (world space, unit length where a surface was hit), depth
+    /// (distance from the camera to the first hit; 0 where the camera saw nothing). None
+    /// unless the settings asked for them.
+    pub fn read_aovs(&self) -> Result<Option<Aovs>, RenderError> {
+        let Some(buffer) = &self.film_aov else {
+            return Ok(None);
+        };
+        let raw = read_buffer(&self.ctx, buffer, buffer.size())?;
+        let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
+        let film = self.read_film()?;
+        let mut aovs = Aovs::default();
+        for (i, px) in raw.chunks_exact(2).enumerate() {
+            let samples = film.sums[i][3].max(1.0) as f32;
+            let [a, n] = [px[0], px[1]];
+            aovs.albedo.extend([a[0], a[1], a[2]].map(|v| v / samples));
+            aovs.depth.push(a[3] / samples);
+            let normal = glam::Vec3::new(n[0], n[1], n[2]);
+            let unit = normal.try_normalize().unwrap_or(glam::Vec3::ZERO);
+            aovs.normal.extend(unit.to_array());
+        }
+        Ok(Some(aovs))
     }
 
     /// Copies the film back from the device.

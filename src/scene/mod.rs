@@ -15,7 +15,7 @@ pub mod shapes;
 
 pub use camera::Camera;
 pub use environment::EnvironmentMap;
-pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene};
+pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene, save_scene};
 pub use light::Light;
 pub use material::Material;
 pub use mesh::Mesh;
@@ -217,4 +217,27 @@ pub fn validate_image_size(width: u32, height: u32) -> Result<(), String> {
         ));
     }
     Ok(())
+}
+
+/// A camera that frames every instance of `scene`: looking at the centre of their bounds
+/// from the front and a little above, at a distance that fits them in a 40° view.
+pub fn frame_camera(scene: &Scene) -> Camera {
+    let mut lo = Vec3::splat(f32::MAX);
+    let mut hi = Vec3::splat(f32::MIN);
+    for inst in &scene.instances {
+        for p in &scene.meshes[inst.mesh].positions {
+            let w = inst.transform.transform_point3(*p);
+            lo = lo.min(w);
+            hi = hi.max(w);
+        }
+    }
+    if lo.x > hi.x {
+        return Camera::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 40.0);
+    }
+    let centre = (lo + hi) * 0.5;
+    let radius = ((hi - lo).length() * 0.5).max(1e-6);
+    let fov = 40.0f32;
+    let distance = radius / (fov.to_radians() * 0.5).sin() * 1.05;
+    let direction = Vec3::new(0.0, 0.35, 1.0).normalize();
+    Camera::look_at(centre + direction * distance, centre, fov)
 }

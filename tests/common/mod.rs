@@ -25,6 +25,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         light_sampling: true,
         page_bytes: None,
         specialize: true,
+        aovs: false,
     }
 }
 

@@ -381,14 +381,39 @@ pub fn path_from_c(path: *const c_char) -> Result<std::path::PathBuf, String> {
     Ok(std::path::PathBuf::from(s))
 }
 
+thread_local! {
+    static PANIC_LOCATION: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+}
+
+/// A panic hook for this library's copy of std that records where a panic happened
+/// instead of printing to the host's terminal: the panic comes back as an error message.
+fn install_quiet_panic_hook() {
+    static ONCE: std::sync::Once = std::sync::Once::new();
+    ONCE.call_once(|| {
+        std::panic::set_hook(Box::new(|info| {
+            let location = info
+                .location()
+                .map(|l| format!("{}:{}", l.file(), l.line()));
+            PANIC_LOCATION.with(|p| *p.borrow_mut() = location);
+        }));
+    });
+}
+
 /// Runs `f`, turning an error or a panic into `STATUS_ERROR` and a message.
 #[doc(hidden)]
 pub fn guarded(error: *mut ErrorBuffer, f: impl FnOnce() -> Result<(), String>) -> i32 {
+    install_quiet_panic_hook();
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
     let message = match outcome {
         Ok(Ok(())) => return STATUS_OK,
         Ok(Err(e)) => e,
-        Err(payload) => format!("the plugin panicked: {}", panic_message(payload)),
+        Err(payload) => {
+            let location = PANIC_LOCATION.with(|p| p.borrow_mut().take());
+            match location {
+                Some(at) => format!("the plugin panicked at {at}: {}", panic_message(payload)),
+                None => format!("the plugin panicked: {}", panic_message(payload)),
+            }
+        }
     };
     if !error.is_null() {
         unsafe { (*error).write(&message) };

@@ -1,0 +1,222 @@
+//! Reading a `.gltf` or `.glb` file into the JSON model (`gltf::json::Root`) and the GLB's
+//! binary chunk, and checking it against the schema.
+//!
+//! The GLB container is parsed here rather than by the `gltf` crate, whose reader
+//! subtracts before it compares (a header length under 12 panics). Schema violations are
+//! reported as one warning and the import goes on: every later read is bounds-checked, so
+//! a broken reference costs the object that holds it, not the file. This module does not
+//! read buffers or accessors (see `buffers` and `accessor`).
+
+use std::path::Path;
+
+use gltf::json;
+use gltf::json::validation::{Checked, Validate};
+
+/// Files (and external buffers) larger than this are refused before they are read.
+pub const MAX_FILE_BYTES: u64 = 1 << 31;
+
+/// A parsed file: the JSON document and the GLB binary chunk, if any.
+pub struct Document {
+    pub root: json::Root,
+    pub blob: Option<Vec<u8>>,
+}
+
+/// Reads `path`, which may be either JSON glTF or binary GLB (told apart by the magic).
+pub fn read(path: &Path) -> Result<Document, String> {
+    let bytes = read_file(path)?;
+    parse(&bytes)
+}
+
+/// Reads a whole file after checking its size against [`MAX_FILE_BYTES`].
+pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
+    let fail = |e: std::io::Error| format!("cannot read {}: {e}", path.display());
+    let size = std::fs::metadata(path).map_err(fail)?.len();
+    if size > MAX_FILE_BYTES {
+        return Err(format!(
+            "{} is {size} bytes, more than the {MAX_FILE_BYTES} this importer reads",
+            path.display()
+        ));
+    }
+    std::fs::read(path).map_err(fail)
+}
+
+/// Parses the bytes of a `.gltf` or `.glb` file.
+pub fn parse(bytes: &[u8]) -> Result<Document, String> {
+    let (json_bytes, blob) = if bytes.starts_with(b"glTF") {
+        let (json_bytes, blob) = split_glb(bytes)?;
+        (json_bytes, blob.map(<[u8]>::to_vec))
+    } else {
+        (bytes, None)
+    };
+    // A UTF-8 byte-order mark is forbidden by the spec but written by some tools.
+    let json_bytes = json_bytes
+        .strip_prefix(b"\xEF\xBB\xBF")
+        .unwrap_or(json_bytes);
+    let root: json::Root = json::deserialize::from_slice(json_bytes)
+        .map_err(|e| format!("not a valid glTF JSON document: {e}"))?;
+    check_version(&root)?;
+    Ok(Document { root, blob })
+}
+
+fn check_version(root: &json::Root) -> Result<(), String> {
+    let version = &root.asset.version;
+    let major = version.split('.').next().unwrap_or("");
+    if major != "2" {
+        return Err(format!(
+            "glTF version \"{version}\" is not supported (this importer reads glTF 2.x)"
+        ));
+    }
+    Ok(())
+}
+
+fn le_u32(bytes: &[u8], at: usize) -> Option<u32> {
+    let b = bytes.get(at..at.checked_add(4)?)?;
+    Some(u32::from_le_bytes([b[0], b[1], b[2], b[3]]))
+}
+
+const CHUNK_JSON: u32 = 0x4E4F_534A;
+const CHUNK_BIN: u32 = 0x004E_4942;
+
+/// Splits a GLB (glTF 2.0 spec §4.4) into its JSON chunk and optional BIN chunk.
+/// Chunks of other types are skipped, as the spec asks.
+pub fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    let header = |what: &str| format!("not a valid GLB file: {what}");
+    let version = le_u32(bytes, 4).ok_or_else(|| header("truncated header"))?;
+    if version != 2 {
+        return Err(format!(
+            "GLB container version {version} is not supported (version 2 only)"
+        ));
+    }
+    let length = le_u32(bytes, 8).ok_or_else(|| header("truncated header"))? as usize;
+    if length < 12 || length > bytes.len() {
+        return Err(header(&format!(
+            "the header gives a length of {length} bytes; the file has {}",
+            bytes.len()
+        )));
+    }
+    let data = &bytes[..length];
+    let mut at = 12;
+    let mut json = None;
+    let mut bin = None;
+    let mut index = 0;
+    while at < data.len() {
+        let (Some(chunk_length), Some(kind)) = (le_u32(data, at), le_u32(data, at + 4)) else {
+            return Err(header(&format!("chunk {index} has a truncated header")));
+        };
+        let start = at + 8;
+        let end = start
+            .checked_add(chunk_length as usize)
+            .filter(|&end| end <= data.len())
+            .ok_or_else(|| {
+                header(&format!(
+                    "chunk {index} claims {chunk_length} bytes past the end of the file"
+                ))
+            })?;
+        let chunk = &data[start..end];
+        match (index, kind) {
+            (0, CHUNK_JSON) => json = Some(chunk),
+            (0, _) => return Err(header("the first chunk is not JSON")),
+            (1, CHUNK_BIN) => bin = Some(chunk),
+            (_, CHUNK_JSON) => return Err(header("more than one JSON chunk")),
+            (_, CHUNK_BIN) => return Err(header("a BIN chunk that is not the second chunk")),
+            _ => {}
+        }
+        // Chunks are padded to 4 bytes; a missing final padding is tolerated.
+        at = end.saturating_add(3) & !3;
+        index += 1;
+    }
+    let json = json.ok_or_else(|| header("no JSON chunk"))?;
+    Ok((json, bin))
+}
+
+/// Schema violations, as `path: problem` lines. Unsupported entries of
+/// `extensionsRequired` are left to `extensions::check`, which knows what this importer
+/// handles (the `gltf` crate only knows the extensions it parses).
+pub fn schema_problems(root: &mut json::Root) -> Vec<String> {
+    let mut problems = Vec::new();
+    // gltf-json's primitive check indexes `accessors` with the POSITION index unchecked:
+    // drop dangling POSITION references first (the primitive is then reported and skipped).
+    let accessor_count = root.accessors.len();
+    for (m, mesh) in root.meshes.iter_mut().enumerate() {
+        for (p, primitive) in mesh.primitives.iter_mut().enumerate() {
+            let key = Checked::Valid(json::mesh::Semantic::Positions);
+            let dangling = primitive.attributes.get(&key).map(|i| i.value());
+            if let Some(index) = dangling.filter(|&i| i >= accessor_count) {
+                problems.push(format!(
+                    "meshes[{m}].primitives[{p}].attributes.POSITION: accessor {index} does not exist"
+                ));
+                primitive.attributes.remove(&key);
+            }
+        }
+    }
+    let root = &*root;
+    root.validate(root, json::Path::new, &mut |path, error| {
+        let path = path();
+        let unsupported_required = matches!(error, json::validation::Error::Unsupported)
+            && path.as_str().starts_with("extensionsRequired");
+        if !unsupported_required {
+            problems.push(format!("{path}: {error}"));
+        }
+    });
+    problems
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn glb(chunks: &[(u32, &[u8])], length_delta: i64) -> Vec<u8> {
+        let mut body = Vec::new();
+        for (kind, data) in chunks {
+            body.extend_from_slice(&(data.len() as u32).to_le_bytes());
+            body.extend_from_slice(&kind.to_le_bytes());
+            body.extend_from_slice(data);
+            while body.len() % 4 != 0 {
+                body.push(b' ');
+            }
+        }
+        let mut out = b"glTF".to_vec();
+        out.extend_from_slice(&2u32.to_le_bytes());
+        out.extend_from_slice(&((12 + body.len()) as i64 + length_delta).to_le_bytes()[..4]);
+        out.extend_from_slice(&body);
+        out
+    }
+
+    #[test]
+    fn glb_chunks_are_split_and_unknown_chunks_skipped() {
+        let json = br#"{"asset":{"version":"2.0"}}"#;
+        let bytes = glb(&[(CHUNK_JSON, json), (CHUNK_BIN, b"abcd"), (7, b"xx")], 0);
+        let (j, b) = split_glb(&bytes).expect("valid GLB");
+        assert_eq!(j, json);
+        assert_eq!(b, Some(&b"abcd"[..]));
+        assert!(parse(&bytes).is_ok());
+    }
+
+    #[test]
+    fn glb_with_lying_lengths_is_an_error_not_a_panic() {
+        let json = br#"{"asset":{"version":"2.0"}}"#;
+        let good = glb(&[(CHUNK_JSON, json)], 0);
+        assert!(split_glb(&glb(&[(CHUNK_JSON, json)], 4)).is_err());
+        assert!(split_glb(&glb(&[(CHUNK_JSON, json)], -100)).is_err());
+        let mut huge_chunk = good.clone();
+        huge_chunk[12..16].copy_from_slice(&u32::MAX.to_le_bytes());
+        assert!(split_glb(&huge_chunk).is_err());
+        for n in 0..good.len() {
+            let _ = parse(&good[..n]);
+        }
+    }
+
+    #[test]
+    fn glb_whose_first_chunk_is_binary_is_refused() {
+        let bytes = glb(&[(CHUNK_BIN, b"abcd")], 0);
+        assert!(split_glb(&bytes).is_err());
+    }
+
+    #[test]
+    fn gltf_1_is_refused_with_its_version() {
+        let e = parse(br#"{"asset":{"version":"1.0"}}"#)
+            .err()
+            .expect("refused");
+        assert!(e.contains("1.0"), "{e}");
+    }
+}
