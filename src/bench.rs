@@ -111,6 +111,8 @@ fn measure(
 }
 
 pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
+    // The import first, so the memory it measures is not hidden under the renders' peak.
+    let import = measure_import(args.triangles);
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
     let mut scenes = vec![
@@ -160,5 +162,130 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
             );
         }
     }
+    println!();
+    match import {
+        Ok((time, extra, triangles)) => println!(
+            "glTF import ({triangles} triangles, .glb through the plugin): {:.0} ms, peak memory +{}",
+            time.as_secs_f64() * 1e3,
+            extra.map_or("unknown".into(), |b| format!(
+                "{:.0} MiB",
+                b as f64 / (1u64 << 20) as f64
+            ))
+        ),
+        Err(e) => println!("glTF import: not measured ({e:#})"),
+    }
     Ok(())
+}
+
+/// Writes `mesh` as a minimal binary glTF (one node, one primitive with positions and
+/// normals when present, u32 indices): the input of the import benchmark and tests.
+pub fn write_glb(mesh: &crate::scene::Mesh, path: &std::path::Path) -> std::io::Result<()> {
+    let mut bin: Vec<u8> = Vec::new();
+    let (mut lo, mut hi) = (Vec3::splat(f32::MAX), Vec3::splat(f32::MIN));
+    for p in &mesh.positions {
+        lo = lo.min(*p);
+        hi = hi.max(*p);
+        bin.extend(bytemuck::bytes_of(&p.to_array()));
+    }
+    let positions_len = bin.len();
+    let has_normals = mesh.normals.len() == mesh.positions.len();
+    if has_normals {
+        for n in &mesh.normals {
+            bin.extend(bytemuck::bytes_of(&n.to_array()));
+        }
+    }
+    let indices_offset = bin.len();
+    for t in &mesh.indices {
+        bin.extend(bytemuck::bytes_of(t));
+    }
+    let count = mesh.positions.len();
+    let normal_attr = if has_normals { r#","NORMAL":2"# } else { "" };
+    let normal_view = if has_normals {
+        format!(r#",{{"buffer":0,"byteOffset":{positions_len},"byteLength":{positions_len}}}"#)
+    } else {
+        String::new()
+    };
+    let normal_accessor = if has_normals {
+        format!(r#",{{"bufferView":2,"componentType":5126,"count":{count},"type":"VEC3"}}"#)
+    } else {
+        String::new()
+    };
+    let json = format!(
+        concat!(
+            r#"{{"asset":{{"version":"2.0","generator":"kiln bench"}},"scene":0,"scenes":[{{"nodes":[0]}}],"#,
+            r#""nodes":[{{"mesh":0}}],"meshes":[{{"primitives":[{{"attributes":{{"POSITION":0{normal_attr}}},"indices":1}}]}}],"#,
+            r#""buffers":[{{"byteLength":{total}}}],"#,
+            r#""bufferViews":[{{"buffer":0,"byteOffset":0,"byteLength":{plen}}},{{"buffer":0,"byteOffset":{ioff},"byteLength":{ilen}}}{normal_view}],"#,
+            r#""accessors":[{{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":[{lx},{ly},{lz}],"max":[{hx},{hy},{hz}]}},"#,
+            r#"{{"bufferView":1,"componentType":5125,"count":{icount},"type":"SCALAR"}}{normal_accessor}]}}"#
+        ),
+        normal_attr = normal_attr,
+        total = bin.len(),
+        plen = positions_len,
+        ioff = indices_offset,
+        ilen = bin.len() - indices_offset,
+        normal_view = normal_view,
+        count = count,
+        lx = lo.x,
+        ly = lo.y,
+        lz = lo.z,
+        hx = hi.x,
+        hy = hi.y,
+        hz = hi.z,
+        icount = mesh.indices.len() * 3,
+        normal_accessor = normal_accessor,
+    );
+    let mut json = json.into_bytes();
+    while json.len() % 4 != 0 {
+        json.push(b' ');
+    }
+    while bin.len() % 4 != 0 {
+        bin.push(0);
+    }
+    let total = 12 + 8 + json.len() + 8 + bin.len();
+    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+    use std::io::Write;
+    out.write_all(b"glTF")?;
+    out.write_all(&2u32.to_le_bytes())?;
+    out.write_all(&(total as u32).to_le_bytes())?;
+    out.write_all(&(json.len() as u32).to_le_bytes())?;
+    out.write_all(b"JSON")?;
+    out.write_all(&json)?;
+    out.write_all(&(bin.len() as u32).to_le_bytes())?;
+    out.write_all(b"BIN\0")?;
+    out.write_all(&bin)?;
+    out.flush()
+}
+
+/// Resident memory of this process (Linux /proc/self/status): (now, peak so far), bytes.
+pub fn memory() -> Option<(u64, u64)> {
+    let status = std::fs::read_to_string("/proc/self/status").ok()?;
+    let field = |name: &str| -> Option<u64> {
+        let line = status.lines().find(|l| l.starts_with(name))?;
+        Some(line.split_whitespace().nth(1)?.parse::<u64>().ok()? * 1024)
+    };
+    Some((field("VmRSS:")?, field("VmHWM:")?))
+}
+
+/// Imports a `triangles`-triangle glTF through the plugin host: (time, extra peak memory
+/// over the memory in use before, triangles imported). Run first in a process, before
+/// rendering raises the peak.
+pub fn measure_import(triangles: u32) -> Result<(Duration, Option<u64>, u64)> {
+    let host = crate::plugin::PluginHost::discover(&[]);
+    let dir = tempfile::tempdir()?;
+    let path = dir.path().join("sphere.glb");
+    {
+        let mesh = shapes::displaced_sphere(triangles);
+        write_glb(&mesh, &path)?;
+    }
+    let before = memory();
+    let t = Instant::now();
+    let imported = host.import(&path)?;
+    let elapsed = t.elapsed();
+    let after = memory();
+    let extra = match (before, after) {
+        (Some((rss, _)), Some((_, peak))) => Some(peak.saturating_sub(rss)),
+        _ => None,
+    };
+    Ok((elapsed, extra, imported.scene.triangle_count()))
 }

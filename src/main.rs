@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
+use kiln::plugin::{ExportFilm, ExportLayer, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
@@ -146,6 +146,10 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
+    /// Options for the exporter plugin, `key=value;…` (PNG: `bits=16`; JPEG: `quality=90`;
+    /// EXR: `compression=zip|piz|none`).
+    #[arg(long, default_value = "")]
+    export_options: String,
 }
 
 fn parse_size(s: &str) -> Result<(u32, u32), String> {
@@ -389,6 +393,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     }
     settings.seed = args.seed;
     settings.light_sampling = !args.no_light_sampling;
+    // An EXR written by a plugin gets the AOV layers too.
+    let exr = args
+        .output
+        .extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    settings.aovs = exr && plugins.handles(PluginKind::Exporter, &args.output);
 
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
@@ -454,10 +464,24 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         tonemap: args.tonemap.into(),
     };
     if plugins.handles(PluginKind::Exporter, &args.output) {
+        let mut layers = Vec::new();
+        if let Some(aovs) = renderer.read_aovs()? {
+            for (name, channels, data) in [
+                ("albedo", 3, aovs.albedo),
+                ("normal", 3, aovs.normal),
+                ("depth", 1, aovs.depth),
+            ] {
+                layers.push(ExportLayer {
+                    name: name.into(),
+                    channels,
+                    data,
+                });
+            }
+        }
         plugins.export(
             &args.output,
-            &ExportFilm::from_film(&film, view, Vec::new()),
-            "",
+            &ExportFilm::from_film(&film, view, layers),
+            &args.export_options,
         )?;
     } else {
         write_image(&args.output, &film, view)?;

@@ -3,7 +3,6 @@
 //! folder that is renamed over the target only when complete, so a failed or interrupted
 //! write never leaves a truncated image or destroys the previous one.
 
-use std::io::{BufWriter, Write};
 use std::path::{Path, PathBuf};
 
 use image::{ImageFormat, Rgb32FImage, RgbImage};
@@ -18,7 +17,8 @@ pub enum OutputError {
         "cannot tell the image format of {path}: use one of the extensions .png, .jpg, .jpeg, .exr"
     )]
     UnknownFormat { path: PathBuf },
-    #[error("cannot write {path}: {message}")]
+    /// `message` names the path.
+    #[error("{message}")]
     Write { path: PathBuf, message: String },
 }
 
@@ -60,64 +60,27 @@ pub fn to_srgb_image(film: &Film, view: ViewSettings) -> RgbImage {
     })
 }
 
+/// Writes the film atomically (`kiln_plugin_api::atomic`, shared with the exporter
+/// plugins): a complete image or none, never a truncated one.
 pub fn write_image(path: &Path, film: &Film, view: ViewSettings) -> Result<(), OutputError> {
     let format = OutputFormat::from_path(path)?;
-    let fail = |message: String| OutputError::Write {
-        path: path.to_owned(),
-        message,
-    };
-    let dir = match path.parent() {
-        Some(p) if !p.as_os_str().is_empty() => p,
-        _ => Path::new("."),
-    };
-    let mut temp = tempfile::Builder::new()
-        .prefix(".kiln-")
-        .suffix(".part")
-        .tempfile_in(dir)
-        .map_err(|e| {
-            fail(format!(
-                "cannot create a temporary file in {}: {e}",
-                dir.display()
-            ))
-        })?;
-    {
-        let mut writer = BufWriter::new(temp.as_file_mut());
+    kiln_plugin_api::atomic::write_atomically(path, |writer| {
         let result = match format {
-            OutputFormat::Png => to_srgb_image(film, view).write_to(&mut writer, ImageFormat::Png),
-            OutputFormat::Jpeg => {
-                to_srgb_image(film, view).write_to(&mut writer, ImageFormat::Jpeg)
-            }
+            OutputFormat::Png => to_srgb_image(film, view).write_to(writer, ImageFormat::Png),
+            OutputFormat::Jpeg => to_srgb_image(film, view).write_to(writer, ImageFormat::Jpeg),
             OutputFormat::Exr => {
                 let pixels: Vec<f32> = film.radiance().iter().flat_map(|c| c.to_array()).collect();
                 Rgb32FImage::from_raw(film.width, film.height, pixels)
                     .expect("one rgb triple per pixel")
-                    .write_to(&mut writer, ImageFormat::OpenExr)
+                    .write_to(writer, ImageFormat::OpenExr)
             }
         };
-        result.map_err(|e| fail(e.to_string()))?;
-        writer.flush().map_err(|e| fail(e.to_string()))?;
-    }
-    temp.as_file().sync_all().map_err(|e| fail(e.to_string()))?;
-    // Temporary files are private (0600 on Unix); the image should be as readable as any
-    // other file the user writes, or keep the permissions of the file it replaces.
-    if let Some(permissions) = final_permissions(path) {
-        std::fs::set_permissions(temp.path(), permissions).map_err(|e| fail(e.to_string()))?;
-    }
-    temp.persist(path).map_err(|e| fail(e.error.to_string()))?;
-    Ok(())
-}
-
-fn final_permissions(path: &Path) -> Option<std::fs::Permissions> {
-    if let Ok(existing) = std::fs::metadata(path) {
-        return Some(existing.permissions());
-    }
-    #[cfg(unix)]
-    {
-        use std::os::unix::fs::PermissionsExt;
-        Some(std::fs::Permissions::from_mode(0o644))
-    }
-    #[cfg(not(unix))]
-    None
+        result.map_err(|e| e.to_string())
+    })
+    .map_err(|message| OutputError::Write {
+        path: path.to_owned(),
+        message,
+    })
 }
 
 #[cfg(test)]

@@ -67,7 +67,7 @@ struct Loaded {
     import: Option<api::ImportFn>,
     export: Option<api::ExportFn>,
     // Last: the functions above point into it.
-    _library: libloading::Library,
+    _library: &'static libloading::Library,
 }
 
 #[derive(Default)]
@@ -152,8 +152,12 @@ impl PluginHost {
     pub fn load_file(&mut self, path: &Path) -> Result<(), String> {
         // Loading runs the library's initialisers: only libraries put where plugins go
         // are loaded.
-        let library =
-            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load: {e}"))?;
+        // Libraries are never unloaded: a Rust plugin's thread-local destructors (and any
+        // plugin's) would otherwise run after its code was unmapped, and crash. The host
+        // loads each library once per process.
+        let library: &'static libloading::Library = Box::leak(Box::new(
+            unsafe { libloading::Library::new(path) }.map_err(|e| format!("cannot load: {e}"))?,
+        ));
         let descriptor_fn = unsafe {
             library.get::<unsafe extern "C" fn() -> *const api::PluginDescriptor>(
                 api::DESCRIPTOR_SYMBOL,

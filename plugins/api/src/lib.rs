@@ -10,6 +10,8 @@
 //! [`export_exporter!`], which generate the descriptor and C shims that turn panics into
 //! errors. See `docs/PLUGINS.md` for complete examples.
 
+pub mod atomic;
+
 use std::ffi::{CStr, CString, c_char, c_void};
 
 /// Bumped on any change to the types below.
@@ -304,13 +306,13 @@ impl<'a> Film<'a> {
     /// # Safety
     /// `raw` and everything it points to must be valid for `'a`.
     pub unsafe fn from_raw(raw: &'a FilmView) -> Self {
-        let pixels = raw.width as usize * raw.height as usize;
-        let slice = |p: *const f32, n: usize| {
-            if p.is_null() {
-                &[][..]
-            } else {
-                unsafe { std::slice::from_raw_parts(p, n) }
-            }
+        let pixels = (raw.width as usize).saturating_mul(raw.height as usize);
+        // A size whose arrays would not fit in memory has no data (exporters check lengths).
+        let slice = |p: *const f32, n: Option<usize>| match n {
+            Some(n) if !p.is_null() && n <= isize::MAX as usize / 4 => unsafe {
+                std::slice::from_raw_parts(p, n)
+            },
+            _ => &[][..],
         };
         let layers = (0..raw.layer_count as usize)
             .map(|i| {
@@ -318,15 +320,15 @@ impl<'a> Film<'a> {
                 Layer {
                     name: unsafe { CStr::from_ptr(l.name) }.to_str().unwrap_or("?"),
                     channels: l.channels,
-                    data: slice(l.data, pixels * l.channels as usize),
+                    data: slice(l.data, pixels.checked_mul(l.channels as usize)),
                 }
             })
             .collect();
         Self {
             width: raw.width,
             height: raw.height,
-            radiance: slice(raw.radiance, pixels * 4),
-            display: slice(raw.display, pixels * 4),
+            radiance: slice(raw.radiance, pixels.checked_mul(4)),
+            display: slice(raw.display, pixels.checked_mul(4)),
             layers,
         }
     }
@@ -383,18 +385,25 @@ pub fn path_from_c(path: *const c_char) -> Result<std::path::PathBuf, String> {
 
 thread_local! {
     static PANIC_LOCATION: std::cell::RefCell<Option<String>> = const { std::cell::RefCell::new(None) };
+    static IN_GUARD: std::cell::Cell<bool> = const { std::cell::Cell::new(false) };
 }
 
-/// A panic hook for this library's copy of std that records where a panic happened
-/// instead of printing to the host's terminal: the panic comes back as an error message.
+/// A panic hook that, for panics inside [`guarded`], records where they happened instead
+/// of printing to the host's terminal (the panic comes back as an error message); other
+/// panics go to the hook that was there before.
 fn install_quiet_panic_hook() {
     static ONCE: std::sync::Once = std::sync::Once::new();
     ONCE.call_once(|| {
-        std::panic::set_hook(Box::new(|info| {
-            let location = info
-                .location()
-                .map(|l| format!("{}:{}", l.file(), l.line()));
-            PANIC_LOCATION.with(|p| *p.borrow_mut() = location);
+        let previous = std::panic::take_hook();
+        std::panic::set_hook(Box::new(move |info| {
+            if IN_GUARD.with(|g| g.get()) {
+                let location = info
+                    .location()
+                    .map(|l| format!("{}:{}", l.file(), l.line()));
+                PANIC_LOCATION.with(|p| *p.borrow_mut() = location);
+            } else {
+                previous(info);
+            }
         }));
     });
 }
@@ -403,7 +412,9 @@ fn install_quiet_panic_hook() {
 #[doc(hidden)]
 pub fn guarded(error: *mut ErrorBuffer, f: impl FnOnce() -> Result<(), String>) -> i32 {
     install_quiet_panic_hook();
+    let was = IN_GUARD.with(|g| g.replace(true));
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
+    IN_GUARD.with(|g| g.set(was));
     let message = match outcome {
         Ok(Ok(())) => return STATUS_OK,
         Ok(Err(e)) => e,

@@ -20,7 +20,6 @@
 //! (wavelet, best on noisy images). The lossy ones (`pxr24`, `b44`, `dwaa`, …) round
 //! 32-bit floats and are refused.
 
-mod atomic;
 pub mod channels;
 
 use std::path::Path;
@@ -154,7 +153,7 @@ impl Exporter for ExrExport {
             AnyChannels::sort(channels),
         );
         let image = Image::from_layer(layer);
-        atomic::write_atomically(path, |writer| {
+        kiln_plugin_api::atomic::write_atomically(path, |writer| {
             image.write().to_buffered(writer).map_err(|e| e.to_string())
         })
     }

@@ -324,6 +324,17 @@ mod tests {
     }
 
     #[test]
+    fn strided_normalized_bytes_read_each_element() {
+        let (root, buffers) = root_with(
+            r#"{"bufferView":0,"componentType":5121,"normalized":true,"count":3,"type":"VEC3"}"#,
+            r#"{"buffer":0,"byteLength":12,"byteStride":4}"#,
+            &[255, 0, 0, 0, 0, 255, 0, 0, 0, 0, 255, 0],
+        );
+        let v: Vec<[f32; 3]> = read(&root, &buffers, 0).expect("readable");
+        assert_eq!(v, vec![[1.0, 0.0, 0.0], [0.0, 1.0, 0.0], [0.0, 0.0, 1.0]]);
+    }
+
+    #[test]
     fn strided_accessor_past_its_view_is_refused() {
         let (root, buffers) = root_with(
             r#"{"bufferView":0,"componentType":5126,"count":3,"type":"VEC3"}"#,

@@ -12,9 +12,11 @@ use gltf::json;
 
 use crate::document::{MAX_FILE_BYTES, read_file};
 
-/// The loaded buffers, in document order, each cut to its declared `byteLength`.
+/// The loaded buffers, in document order, each cut to its declared `byteLength`. None
+/// for a buffer without a URI that the GLB binary chunk does not fill (a placeholder the
+/// validator accepts): reading it fails where it is used.
 pub struct Buffers {
-    data: Vec<Vec<u8>>,
+    data: Vec<Option<Vec<u8>>>,
 }
 
 /// Where a URI points.
@@ -99,9 +101,13 @@ impl Buffers {
                 |n| format!("buffer {i} (\"{n}\")"),
             );
             let mut bytes = match &buffer.uri {
-                None => blob.take().ok_or_else(|| {
-                    format!("{name} has no URI and the file has no (unused) GLB binary chunk")
-                })?,
+                None => match blob.take() {
+                    Some(blob) => blob,
+                    None => {
+                        data.push(None);
+                        continue;
+                    }
+                },
                 Some(uri) => match parse_uri(uri).map_err(|e| format!("{name}: {e}"))? {
                     Uri::Data(bytes) => bytes,
                     Uri::Relative(relative) => {
@@ -130,7 +136,7 @@ impl Buffers {
             }
             // Bytes past byteLength (GLB padding) are not part of the buffer.
             bytes.truncate(length.min(MAX_FILE_BYTES) as usize);
-            data.push(bytes);
+            data.push(Some(bytes));
         }
         Ok(Self { data })
     }
@@ -145,7 +151,13 @@ impl Buffers {
         let data = self
             .data
             .get(buffer)
-            .ok_or_else(|| format!("buffer view {index}: buffer {buffer} does not exist"))?;
+            .ok_or_else(|| format!("buffer view {index}: buffer {buffer} does not exist"))?
+            .as_ref()
+            .ok_or_else(|| {
+                format!(
+                    "buffer view {index}: buffer {buffer} has no data (no URI, no GLB binary chunk)"
+                )
+            })?;
         let offset = view.byte_offset.map_or(0, |o| o.0);
         let length = view.byte_length.0;
         let end = offset

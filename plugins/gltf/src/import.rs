@@ -39,6 +39,12 @@ pub fn import(path: &Path, builder: &mut Builder) -> Result<(), String> {
         ));
     }
     extensions::check(&doc.root, &mut warnings)?;
+    if doc.animations > 0 {
+        warnings.push(format!(
+            "animations are not imported ({} in the file); the scene is shown at rest",
+            doc.animations
+        ));
+    }
     for w in warnings.drain(..) {
         builder.warn(&w);
     }

@@ -330,7 +330,7 @@ fn surface(t: &mut Translation, m: &json::Material, vertex_colors: bool) -> bool
     let strength = ext
         .and_then(|e| e.emissive_strength.as_ref())
         .map_or(1.0, |s| finite_or(s.emissive_strength.0, 1.0).max(0.0));
-    let emissive = m.emissive_factor.0.map(|v| finite_or(v, 0.0).max(0.0));
+    let emissive = unit3(m.emissive_factor.0, 0.0);
     if strength > 0.0 && emissive.iter().any(|&v| v > 0.0) {
         let (color, _) = t.color(
             emissive,

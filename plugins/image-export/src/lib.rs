@@ -13,7 +13,6 @@
 //! exporter does not know, or one given for the other format, is an error rather than
 //! silently ignored.
 
-mod atomic;
 mod encode;
 
 use std::path::Path;
@@ -119,7 +118,7 @@ impl Exporter for ImageExport {
                 film.height
             )));
         }
-        atomic::write_atomically(path, |writer| {
+        kiln_plugin_api::atomic::write_atomically(path, |writer| {
             encode::encode(
                 writer,
                 settings.format,

@@ -18,6 +18,9 @@
 //! | `bump`, `map_Bump`       | `normal` through a `bump` node (height, strength `-bm`)  |
 //!
 //! Colour maps are sRGB, data maps (roughness, metallic, alpha, bump, normal) linear.
+//! Of the texture options, `-s` and `-o` become a mapping node, `-clamp on` the
+//! `extend` edge mode, `-imfchan` the channel a data map reads, `-bm` the bump or
+//! normal-map strength; `-mm` and `-t` are reported as unsupported.
 //! Texture paths stay as written, relative to the .obj's folder; the host resolves
 //! them. Ambient terms (`Ka`, `map_Ka`) mean nothing to a path tracer and are dropped
 //! quietly; other statements Kiln cannot use are reported as warnings.
@@ -287,7 +290,9 @@ impl<'a> Converter<'a> {
                 .push("map_Ns is not supported (use map_Pr)".into());
         }
 
-        // Emission.
+        // Emission. A black Ke beside a map_Ke is taken as unset rather than as a factor
+        // that blacks the map out: exporters write the emission colour socket's unused
+        // value there when a texture drives it.
         let ke = self
             .finite3("Ke", m.emissive)
             .filter(|c| c.iter().any(|&x| x > 0.0));

@@ -545,7 +545,11 @@ fn null_arguments_are_errors_not_crashes() {
     let path = CString::new(fixture("scene.obj").to_str().unwrap()).unwrap();
     let status = unsafe { import(path.as_ptr(), std::ptr::null(), &mut error) };
     assert_eq!(status, api::STATUS_ERROR);
-    assert!(unsafe { CStr::from_ptr(message.as_ptr()) }.to_bytes().len() > 0);
+    assert!(
+        !unsafe { CStr::from_ptr(message.as_ptr()) }
+            .to_bytes()
+            .is_empty()
+    );
     let mut recorder = Recorder::default();
     let builder = api::SceneBuilder {
         ctx: (&mut recorder as *mut Recorder).cast(),

@@ -69,7 +69,11 @@ unsafe fn array<const N: usize>(p: *const f32, n: usize) -> Option<Vec<[f32; N]>
         return None;
     }
     let flat = unsafe { std::slice::from_raw_parts(p, n * N) };
-    Some(flat.chunks_exact(N).map(|c| std::array::from_fn(|i| c[i])).collect())
+    Some(
+        flat.chunks_exact(N)
+            .map(|c| std::array::from_fn(|i| c[i]))
+            .collect(),
+    )
 }
 
 unsafe extern "C" fn add_mesh(ctx: *mut c_void, m: *const api::MeshData) -> u32 {
@@ -78,13 +82,15 @@ unsafe extern "C" fn add_mesh(ctx: *mut c_void, m: *const api::MeshData) -> u32 
     let n = m.vertex_count;
     let name = text(m.name);
     if m.positions.is_null() || m.indices.is_null() || m.index_count % 3 != 0 || n == 0 {
-        s.violations.push(format!("mesh {name}: empty or malformed"));
+        s.violations
+            .push(format!("mesh {name}: empty or malformed"));
         return u32::MAX;
     }
     let indices = unsafe { std::slice::from_raw_parts(m.indices, m.index_count) }.to_vec();
     if let Some(bad) = indices.iter().find(|&&i| i as usize >= n) {
-        s.violations
-            .push(format!("mesh {name}: index {bad} out of range for {n} vertices"));
+        s.violations.push(format!(
+            "mesh {name}: index {bad} out of range for {n} vertices"
+        ));
         return u32::MAX;
     }
     let mesh = RecordedMesh {
@@ -97,7 +103,8 @@ unsafe extern "C" fn add_mesh(ctx: *mut c_void, m: *const api::MeshData) -> u32 
     };
     if mesh.positions.iter().flatten().any(|v| !v.is_finite()) {
         // The host refuses these with a warning; not the importer's fault.
-        s.warnings.push(format!("host: mesh {}: non-finite positions", mesh.name));
+        s.warnings
+            .push(format!("host: mesh {}: non-finite positions", mesh.name));
         return u32::MAX;
     }
     s.meshes.push(mesh);
@@ -106,13 +113,17 @@ unsafe extern "C" fn add_mesh(ctx: *mut c_void, m: *const api::MeshData) -> u32 
 
 /// Parses and compiles `kmat` as Kiln's host does; the error if it does not compile.
 pub fn compile_kmat(name: &str, kmat: &str) -> Result<(), String> {
-    let (_, graph) = kiln::material::parse_material(kmat, "test.gltf")
-        .map_err(|e| format!("{e}\n{kmat}"))?;
+    let (_, graph) =
+        kiln::material::parse_material(kmat, "test.gltf").map_err(|e| format!("{e}\n{kmat}"))?;
     kiln::material::compile(name, &graph, "material").map_err(|e| format!("{e}\n{kmat}"))?;
     Ok(())
 }
 
-unsafe extern "C" fn add_material(ctx: *mut c_void, name: *const c_char, kmat: *const c_char) -> u32 {
+unsafe extern "C" fn add_material(
+    ctx: *mut c_void,
+    name: *const c_char,
+    kmat: *const c_char,
+) -> u32 {
     let s = state(ctx);
     let (name, kmat) = (text(name), text(kmat));
     if let Err(e) = compile_kmat(&name, &kmat) {
@@ -123,7 +134,12 @@ unsafe extern "C" fn add_material(ctx: *mut c_void, name: *const c_char, kmat: *
     (s.materials.len() - 1) as u32
 }
 
-unsafe extern "C" fn add_image(ctx: *mut c_void, name: *const c_char, bytes: *const u8, len: usize) -> u32 {
+unsafe extern "C" fn add_image(
+    ctx: *mut c_void,
+    name: *const c_char,
+    bytes: *const u8,
+    len: usize,
+) -> u32 {
     let s = state(ctx);
     if bytes.is_null() || len == 0 {
         s.violations.push("image without data".into());
@@ -134,18 +150,26 @@ unsafe extern "C" fn add_image(ctx: *mut c_void, name: *const c_char, bytes: *co
     (s.images.len() - 1) as u32
 }
 
-unsafe extern "C" fn add_instance(ctx: *mut c_void, mesh: u32, material: u32, m: *const [f32; 16]) -> u32 {
+unsafe extern "C" fn add_instance(
+    ctx: *mut c_void,
+    mesh: u32,
+    material: u32,
+    m: *const [f32; 16],
+) -> u32 {
     let s = state(ctx);
     let m = unsafe { *m };
     if mesh as usize >= s.meshes.len() {
-        s.violations.push(format!("instance of missing mesh {mesh}"));
+        s.violations
+            .push(format!("instance of missing mesh {mesh}"));
         return u32::MAX;
     }
     if material != u32::MAX && material as usize >= s.materials.len() {
-        s.violations.push(format!("instance with missing material {material}"));
+        s.violations
+            .push(format!("instance with missing material {material}"));
     }
     if m.iter().any(|v| !v.is_finite()) {
-        s.violations.push("instance with a non-finite transform".into());
+        s.violations
+            .push("instance with a non-finite transform".into());
         return u32::MAX;
     }
     s.instances.push((mesh, material, m));
@@ -209,6 +233,9 @@ pub fn import(path: &Path) -> (Result<(), String>, Recorded) {
         capacity: message.len(),
     };
     let status = unsafe { import(c_path.as_ptr(), &builder, &mut error) };
+    // The plugin API installs a hook that silences panics (they come back as errors);
+    // in this process it would also silence the tests' own assertion messages.
+    drop(std::panic::take_hook());
     let result = if status == api::STATUS_OK {
         Ok(())
     } else {
@@ -218,7 +245,10 @@ pub fn import(path: &Path) -> (Result<(), String>, Recorded) {
 }
 
 /// [`import`] on another thread; None if it did not finish within `limit`.
-pub fn import_with_timeout(path: &Path, limit: Duration) -> Option<(Result<(), String>, Recorded, Duration)> {
+pub fn import_with_timeout(
+    path: &Path,
+    limit: Duration,
+) -> Option<(Result<(), String>, Recorded, Duration)> {
     let (tx, rx) = mpsc::channel();
     let path = path.to_owned();
     std::thread::spawn(move || {
@@ -229,9 +259,10 @@ pub fn import_with_timeout(path: &Path, limit: Duration) -> Option<(Result<(), S
     rx.recv_timeout(limit).ok()
 }
 
-/// A scratch folder for files a test writes.
-pub fn scratch_dir(test: &str) -> std::path::PathBuf {
-    let dir = std::env::temp_dir().join(format!("kiln-gltf-tests-{}-{test}", std::process::id()));
-    std::fs::create_dir_all(&dir).expect("temp dir");
-    dir
+/// A scratch folder of its own for files a test writes, removed when dropped.
+pub fn scratch_dir() -> tempfile::TempDir {
+    tempfile::Builder::new()
+        .prefix("kiln-gltf-test-")
+        .tempdir()
+        .expect("temp dir")
 }

@@ -1,0 +1,304 @@
+//! Importing through the bundled plugins: the Khronos glTF-Validator corpus (no crash, no
+//! escaped panic, no hang; every file the validator finds errors in is refused or imported
+//! with warnings), hostile inputs, and exporter round trips.
+
+mod common;
+
+use std::path::{Path, PathBuf};
+use std::sync::mpsc;
+use std::time::{Duration, Instant};
+
+use glam::Vec3;
+use kiln::plugin::{ExportFilm, ExportLayer, PluginHost, PluginKind};
+
+const CORPUS: &str = concat!(
+    env!("CARGO_MANIFEST_DIR"),
+    "/../shared/corpus/gltf-validator/test"
+);
+
+/// The bundled plugins, as `cargo build` left them next to the test executable.
+fn host() -> PluginHost {
+    let exe = std::env::current_exe().unwrap();
+    let mut host = PluginHost::default();
+    host.load_dir(exe.parent().unwrap(), true);
+    for kind in [PluginKind::Importer, PluginKind::Exporter] {
+        for ext in match kind {
+            PluginKind::Importer => ["gltf", "glb", "obj"].as_slice(),
+            PluginKind::Exporter => ["png", "exr"].as_slice(),
+        } {
+            assert!(
+                host.handles(kind, Path::new(&format!("x.{ext}"))),
+                "no bundled {kind} for .{ext}; refused: {:?}",
+                host.rejected
+            );
+        }
+    }
+    host
+}
+
+fn files(dir: &Path, out: &mut Vec<PathBuf>) {
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for e in entries.flatten() {
+        let p = e.path();
+        if p.is_dir() {
+            files(&p, out);
+        } else if matches!(p.extension().and_then(|e| e.to_str()), Some("gltf" | "glb")) {
+            out.push(p);
+        }
+    }
+}
+
+/// The validator's error count for `file`, from its report.
+fn validator_errors(file: &Path) -> Option<u32> {
+    let report = std::fs::read_to_string(format!("{}.report.json", file.display())).ok()?;
+    let at = report.find("\"numErrors\":")? + "\"numErrors\":".len();
+    report[at..]
+        .trim_start()
+        .split(|c: char| !c.is_ascii_digit())
+        .next()?
+        .parse()
+        .ok()
+}
+
+/// Imports on a worker thread, giving up after `limit`.
+fn import_bounded(file: &Path, limit: Duration) -> Option<Result<(usize, usize), String>> {
+    let (tx, rx) = mpsc::channel();
+    let file = file.to_owned();
+    std::thread::spawn(move || {
+        let host = host();
+        let r = host
+            .import(&file)
+            .map(|i| (i.scene.instances.len(), i.warnings.len()))
+            .map_err(|e| e.to_string());
+        let _ = tx.send(r);
+    });
+    rx.recv_timeout(limit).ok()
+}
+
+#[test]
+fn every_validator_corpus_file_imports_or_fails_cleanly_and_in_bounded_time() {
+    let mut all = Vec::new();
+    files(Path::new(CORPUS), &mut all);
+    if all.is_empty() {
+        eprintln!("skipped: no corpus at {CORPUS}");
+        return;
+    }
+    all.sort();
+    let (mut ok, mut warned, mut refused) = (0, 0, 0);
+    let mut problems = Vec::new();
+    let mut slowest = (Duration::ZERO, PathBuf::new());
+    for file in &all {
+        let t = Instant::now();
+        let Some(result) = import_bounded(file, Duration::from_secs(20)) else {
+            problems.push(format!("{}: no answer within 20 s", file.display()));
+            continue;
+        };
+        let took = t.elapsed();
+        if took > slowest.0 {
+            slowest = (took, file.clone());
+        }
+        let errors = validator_errors(file).unwrap_or(0);
+        match result {
+            Ok((_, 0)) if errors > 0 => problems.push(format!(
+                "{}: the validator finds {errors} errors, the import neither failed nor warned",
+                file.display()
+            )),
+            Ok((_, 0)) => ok += 1,
+            Ok(_) => warned += 1,
+            Err(e) => {
+                assert!(!e.is_empty());
+                if e.contains("panicked") {
+                    problems.push(format!("{}: {e}", file.display()));
+                }
+                refused += 1;
+            }
+        }
+    }
+    eprintln!(
+        "{} files: {ok} clean, {warned} with warnings, {refused} refused; slowest {:?} ({})",
+        all.len(),
+        slowest.0,
+        slowest.1.display()
+    );
+    assert!(
+        problems.is_empty(),
+        "{} problems:\n{}",
+        problems.len(),
+        problems.join("\n")
+    );
+}
+
+/// A small valid .glb: a quad.
+fn quad_glb(dir: &Path) -> PathBuf {
+    let path = dir.join("quad.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &path).unwrap();
+    path
+}
+
+#[test]
+fn hostile_gltf_inputs_are_refused_with_a_message() {
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    let good = quad_glb(dir.path());
+    let imported = host.import(&good).unwrap();
+    assert_eq!(imported.scene.triangle_count(), 2);
+
+    // Truncated GLB.
+    let bytes = std::fs::read(&good).unwrap();
+    for cut in [10, 40, bytes.len() / 2, bytes.len() - 3] {
+        let p = dir.path().join(format!("cut{cut}.glb"));
+        std::fs::write(&p, &bytes[..cut]).unwrap();
+        match host.import(&p) {
+            Err(e) => assert!(!e.to_string().contains("panicked"), "{e}"),
+            Ok(i) => assert!(
+                !i.warnings.is_empty(),
+                "truncated at {cut}: imported silently"
+            ),
+        }
+    }
+
+    let gltf = |name: &str, json: &str| {
+        let p = dir.path().join(name);
+        std::fs::write(&p, json).unwrap();
+        p
+    };
+    // 36 bytes: three positions; then three indices.
+    let b64 = |data: &[u8]| {
+        const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+        let mut s = String::new();
+        for c in data.chunks(3) {
+            let n = (c[0] as u32) << 16
+                | (*c.get(1).unwrap_or(&0) as u32) << 8
+                | *c.get(2).unwrap_or(&0) as u32;
+            for i in 0..4 {
+                if i <= c.len() {
+                    s.push(T[(n >> (18 - 6 * i) & 63) as usize] as char);
+                } else {
+                    s.push('=');
+                }
+            }
+        }
+        s
+    };
+    let triangle = |positions: [f32; 9], indices: [u32; 3], count: &str| {
+        let mut data: Vec<u8> = bytemuck::cast_slice(&positions).to_vec();
+        data.extend(bytemuck::cast_slice(&indices));
+        format!(
+            r#"{{"asset":{{"version":"2.0"}},"scenes":[{{"nodes":[0]}}],"nodes":[{{"mesh":0}}],
+            "meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1}}]}}],
+            "buffers":[{{"byteLength":48,"uri":"data:application/octet-stream;base64,{}"}}],
+            "bufferViews":[{{"buffer":0,"byteLength":36}},{{"buffer":0,"byteOffset":36,"byteLength":12}}],
+            "accessors":[{{"bufferView":0,"componentType":5126,"count":{count},"type":"VEC3","min":[0,0,0],"max":[1,1,0]}},
+                         {{"bufferView":1,"componentType":5125,"count":3,"type":"SCALAR"}}]}}"#,
+            b64(&data)
+        )
+    };
+    let ok = triangle([0., 0., 0., 1., 0., 0., 0., 1., 0.], [0, 1, 2], "3");
+    assert_eq!(
+        host.import(&gltf("ok.gltf", &ok))
+            .unwrap()
+            .scene
+            .triangle_count(),
+        1
+    );
+    let cases = [
+        (
+            "huge count",
+            triangle(
+                [0., 0., 0., 1., 0., 0., 0., 1., 0.],
+                [0, 1, 2],
+                "1000000000",
+            ),
+        ),
+        (
+            "index out of range",
+            triangle([0., 0., 0., 1., 0., 0., 0., 1., 0.], [0, 1, 9], "3"),
+        ),
+        (
+            "NaN position",
+            triangle([0., 0., 0., f32::NAN, 0., 0., 0., 1., 0.], [0, 1, 2], "3"),
+        ),
+    ];
+    for (what, json) in cases {
+        let t = Instant::now();
+        match host.import(&gltf("bad.gltf", &json)) {
+            Err(e) => assert!(!e.to_string().contains("panicked"), "{what}: {e}"),
+            Ok(i) => {
+                assert_eq!(
+                    i.scene.triangle_count(),
+                    0,
+                    "{what}: the bad triangle was kept"
+                );
+                assert!(!i.warnings.is_empty(), "{what}: no warning");
+            }
+        }
+        assert!(
+            t.elapsed() < Duration::from_secs(5),
+            "{what}: took {:?}",
+            t.elapsed()
+        );
+    }
+}
+
+#[test]
+fn exporters_round_trip_the_film() {
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (7u32, 5u32);
+    let n = (w * h) as usize;
+    let radiance: Vec<f32> = (0..4 * n)
+        .map(|i| {
+            if i % 4 == 3 {
+                1.0
+            } else {
+                (i as f32 * 0.37).sin().abs() * 3.0
+            }
+        })
+        .collect();
+    let display: Vec<f32> = radiance.iter().map(|v| (v / (1.0 + v)).min(1.0)).collect();
+    let layer = |name: &str, channels: u32| ExportLayer {
+        name: name.into(),
+        channels,
+        data: (0..n * channels as usize)
+            .map(|i| i as f32 * 0.25 - 1.0)
+            .collect(),
+    };
+    let film = ExportFilm {
+        width: w,
+        height: h,
+        radiance: radiance.clone(),
+        display: display.clone(),
+        layers: vec![layer("albedo", 3), layer("normal", 3), layer("depth", 1)],
+    };
+    // EXR: read back with the image crate (the main RGBA layer), bit for bit.
+    let exr = dir.path().join("film.exr");
+    host.export(&exr, &film, "").unwrap();
+    let back = image::open(&exr).unwrap().to_rgba32f();
+    assert_eq!((back.width(), back.height()), (w, h));
+    for (a, b) in back.as_raw().iter().zip(&radiance) {
+        assert_eq!(a.to_bits(), b.to_bits(), "EXR changed a value");
+    }
+    // PNG: the display image, quantized to 8 bits.
+    let png = dir.path().join("film.png");
+    host.export(&png, &film, "").unwrap();
+    let back = image::open(&png).unwrap().to_rgba8();
+    for (a, b) in back.as_raw().iter().zip(&display) {
+        assert_eq!(*a, (b * 255.0).round() as u8);
+    }
+    // 16-bit PNG on request.
+    let png16 = dir.path().join("film16.png");
+    host.export(&png16, &film, "bits=16").unwrap();
+    assert_eq!(
+        image::open(&png16).unwrap().color(),
+        image::ColorType::Rgba16
+    );
+    // An unwritable path is an error naming it, and no file is left behind.
+    let e = host
+        .export(&dir.path().join("missing/dir/x.png"), &film, "")
+        .unwrap_err()
+        .to_string();
+    assert!(e.contains("missing/dir/x.png"), "{e}");
+    let _ = Vec3::ZERO;
+}
