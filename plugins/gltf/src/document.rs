@@ -2,10 +2,12 @@
 //! binary chunk, and checking it against the schema.
 //!
 //! The GLB container is parsed here rather than by the `gltf` crate, whose reader
-//! subtracts before it compares (a header length under 12 panics). Schema violations are
-//! reported as one warning and the import goes on: every later read is bounds-checked, so
-//! a broken reference costs the object that holds it, not the file. This module does not
-//! read buffers or accessors (see `buffers` and `accessor`).
+//! subtracts before it compares (a header length under 12 panics). The JSON goes through
+//! a generic value first, so that what the importer ignores (animations) cannot fail it
+//! and gltf-json's few demands beyond the spec are met ([`relax`]). Schema violations
+//! are reported as one warning and the import goes on: every later read is
+//! bounds-checked, so a broken reference costs the object that holds it, not the file.
+//! This module does not read buffers or accessors (see `buffers` and `accessor`).
 
 use std::path::Path;
 
@@ -50,10 +52,16 @@ pub fn parse(bytes: &[u8]) -> Result<Document, String> {
     } else {
         (bytes, None)
     };
-    // A UTF-8 byte-order mark is forbidden by the spec but written by some tools.
+    // A UTF-8 byte-order mark is forbidden by the spec but written by some tools, as is
+    // a GLB JSON chunk padded with NULs instead of spaces.
     let json_bytes = json_bytes
         .strip_prefix(b"\xEF\xBB\xBF")
         .unwrap_or(json_bytes);
+    let end = json_bytes
+        .iter()
+        .rposition(|&b| b != 0)
+        .map_or(0, |i| i + 1);
+    let json_bytes = &json_bytes[..end];
     let mut value: json::Value = json::deserialize::from_slice(json_bytes)
         .map_err(|e| format!("not a valid JSON document: {e}"))?;
     check_version(&value)?;
@@ -83,11 +91,33 @@ fn check_version(value: &json::Value) -> Result<(), String> {
     Ok(())
 }
 
+/// Integers written with a fraction (`1.0`), which JSON and the validator accept and
+/// serde's integer fields do not, rewritten as integers. serde_json's recursion limit
+/// bounds the depth.
+fn integral_floats(value: &mut json::Value) {
+    match value {
+        json::Value::Number(n) if n.is_f64() => {
+            let f = n.as_f64().unwrap_or(f64::NAN);
+            if f.fract() == 0.0 && f.abs() < 9.0e15 {
+                *value = if f >= 0.0 {
+                    json::Value::from(f as u64)
+                } else {
+                    json::Value::from(f as i64)
+                };
+            }
+        }
+        json::Value::Array(items) => items.iter_mut().for_each(integral_floats),
+        json::Value::Object(fields) => fields.values_mut().for_each(integral_floats),
+        _ => {}
+    }
+}
+
 /// Removes what this importer does not read and gltf-json parses more strictly than
 /// the spec (animations: KHR_animation_pointer channels have no `node`), and fills in
-/// what the spec makes optional but gltf-json requires (a scene's `nodes`). Returns the
-/// number of animations removed.
+/// what the spec makes optional but gltf-json requires (a scene's `nodes`, integers
+/// written as `1.0`). Returns the number of animations removed.
 fn relax(value: &mut json::Value) -> usize {
+    integral_floats(value);
     let Some(object) = value.as_object_mut() else {
         return 0;
     };

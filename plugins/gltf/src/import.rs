@@ -25,6 +25,7 @@ const MAX_TRIANGLES: usize = 1 << 26;
 /// Schema problems listed in the one warning that reports them.
 const PROBLEMS_LISTED: usize = 5;
 
+/// Imports the glTF or GLB file at `path` into `builder`.
 pub fn import(path: &Path, builder: &mut Builder) -> Result<(), String> {
     let mut doc = document::read(path)?;
     let mut warnings = Vec::new();

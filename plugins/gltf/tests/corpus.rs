@@ -8,7 +8,7 @@ use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 /// Per-file limit: the largest corpus file imports in milliseconds.
-const LIMIT: Duration = Duration::from_secs(10);
+const LIMIT: Duration = Duration::from_secs(5);
 
 fn corpus() -> Option<PathBuf> {
     let dir = Path::new(concat!(
@@ -61,6 +61,7 @@ fn every_corpus_file_imports_or_fails_cleanly() {
     let (mut ok, mut ok_warned, mut refused) = (0, 0, 0);
     let mut failures = Vec::new();
     let mut slow = Vec::new();
+    let mut slowest = (Duration::ZERO, String::new());
     for path in &paths {
         let name = path
             .strip_prefix(&dir)
@@ -71,11 +72,23 @@ fn every_corpus_file_imports_or_fails_cleanly() {
             failures.push(format!("{name}: no result within {LIMIT:?}"));
             continue;
         };
+        if elapsed > slowest.0 {
+            slowest = (elapsed, name.clone());
+        }
         if elapsed > Duration::from_secs(1) {
             slow.push(format!("{name}: {elapsed:?}"));
         }
         match &result {
             Err(e) if e.contains("panicked") => failures.push(format!("{name}: {e}")),
+            // A file the validator finds no error in is refused only for an extension
+            // it requires that this importer lacks, or data it keeps on the web.
+            Err(e)
+                if valid(path)
+                    && !e.contains("requires the glTF extension")
+                    && !e.contains("URIs are not supported") =>
+            {
+                failures.push(format!("{name}: valid, but refused: {e}"));
+            }
             Err(_) => refused += 1,
             Ok(()) if recorded.warnings.is_empty() => ok += 1,
             Ok(()) => ok_warned += 1,
@@ -91,8 +104,10 @@ fn every_corpus_file_imports_or_fails_cleanly() {
         }
     }
     eprintln!(
-        "{} files: {ok} imported cleanly, {ok_warned} with warnings, {refused} refused; slower than 1 s: {slow:?}",
-        paths.len()
+        "{} files: {ok} imported cleanly, {ok_warned} with warnings, {refused} refused; slower than 1 s: {slow:?}; slowest {} in {:?}",
+        paths.len(),
+        slowest.1,
+        slowest.0
     );
     assert!(failures.is_empty(), "{failures:#?}");
 }
