@@ -300,5 +300,58 @@ fn exporters_round_trip_the_film() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("missing/dir/x.png"), "{e}");
-    let _ = Vec3::ZERO;
+}
+
+#[test]
+fn kiln_renders_and_converts_imported_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = quad_glb(dir.path());
+    let kiln = |args: &[&str]| {
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_kiln")).args(args).output().unwrap();
+        (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+    };
+    // Rendered directly, framed by the default camera under the default sky.
+    let png = dir.path().join("quad.png");
+    let (code, err) = kiln(&["render", glb.to_str().unwrap(), "--size", "16x16", "--spp", "2", "-q", "-o", png.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let img = image::open(&png).unwrap().to_rgb8();
+    assert!(img.pixels().any(|p| p.0 != img.get_pixel(0, 0).0), "a uniform image: the quad is not in view");
+    // Converted to a scene file, which renders too, with AOV layers in the EXR.
+    let scene = dir.path().join("quad.kiln");
+    let (code, err) = kiln(&["import", glb.to_str().unwrap(), "-o", scene.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    assert!(dir.path().join("quad.assets/mesh_0.obj").exists());
+    let exr = dir.path().join("quad.exr");
+    let (code, err) = kiln(&["render", scene.to_str().unwrap(), "--size", "16x16", "--spp", "2", "-q", "-o", exr.to_str().unwrap()]);
+    assert_eq!(code, 0, "{err}");
+    let header = std::fs::read(&exr).unwrap();
+    let text = String::from_utf8_lossy(&header[..header.len().min(4096)]).into_owned();
+    assert!(text.contains("albedo.R") && text.contains("depth.Z"), "no AOV channels in the EXR header");
+    // A broken file is one clear error.
+    let broken = dir.path().join("broken.glb");
+    std::fs::write(&broken, b"glTF\x02\x00\x00\x00").unwrap();
+    let (code, err) = kiln(&["render", broken.to_str().unwrap(), "-q", "-o", png.to_str().unwrap()]);
+    assert_eq!(code, 1, "{err}");
+    assert!(err.contains("broken.glb") && !err.contains("panicked"), "{err}");
+}
+
+#[test]
+fn obj_files_import_with_their_materials() {
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    std::fs::write(
+        dir.path().join("box.mtl"),
+        "newmtl red\nKd 0.8 0.1 0.1\nNs 100\nnewmtl lamp\nKd 0 0 0\nKe 5 5 5\n",
+    )
+    .unwrap();
+    std::fs::write(
+        dir.path().join("box.obj"),
+        "mtllib box.mtl\no a\nv 0 0 0\nv 1 0 0\nv 0 1 0\nv 1 1 0\nusemtl red\nf 1 2 3\no b\nusemtl lamp\nf 2 4 3\n",
+    )
+    .unwrap();
+    let imported = host.import(&dir.path().join("box.obj")).unwrap();
+    assert_eq!(imported.scene.triangle_count(), 2);
+    assert_eq!(imported.scene.instances.len(), 2);
+    let lamp = imported.scene.materials.iter().find(|m| m.name == "lamp").expect("the lamp material");
+    assert_eq!(lamp.emission, Vec3::splat(5.0), "a constant emitter is a light");
 }
