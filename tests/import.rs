@@ -307,32 +307,78 @@ fn kiln_renders_and_converts_imported_files() {
     let dir = tempfile::tempdir().unwrap();
     let glb = quad_glb(dir.path());
     let kiln = |args: &[&str]| {
-        let out = std::process::Command::new(env!("CARGO_BIN_EXE_kiln")).args(args).output().unwrap();
-        (out.status.code().unwrap_or(-1), String::from_utf8_lossy(&out.stderr).into_owned())
+        let out = std::process::Command::new(env!("CARGO_BIN_EXE_kiln"))
+            .args(args)
+            .output()
+            .unwrap();
+        (
+            out.status.code().unwrap_or(-1),
+            String::from_utf8_lossy(&out.stderr).into_owned(),
+        )
     };
     // Rendered directly, framed by the default camera under the default sky.
     let png = dir.path().join("quad.png");
-    let (code, err) = kiln(&["render", glb.to_str().unwrap(), "--size", "16x16", "--spp", "2", "-q", "-o", png.to_str().unwrap()]);
+    let (code, err) = kiln(&[
+        "render",
+        glb.to_str().unwrap(),
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "-q",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     let img = image::open(&png).unwrap().to_rgb8();
-    assert!(img.pixels().any(|p| p.0 != img.get_pixel(0, 0).0), "a uniform image: the quad is not in view");
+    assert!(
+        img.pixels().any(|p| p.0 != img.get_pixel(0, 0).0),
+        "a uniform image: the quad is not in view"
+    );
     // Converted to a scene file, which renders too, with AOV layers in the EXR.
     let scene = dir.path().join("quad.kiln");
-    let (code, err) = kiln(&["import", glb.to_str().unwrap(), "-o", scene.to_str().unwrap()]);
+    let (code, err) = kiln(&[
+        "import",
+        glb.to_str().unwrap(),
+        "-o",
+        scene.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     assert!(dir.path().join("quad.assets/mesh_0.obj").exists());
     let exr = dir.path().join("quad.exr");
-    let (code, err) = kiln(&["render", scene.to_str().unwrap(), "--size", "16x16", "--spp", "2", "-q", "-o", exr.to_str().unwrap()]);
+    let (code, err) = kiln(&[
+        "render",
+        scene.to_str().unwrap(),
+        "--size",
+        "16x16",
+        "--spp",
+        "2",
+        "-q",
+        "-o",
+        exr.to_str().unwrap(),
+    ]);
     assert_eq!(code, 0, "{err}");
     let header = std::fs::read(&exr).unwrap();
     let text = String::from_utf8_lossy(&header[..header.len().min(4096)]).into_owned();
-    assert!(text.contains("albedo.R") && text.contains("depth.Z"), "no AOV channels in the EXR header");
+    assert!(
+        text.contains("albedo.R") && text.contains("depth.Z"),
+        "no AOV channels in the EXR header"
+    );
     // A broken file is one clear error.
     let broken = dir.path().join("broken.glb");
     std::fs::write(&broken, b"glTF\x02\x00\x00\x00").unwrap();
-    let (code, err) = kiln(&["render", broken.to_str().unwrap(), "-q", "-o", png.to_str().unwrap()]);
+    let (code, err) = kiln(&[
+        "render",
+        broken.to_str().unwrap(),
+        "-q",
+        "-o",
+        png.to_str().unwrap(),
+    ]);
     assert_eq!(code, 1, "{err}");
-    assert!(err.contains("broken.glb") && !err.contains("panicked"), "{err}");
+    assert!(
+        err.contains("broken.glb") && !err.contains("panicked"),
+        "{err}"
+    );
 }
 
 #[test]
@@ -352,6 +398,15 @@ fn obj_files_import_with_their_materials() {
     let imported = host.import(&dir.path().join("box.obj")).unwrap();
     assert_eq!(imported.scene.triangle_count(), 2);
     assert_eq!(imported.scene.instances.len(), 2);
-    let lamp = imported.scene.materials.iter().find(|m| m.name == "lamp").expect("the lamp material");
-    assert_eq!(lamp.emission, Vec3::splat(5.0), "a constant emitter is a light");
+    let lamp = imported
+        .scene
+        .materials
+        .iter()
+        .find(|m| m.name == "lamp")
+        .expect("the lamp material");
+    assert_eq!(
+        lamp.emission,
+        Vec3::splat(5.0),
+        "a constant emitter is a light"
+    );
 }

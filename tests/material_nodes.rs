@@ -1010,13 +1010,8 @@ fn vector_math_and_mixes_take_their_stated_values() {
     for (k, want) in [3.0, 2.0, 1.0].iter().enumerate() {
         assert_near("combine xyz", v[n + 2][k], *want, 1e-6);
     }
-    for k in 0..3 {
-        assert_near(
-            "vertex colour of a mesh without colours",
-            v[n + 3][k],
-            1.0,
-            0.0,
-        );
+    for c in &v[n + 3][..3] {
+        assert_near("vertex colour of a mesh without colours", *c, 1.0, 0.0);
     }
     assert_near("separate rgb", v[n + 4][0], 2.0, 0.0);
 }

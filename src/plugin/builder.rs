@@ -239,7 +239,7 @@ impl ImportState {
             }
             *self
                 .default_material
-                .get_or_insert_with(|| self.scene.materials.len())
+                .get_or_insert(self.scene.materials.len())
         };
         if material == self.scene.materials.len() {
             self.scene.materials.push(Material {
@@ -254,7 +254,7 @@ impl ImportState {
 
     fn camera(&mut self, c: &api::CameraData) {
         let m = Mat4::from_cols_array(&c.to_world);
-        if !m.is_finite() || !(c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0) {
+        if !(m.is_finite() && c.fov_y_degrees > 0.0 && c.fov_y_degrees < 180.0) {
             self.warnings
                 .push("camera with a non-finite transform or field of view ignored".into());
             return;

@@ -372,8 +372,10 @@ pub fn panic_message(payload: Box<dyn std::any::Any + Send>) -> String {
     }
 }
 
+/// # Safety
+/// `path` must be null or a NUL-terminated string.
 #[doc(hidden)]
-pub fn path_from_c(path: *const c_char) -> Result<std::path::PathBuf, String> {
+pub unsafe fn path_from_c(path: *const c_char) -> Result<std::path::PathBuf, String> {
     if path.is_null() {
         return Err("null path".into());
     }
@@ -409,8 +411,11 @@ fn install_quiet_panic_hook() {
 }
 
 /// Runs `f`, turning an error or a panic into `STATUS_ERROR` and a message.
+///
+/// # Safety
+/// `error` must be null or point to a valid [`ErrorBuffer`].
 #[doc(hidden)]
-pub fn guarded(error: *mut ErrorBuffer, f: impl FnOnce() -> Result<(), String>) -> i32 {
+pub unsafe fn guarded(error: *mut ErrorBuffer, f: impl FnOnce() -> Result<(), String>) -> i32 {
     install_quiet_panic_hook();
     let was = IN_GUARD.with(|g| g.replace(true));
     let outcome = std::panic::catch_unwind(std::panic::AssertUnwindSafe(f));
@@ -482,14 +487,15 @@ macro_rules! export_importer {
                 builder: *const $crate::SceneBuilder,
                 error: *mut $crate::ErrorBuffer,
             ) -> i32 {
-                $crate::guarded(error, || {
-                    let path = $crate::path_from_c(path)?;
+                let run = || {
+                    let path = unsafe { $crate::path_from_c(path) }?;
                     if builder.is_null() {
                         return Err("null builder".into());
                     }
                     let mut b = unsafe { $crate::Builder::from_raw(&*builder) };
                     <$t as $crate::Importer>::import(&path, &mut b)
-                })
+                };
+                unsafe { $crate::guarded(error, run) }
             }
             static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
                 ::std::sync::OnceLock::new();
@@ -521,8 +527,8 @@ macro_rules! export_exporter {
                 options: *const ::std::ffi::c_char,
                 error: *mut $crate::ErrorBuffer,
             ) -> i32 {
-                $crate::guarded(error, || {
-                    let path = $crate::path_from_c(path)?;
+                let run = || {
+                    let path = unsafe { $crate::path_from_c(path) }?;
                     if film.is_null() {
                         return Err("null film".into());
                     }
@@ -535,7 +541,8 @@ macro_rules! export_exporter {
                             .unwrap_or("")
                     };
                     <$t as $crate::Exporter>::export(&path, &film, &$crate::parse_options(options))
-                })
+                };
+                unsafe { $crate::guarded(error, run) }
             }
             static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
                 ::std::sync::OnceLock::new();
