@@ -9,7 +9,7 @@ use std::f32::consts::PI;
 use common::node_reference as reference;
 use common::{gpu, settings};
 use glam::Vec3;
-use kiln::material::compile::{compile_value, link};
+use kiln::material::compile::{compile_value_with_textures, link};
 use kiln::material::nodes::{BLEND_MODES, MATH_OPERATIONS};
 use kiln::material::{Graph, Link, Node, Param, RampStop, library};
 use kiln::render::probe::{Probe, run_probe};
@@ -32,6 +32,14 @@ fn case(graph: &Graph, node: &str, socket: &str, p: [f32; 3]) -> Case {
 
 /// Evaluates every case in one kernel.
 fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
+    evaluate_with_textures(Vec::new(), cases)
+}
+
+/// [`evaluate`] in a scene holding `materials`, so that their textures are bound.
+fn evaluate_with_textures(materials: Vec<kiln::scene::Material>, cases: &[Case]) -> Vec<[f32; 4]> {
+    let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+    scene.materials = materials;
+    let mut textures = kiln::material::scene_textures(&scene).index;
     // Cases sharing a graph and socket share a function.
     let mut functions: Vec<(String, usize)> = Vec::new();
     let mut code = String::new();
@@ -43,8 +51,14 @@ fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
             Some(i) => i,
             None => {
                 let i = functions.len();
-                let compiled = compile_value("test", &c.graph, &c.at, &format!("probe_value_{i}"))
-                    .unwrap_or_else(|e| panic!("{e}"));
+                let compiled = compile_value_with_textures(
+                    "test",
+                    &c.graph,
+                    &c.at,
+                    &format!("probe_value_{i}"),
+                    &mut textures,
+                )
+                .unwrap_or_else(|e| panic!("{e}"));
                 code.push_str(&compiled.code);
                 calls.extend(compiled.calls);
                 functions.push((key, i));
@@ -70,7 +84,6 @@ fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
         input.push([0.0, 0.0, 1.0, c.p[1]]);
         input.push([*w as f32, 0.0, 0.0, 0.0]);
     }
-    let scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
     let out = run_probe(
         &gpu(),
         &scene,
@@ -683,64 +696,6 @@ fn bump_tilts_the_normal_by_the_height_slope() {
         &[0.0, 0.0, 1.0],
         "a constant height bumps nothing"
     );
-}
-
-/// Evaluates cases in a scene holding `materials` (so their textures are bound).
-fn evaluate_with_textures(materials: Vec<kiln::scene::Material>, cases: &[Case]) -> Vec<[f32; 4]> {
-    let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
-    scene.materials = materials;
-    let mut code = String::new();
-    let mut calls = BTreeSet::from(["ShadingPoint".to_owned(), "MaterialEval".to_owned()]);
-    let mut textures = kiln::material::scene_textures(&scene).index;
-    for (i, c) in cases.iter().enumerate() {
-        let compiled = kiln::material::compile::compile_value_with_textures(
-            "test",
-            &c.graph,
-            &c.at,
-            &format!("probe_value_{i}"),
-            &mut textures,
-        )
-        .unwrap_or_else(|e| panic!("{e}"));
-        code.push_str(&compiled.code);
-        calls.extend(compiled.calls);
-    }
-    code.push_str(
-        "fn probe_value(which: u32, sp: ShadingPoint) -> vec4<f32> {\n    switch (which) {\n",
-    );
-    for i in 0..cases.len() {
-        code.push_str(&format!(
-            "        case {i}u: {{ return probe_value_{i}(sp); }}\n"
-        ));
-    }
-    code.push_str("        default: { return vec4<f32>(0.0); }\n    }\n}\n");
-    let wgsl = library::closure(calls) + &code;
-    let mut input: Vec<[f32; 4]> = vec![[cases.len() as f32, 0.0, 0.0, 0.0]];
-    for (i, c) in cases.iter().enumerate() {
-        input.push([c.p[0], c.p[1], c.p[2], c.p[0]]);
-        input.push([0.0, 0.0, 1.0, c.p[1]]);
-        input.push([i as f32, 0.0, 0.0, 0.0]);
-    }
-    let out = run_probe(
-        &gpu(),
-        &scene,
-        &settings(1, 1, 1),
-        &Probe {
-            name: "node_probe",
-            parts: &[
-                ("(generated) graph values", &wgsl),
-                (
-                    "shaders/tests/node_probe.wgsl",
-                    include_str!("../shaders/tests/node_probe.wgsl"),
-                ),
-            ],
-            entry: "node_probe",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 16 * cases.len() as u64,
-            invocations: cases.len() as u32,
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
-    bytemuck::cast_slice::<u8, [f32; 4]>(&out).to_vec()
 }
 
 fn image_graph(file: &str, params: &[(&str, &str)]) -> Graph {

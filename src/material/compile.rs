@@ -113,13 +113,35 @@ pub fn compile_with_textures(
     textures: &mut BTreeMap<String, u32>,
 ) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
-    let mut flat = Flattener::new(&ctx, graph).run()?;
+    let flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
     let output = find_output(&ctx, graph, &flat)?;
-    reject_cycles(&ctx, &flat, output)?;
-    fold_constants(&mut flat, output);
-    merge_identical(&mut flat, output);
-    let traits = traits(&flat, output);
+    emit_function(
+        &ctx,
+        flat,
+        (output, 0),
+        function,
+        "MaterialEval",
+        textures,
+        |flat, root| (root.to_owned(), traits(flat, output)),
+    )
+}
+
+/// Rejects cycles toward `root`, folds constants, merges identical nodes and emits
+/// `fn <function>(sp: ShadingPoint) -> <returns>`; `finish` turns the root's expression
+/// into the returned one and says what is known of the material.
+fn emit_function(
+    ctx: &Ctx,
+    mut flat: Vec<FlatNode>,
+    root: (usize, usize),
+    function: &str,
+    returns: &str,
+    textures: &mut BTreeMap<String, u32>,
+    finish: impl FnOnce(&[FlatNode], &str) -> (String, MaterialTraits),
+) -> Result<CompiledMaterial, GraphError> {
+    reject_cycles(ctx, &flat, root.0)?;
+    fold_constants(&mut flat, root.0);
+    merge_identical(&mut flat, root.0);
     let mut emitter = Emitter {
         flat: &flat,
         prefix: function,
@@ -129,13 +151,14 @@ pub fn compile_with_textures(
         textures,
         images: BTreeMap::new(),
     };
-    let body = emitter.function_body(&[(output, 0)])?;
+    let body = emitter.function_body(&[root])?;
+    let (value, traits) = finish(&flat, &body.roots[0]);
     let mut code = emitter.helpers.clone();
-    let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> MaterialEval {{");
+    let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> {returns} {{");
     code.push_str(&body.statements);
-    let _ = writeln!(code, "    return {};\n}}", body.roots[0]);
+    let _ = writeln!(code, "    return {value};\n}}");
     Ok(CompiledMaterial {
-        material: material.to_owned(),
+        material: ctx.material.to_owned(),
         function: function.to_owned(),
         code,
         calls: emitter.calls,
@@ -165,7 +188,7 @@ pub fn compile_value_with_textures(
     textures: &mut BTreeMap<String, u32>,
 ) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
-    let mut flat = Flattener::new(&ctx, graph).run()?;
+    let flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
     let Some(node) = flat.iter().position(|n| n.id == at.node) else {
         return Err(ctx.err(None, None, format!("no node \"{}\"", at.node)));
@@ -174,43 +197,29 @@ pub fn compile_value_with_textures(
         return Err(ctx.err(Some(&at.node), Some(&at.socket), "no such output".into()));
     };
     let ty = def.ty;
-    reject_cycles(&ctx, &flat, node)?;
-    fold_constants(&mut flat, node);
-    merge_identical(&mut flat, node);
-    let mut emitter = Emitter {
-        flat: &flat,
-        prefix: function,
-        helpers: String::new(),
-        helper_names: BTreeSet::new(),
-        calls: BTreeSet::new(),
+    if ty == SocketType::Bsdf {
+        return Err(ctx.err(
+            Some(&at.node),
+            Some(&at.socket),
+            "a BSDF has no value to preview".into(),
+        ));
+    }
+    emit_function(
+        &ctx,
+        flat,
+        (node, output),
+        function,
+        "vec4<f32>",
         textures,
-        images: BTreeMap::new(),
-    };
-    let body = emitter.function_body(&[(node, output)])?;
-    let value = match ty {
-        SocketType::Float => format!("vec4<f32>({}, 0.0, 0.0, 0.0)", body.roots[0]),
-        SocketType::Vec2 => format!("vec4<f32>({}, 0.0, 0.0)", body.roots[0]),
-        SocketType::Vector | SocketType::Color => format!("vec4<f32>({}, 0.0)", body.roots[0]),
-        SocketType::Bsdf => {
-            return Err(ctx.err(
-                Some(&at.node),
-                Some(&at.socket),
-                "a BSDF has no value to preview".into(),
-            ));
-        }
-    };
-    let mut code = emitter.helpers.clone();
-    let _ = writeln!(code, "fn {function}(sp: ShadingPoint) -> vec4<f32> {{");
-    code.push_str(&body.statements);
-    let _ = writeln!(code, "    return {value};\n}}");
-    Ok(CompiledMaterial {
-        material: material.to_owned(),
-        function: function.to_owned(),
-        code,
-        calls: emitter.calls,
-        traits: MaterialTraits::default(),
-        images: emitter.images,
-    })
+        |_, v| {
+            let value = match ty {
+                SocketType::Float => format!("vec4<f32>({v}, 0.0, 0.0, 0.0)"),
+                SocketType::Vec2 => format!("vec4<f32>({v}, 0.0, 0.0)"),
+                _ => format!("vec4<f32>({v}, 0.0)"),
+            };
+            (value, MaterialTraits::default())
+        },
+    )
 }
 
 // ------------------------------------------------------------------ flattening

@@ -239,31 +239,12 @@ impl PluginHost {
     pub fn import(&self, path: &Path) -> Result<Imported, PluginError> {
         let plugin = self.find(PluginKind::Importer, path)?;
         let import = plugin.import.expect("importers have an import function");
-        let c_path = CString::new(path.to_string_lossy().as_bytes()).map_err(|_| {
-            PluginError::Invalid(format!("{}: the path holds a NUL", path.display()))
-        })?;
+        let c_path = c_path(path)?;
         let mut state = builder::ImportState::new(path);
         let raw = state.raw_builder();
-        let mut message = vec![0 as c_char; 4096];
-        let mut error = api::ErrorBuffer {
-            data: message.as_mut_ptr(),
-            capacity: message.len(),
-        };
-        let status = unsafe { import(c_path.as_ptr(), &raw, &mut error) };
-        if status != api::STATUS_OK {
-            let text = unsafe { CStr::from_ptr(message.as_ptr()) }
-                .to_string_lossy()
-                .into_owned();
-            return Err(PluginError::Failed {
-                plugin: plugin.info.name.clone(),
-                path: path.display().to_string(),
-                message: if text.is_empty() {
-                    format!("error status {status}")
-                } else {
-                    text
-                },
-            });
-        }
+        plugin.call(path, |error| unsafe {
+            import(c_path.as_ptr(), &raw, error)
+        })?;
         state.finish().map_err(|message| PluginError::Failed {
             plugin: plugin.info.name.clone(),
             path: path.display().to_string(),
@@ -275,9 +256,7 @@ impl PluginHost {
     pub fn export(&self, path: &Path, film: &ExportFilm, options: &str) -> Result<(), PluginError> {
         let plugin = self.find(PluginKind::Exporter, path)?;
         let export = plugin.export.expect("exporters have an export function");
-        let c_path = CString::new(path.to_string_lossy().as_bytes()).map_err(|_| {
-            PluginError::Invalid(format!("{}: the path holds a NUL", path.display()))
-        })?;
+        let c_path = c_path(path)?;
         let c_options = CString::new(options.replace('\0', " ")).expect("NULs replaced");
         let names: Vec<CString> = film
             .layers
@@ -302,27 +281,45 @@ impl PluginHost {
             layer_count: layers.len() as u32,
             layers: layers.as_ptr(),
         };
+        plugin.call(path, |error| unsafe {
+            export(c_path.as_ptr(), &view, c_options.as_ptr(), error)
+        })
+    }
+}
+
+fn c_path(path: &Path) -> Result<CString, PluginError> {
+    CString::new(path.to_string_lossy().as_bytes())
+        .map_err(|_| PluginError::Invalid(format!("{}: the path holds a NUL", path.display())))
+}
+
+impl Loaded {
+    /// Runs a plugin function with an error buffer; its status and message as a result.
+    fn call(
+        &self,
+        path: &Path,
+        f: impl FnOnce(*mut api::ErrorBuffer) -> i32,
+    ) -> Result<(), PluginError> {
         let mut message = vec![0 as c_char; 4096];
         let mut error = api::ErrorBuffer {
             data: message.as_mut_ptr(),
             capacity: message.len(),
         };
-        let status = unsafe { export(c_path.as_ptr(), &view, c_options.as_ptr(), &mut error) };
-        if status != api::STATUS_OK {
-            let text = unsafe { CStr::from_ptr(message.as_ptr()) }
-                .to_string_lossy()
-                .into_owned();
-            return Err(PluginError::Failed {
-                plugin: plugin.info.name.clone(),
-                path: path.display().to_string(),
-                message: if text.is_empty() {
-                    format!("error status {status}")
-                } else {
-                    text
-                },
-            });
+        let status = f(&mut error);
+        if status == api::STATUS_OK {
+            return Ok(());
         }
-        Ok(())
+        let text = unsafe { CStr::from_ptr(message.as_ptr()) }
+            .to_string_lossy()
+            .into_owned();
+        Err(PluginError::Failed {
+            plugin: self.info.name.clone(),
+            path: path.display().to_string(),
+            message: if text.is_empty() {
+                format!("error status {status}")
+            } else {
+                text
+            },
+        })
     }
 }
 

@@ -250,7 +250,13 @@ struct MaterialDesc {
 
 impl Default for MaterialDesc {
     fn default() -> Self {
-        let m = Material::default();
+        Self::from_params(&Material::default())
+    }
+}
+
+impl MaterialDesc {
+    /// The fixed parameters of `m` (its graph, if any, aside).
+    fn from_params(m: &Material) -> Self {
         Self {
             base_color: m.base_color.into(),
             base_weight: m.base_weight,
@@ -534,34 +540,7 @@ pub fn save_scene(
                     ..MaterialDesc::default()
                 }
             }
-            None => MaterialDesc {
-                base_color: m.base_color.into(),
-                base_weight: m.base_weight,
-                diffuse_roughness: m.diffuse_roughness,
-                metallic: m.metallic,
-                roughness: m.roughness,
-                anisotropy: m.anisotropy,
-                anisotropy_rotation: m.anisotropy_rotation,
-                specular_weight: m.specular_weight,
-                specular_color: m.specular_color.into(),
-                ior: m.ior,
-                transmission_weight: m.transmission_weight,
-                transmission_color: m.transmission_color.into(),
-                transmission_depth: m.transmission_depth,
-                coat_weight: m.coat_weight,
-                coat_roughness: m.coat_roughness,
-                coat_ior: m.coat_ior,
-                coat_color: m.coat_color.into(),
-                sheen_weight: m.sheen_weight,
-                sheen_color: m.sheen_color.into(),
-                sheen_roughness: m.sheen_roughness,
-                emission: m.emission.into(),
-                emission_strength: 1.0,
-                opacity: m.opacity,
-                thin_walled: m.thin_walled,
-                graph: None,
-                graph_file: None,
-            },
+            None => MaterialDesc::from_params(m),
         };
         material_names.push(name.clone());
         materials.insert(name, desc);

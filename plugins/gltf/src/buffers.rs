@@ -141,6 +141,11 @@ impl Buffers {
         Ok(Self { data })
     }
 
+    /// Whether buffer `index` has bytes (it exists and was given a URI or the GLB chunk).
+    pub fn has_data(&self, index: usize) -> bool {
+        matches!(self.data.get(index), Some(Some(_)))
+    }
+
     /// The bytes of buffer view `index`, and its stride if it declares one.
     pub fn view(&self, root: &json::Root, index: usize) -> Result<(&[u8], Option<usize>), String> {
         let view = root

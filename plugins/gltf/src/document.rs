@@ -23,6 +23,15 @@ pub struct Document {
     pub blob: Option<Vec<u8>>,
     /// Animations in the file (not imported; removed before parsing the rest).
     pub animations: usize,
+    /// The JSON as written (integers written as `1.0` made integers), before anything
+    /// was removed or filled in: for the checks that need what the JSON model drops
+    /// (empty arrays, extension objects in any place).
+    pub raw: json::Value,
+    /// Whether the file is a GLB container.
+    pub glb: bool,
+    /// Problems of the container or the JSON text that parsing tolerated (a byte-order
+    /// mark, a chunk length that is not a multiple of 4).
+    pub container_problems: Vec<String>,
 }
 
 /// Reads `path`, which may be either JSON glTF or binary GLB (told apart by the magic).
@@ -46,17 +55,25 @@ pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
 
 /// Parses the bytes of a `.gltf` or `.glb` file.
 pub fn parse(bytes: &[u8]) -> Result<Document, String> {
-    let (json_bytes, blob) = if bytes.starts_with(b"glTF") {
-        let (json_bytes, blob) = split_glb(bytes)?;
+    let glb = bytes.starts_with(b"glTF");
+    let mut container_problems = Vec::new();
+    let (json_bytes, blob) = if glb {
+        let (json_bytes, blob) = split(bytes, &mut container_problems)?;
         (json_bytes, blob.map(<[u8]>::to_vec))
     } else {
         (bytes, None)
     };
     // A UTF-8 byte-order mark is forbidden by the spec but written by some tools, as is
     // a GLB JSON chunk padded with NULs instead of spaces.
-    let json_bytes = json_bytes
-        .strip_prefix(b"\xEF\xBB\xBF")
-        .unwrap_or(json_bytes);
+    let json_bytes = match json_bytes.strip_prefix(b"\xEF\xBB\xBF") {
+        Some(rest) => {
+            container_problems.push(
+                "the JSON starts with a UTF-8 byte-order mark, which glTF forbids".to_owned(),
+            );
+            rest
+        }
+        None => json_bytes,
+    };
     let end = json_bytes
         .iter()
         .rposition(|&b| b != 0)
@@ -65,6 +82,8 @@ pub fn parse(bytes: &[u8]) -> Result<Document, String> {
     let mut value: json::Value = json::deserialize::from_slice(json_bytes)
         .map_err(|e| format!("not a valid JSON document: {e}"))?;
     check_version(&value)?;
+    integral_floats(&mut value);
+    let raw = value.clone();
     let animations = relax(&mut value);
     let root: json::Root = json::deserialize::from_value(value)
         .map_err(|e| format!("not a valid glTF document: {e}"))?;
@@ -72,6 +91,9 @@ pub fn parse(bytes: &[u8]) -> Result<Document, String> {
         root,
         blob,
         animations,
+        raw,
+        glb,
+        container_problems,
     })
 }
 
@@ -114,10 +136,10 @@ fn integral_floats(value: &mut json::Value) {
 
 /// Removes what this importer does not read and gltf-json parses more strictly than
 /// the spec (animations: KHR_animation_pointer channels have no `node`), and fills in
-/// what the spec makes optional but gltf-json requires (a scene's `nodes`, integers
-/// written as `1.0`). Returns the number of animations removed.
+/// what the spec makes optional but gltf-json requires (a scene's `nodes`; integers
+/// written as `1.0` are rewritten by [`integral_floats`] first). Returns the number of
+/// animations removed.
 fn relax(value: &mut json::Value) -> usize {
-    integral_floats(value);
     let Some(object) = value.as_object_mut() else {
         return 0;
     };
@@ -146,6 +168,14 @@ const CHUNK_BIN: u32 = 0x004E_4942;
 /// Splits a GLB (glTF 2.0 spec §4.4) into its JSON chunk and optional BIN chunk.
 /// Chunks of other types are skipped, as the spec asks.
 pub fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
+    split(bytes, &mut Vec::new())
+}
+
+/// [`split_glb`], noting in `problems` what it tolerates (unaligned chunk lengths).
+fn split<'a>(
+    bytes: &'a [u8],
+    problems: &mut Vec<String>,
+) -> Result<(&'a [u8], Option<&'a [u8]>), String> {
     let header = |what: &str| format!("not a valid GLB file: {what}");
     let version = le_u32(bytes, 4).ok_or_else(|| header("truncated header"))?;
     if version != 2 {
@@ -179,6 +209,11 @@ pub fn split_glb(bytes: &[u8]) -> Result<(&[u8], Option<&[u8]>), String> {
                 ))
             })?;
         let chunk = &data[start..end];
+        if chunk_length % 4 != 0 {
+            problems.push(format!(
+                "the GLB's chunk {index} is {chunk_length} bytes long, not a multiple of 4 as the spec requires"
+            ));
+        }
         match (index, kind) {
             (0, CHUNK_JSON) => json = Some(chunk),
             (0, _) => return Err(header("the first chunk is not JSON")),
