@@ -172,3 +172,39 @@ fn an_image_textured_material_renders_its_image() {
     let c = px[12 * 32 + 16];
     assert!(c.x > 4.0 * c.y && c.x > 4.0 * c.z, "centre pixel {c}");
 }
+
+#[test]
+fn vertex_colours_reach_the_color_attribute_node() {
+    // An emitter whose colour is the mesh's vertex colour, seen head-on: the image is the
+    // colour interpolated across the quad.
+    let mut g = Graph::default();
+    g.add("vc", Node::new("vertex_color"));
+    g.add(
+        "s",
+        Node::new("principled_bsdf")
+            .input("base_color", [0.0; 3])
+            .input("specular_weight", 0.0)
+            .input("emission_color", link("vc", "color"))
+            .input("emission_strength", 1.0),
+    );
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("s", "bsdf")),
+    );
+    let mut scene = Scene::empty(Camera {
+        up: Vec3::Z,
+        ..Camera::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, 10.0)
+    });
+    let m = scene.add_material(Material::from_graph("painted", g).unwrap());
+    let mut quad = shapes::quad();
+    quad.colors = vec![glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 4];
+    let q = scene.add_mesh(quad);
+    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
+    let px = render(&gpu(), &scene, settings(8, 8, 4)).radiance();
+    for p in &px {
+        assert!(
+            (*p - Vec3::new(1.0, 0.0, 0.0)).abs().max_element() < 1e-3,
+            "pixel {p}"
+        );
+    }
+}

@@ -350,7 +350,7 @@ fn build() -> Vec<NodeDef> {
             kind: "vertex_color",
             label: "Color Attribute",
             category: "Input",
-            doc: "The mesh's vertex colour, interpolated (white where the mesh has none).",
+            doc: "The mesh's vertex colour (glTF COLOR_0, 8 bits per channel), interpolated; white where the mesh has none.",
             inputs: vec![],
             outputs: vec![
                 out("color", Color, ".rgb", "colour"),

@@ -182,9 +182,17 @@ impl ImportState {
                     .push(format!("mesh \"{name}\": non-finite UVs dropped"));
             }
         }
-        if !m.colors.is_null() {
-            self.warnings
-                .push(format!("mesh \"{name}\": vertex colours are not kept yet"));
+        if let Some(colors) = unsafe { floats(m.colors, n, 4) } {
+            if colors.iter().all(|v| v.is_finite()) {
+                mesh.colors = colors
+                    .chunks_exact(4)
+                    .map(|c| glam::Vec4::new(c[0], c[1], c[2], c[3]))
+                    .collect();
+            } else {
+                self.warnings.push(format!(
+                    "mesh \"{name}\": non-finite vertex colours dropped"
+                ));
+            }
         }
         self.vertices += n;
         self.triangles += mesh.indices.len();

@@ -245,9 +245,14 @@ impl SceneArrays {
             for v in 0..mesh.positions.len() {
                 let n = normals.get(v).map_or(0, |&n| encode_octahedral(n));
                 let uv = mesh.uvs.get(v).copied().unwrap_or(Vec2::ZERO);
-                // w: the vertex colour as RGBA8 (white: meshes carry no colours yet).
-                a.vertices
-                    .push([n, uv.x.to_bits(), uv.y.to_bits(), u32::MAX]);
+                // w: the vertex colour as RGBA8, white where the mesh has none.
+                let colour = mesh.colors.get(v).map_or(u32::MAX, |c| {
+                    u32::from_le_bytes(
+                        c.to_array()
+                            .map(|x| (x.clamp(0.0, 1.0) * 255.0).round() as u8),
+                    )
+                });
+                a.vertices.push([n, uv.x.to_bits(), uv.y.to_bits(), colour]);
             }
             mesh_flags[m] = if mesh.normals.is_empty() {
                 0

@@ -654,8 +654,11 @@ fn write_obj(mesh: &crate::scene::Mesh, path: &Path) -> std::io::Result<()> {
     use std::io::Write;
     let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
     writeln!(out, "# {} (written by Kiln)", mesh.name)?;
-    for p in &mesh.positions {
-        writeln!(out, "v {} {} {}", p.x, p.y, p.z)?;
+    for (i, p) in mesh.positions.iter().enumerate() {
+        match mesh.colors.get(i) {
+            Some(c) => writeln!(out, "v {} {} {} {} {} {}", p.x, p.y, p.z, c.x, c.y, c.z)?,
+            None => writeln!(out, "v {} {} {}", p.x, p.y, p.z)?,
+        }
     }
     for t in &mesh.uvs {
         writeln!(out, "vt {} {}", t.x, t.y)?;
@@ -788,6 +791,7 @@ fn build_scene(
                 normals: normals.into_iter().map(Vec3::from).collect(),
                 uvs: uvs.into_iter().map(Vec2::from).collect(),
                 indices,
+                ..Mesh::default()
             },
             MeshDesc::Obj(file) => {
                 let file = base_dir.join(file);
@@ -863,6 +867,7 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
     let mut mesh = Mesh::default();
     let mut all_have_normals = true;
     let mut all_have_uvs = true;
+    let mut all_have_colors = true;
     for model in &models {
         let m = &model.mesh;
         let base = mesh.positions.len() as u32;
@@ -885,6 +890,15 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
             mesh.uvs
                 .extend(m.texcoords.chunks_exact(2).map(|t| Vec2::new(t[0], t[1])));
         }
+        // Colours after the position (`v x y z r g b`), an extension many tools write.
+        all_have_colors &= m.vertex_color.len() == count * 3;
+        if all_have_colors {
+            mesh.colors.extend(
+                m.vertex_color
+                    .chunks_exact(3)
+                    .map(|c| glam::Vec4::new(c[0], c[1], c[2], 1.0)),
+            );
+        }
         mesh.indices.extend(
             m.indices
                 .chunks_exact(3)
@@ -896,6 +910,9 @@ fn load_obj(path: &Path) -> Result<Mesh, String> {
     }
     if !all_have_uvs {
         mesh.uvs.clear();
+    }
+    if !all_have_colors {
+        mesh.colors.clear();
     }
     Ok(mesh)
 }

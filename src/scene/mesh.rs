@@ -1,6 +1,6 @@
 //! Triangle meshes with optional per-vertex normals and texture coordinates.
 
-use glam::{Vec2, Vec3};
+use glam::{Vec2, Vec3, Vec4};
 
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Mesh {
@@ -10,6 +10,9 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Empty, or one coordinate per position.
     pub uvs: Vec<Vec2>,
+    /// Empty, or one linear RGBA colour per position (the Color Attribute node; stored
+    /// with 8 bits per channel, so clamped to [0, 1]).
+    pub colors: Vec<Vec4>,
     pub indices: Vec<[u32; 3]>,
 }
 
@@ -52,6 +55,13 @@ impl Mesh {
         }
         if let Some(i) = self.uvs.iter().position(|uv| !uv.is_finite()) {
             return Err(format!("uv {i} is not finite"));
+        }
+        if !self.colors.is_empty() && self.colors.len() != self.positions.len() {
+            return Err(format!(
+                "has {} colours for {} positions",
+                self.colors.len(),
+                self.positions.len()
+            ));
         }
         let n = self.positions.len() as u32;
         if let Some((t, tri)) = self

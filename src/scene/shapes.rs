@@ -25,6 +25,7 @@ pub fn quad() -> Mesh {
             Vec2::new(1.0, 0.0),
         ],
         indices: vec![[0, 1, 2], [0, 2, 3]],
+        ..Mesh::default()
     }
 }
 

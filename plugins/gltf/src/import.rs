@@ -17,7 +17,7 @@ use crate::buffers::Buffers;
 use crate::geometry::{self, primitive_name};
 use crate::images::{HostImages, ImageCache, NamedImages};
 use crate::material::{self, Variant};
-use crate::{document, extensions, scene};
+use crate::{document, extensions, scene, validate};
 
 /// Vertices and triangles one import hands over (the host's limits).
 const MAX_VERTICES: usize = 1 << 26;
@@ -51,6 +51,9 @@ pub fn import(path: &Path, builder: &mut Builder) -> Result<(), String> {
     }
     let base = path.parent().unwrap_or(Path::new("."));
     let buffers = Buffers::load(&doc.root, base, doc.blob.take())?;
+    for w in validate::check(&doc, &buffers, base) {
+        builder.warn(&w);
+    }
     let mut import = SceneImport {
         root: &doc.root,
         buffers: &buffers,

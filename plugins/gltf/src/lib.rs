@@ -6,7 +6,8 @@
 //! the file can be imported at all, [`buffers`] loads the bytes, [`scene`] walks the
 //! nodes, [`geometry`] (through [`accessor`]) turns primitives into triangle lists and
 //! [`material`] (through [`texture`], [`images`] and [`kmat`]) turns materials into
-//! `.kmat` graphs; [`import`] drives them and talks to the host.
+//! `.kmat` graphs; [`import`] drives them and talks to the host. [`validate`] checks the
+//! file against the rules parsing does not enforce and reports what breaks them.
 //!
 //! Not imported: animations, skins and morph targets (rest pose), orthographic cameras,
 //! second UV sets, points and lines, and extensions outside [`extensions::HANDLED`]
@@ -24,6 +25,7 @@ pub mod kmat;
 pub mod material;
 pub mod scene;
 pub mod texture;
+pub mod validate;
 
 use std::path::Path;
 

@@ -182,7 +182,9 @@ fn scan(
             return None;
         };
         let index_size = index_type.size();
-        let (index_bytes, _) = buffers.view(root, sparse.indices.buffer_view.value()).ok()?;
+        let (index_bytes, _) = buffers
+            .view(root, sparse.indices.buffer_view.value())
+            .ok()?;
         let (value_bytes, _) = buffers.view(root, sparse.values.buffer_view.value()).ok()?;
         let at = sparse.indices.byte_offset.0;
         let value_at = sparse.values.byte_offset.0;
@@ -404,11 +406,11 @@ pub fn check(root: &json::Root, buffers: &Buffers, uses: &Uses, report: &mut Rep
                 f.first_non_finite.unwrap_or(0)
             ));
         }
-        if f.below_min > 0 || f.above_max > 0 {
-            problems.push(format!(
-                "{} element(s) below its declared min and {} above its declared max",
-                f.below_min, f.above_max
-            ));
+        if f.below_min > 0 {
+            problems.push(format!("{} element(s) below its declared min", f.below_min));
+        }
+        if f.above_max > 0 {
+            problems.push(format!("{} element(s) above its declared max", f.above_max));
         }
         if complete && total > 0 {
             let mismatch = |declared: &Option<Vec<f64>>, actual: &[f64]| {
@@ -502,7 +504,10 @@ mod tests {
     #[test]
     fn matrix_columns_are_padded_to_four_bytes() {
         let m3 = layout(5121, "MAT3");
-        assert_eq!((m3.column_stride, m3.element_length, m3.default_stride), (4, 11, 12));
+        assert_eq!(
+            (m3.column_stride, m3.element_length, m3.default_stride),
+            (4, 11, 12)
+        );
         assert_eq!(m3.offset_of(4), 5);
         let m2 = layout(5121, "MAT2");
         assert_eq!((m2.element_length, m2.default_stride), (6, 8));

@@ -7,8 +7,8 @@
 //! Nothing here changes what is imported: the readers are bounds-checked on their own and
 //! the checks only read. They are bounded: accessor values are scanned up to
 //! [`MAX_ELEMENTS_SCANNED`] per accessor and [`MAX_VALUES_SCANNED`] per file (a warning
-//! says when a check stopped early), image files are read up to [`MAX_IMAGE_BYTES`], and
-//! at most [`MAX_WARNINGS`] warnings are listed.
+//! says when a check stopped early), image files are read up to [`MAX_IMAGE_BYTES`] each
+//! and [`MAX_IMAGE_FILE_BYTES`] in all, and at most [`MAX_WARNINGS`] warnings are listed.
 //!
 //! - [`raw`]: what only the JSON text shows (empty arrays, extension objects and their
 //!   declarations, values out of their schema ranges in materials and lights).
@@ -37,6 +37,8 @@ pub const MAX_ELEMENTS_SCANNED: u64 = 1 << 22;
 pub const MAX_VALUES_SCANNED: u64 = 1 << 26;
 /// Bytes of an external image file read to check its header.
 pub const MAX_IMAGE_BYTES: u64 = 1 << 22;
+/// Bytes of external image files read in all.
+pub const MAX_IMAGE_FILE_BYTES: u64 = 1 << 26;
 /// Warnings listed; the rest are counted in one more.
 pub const MAX_WARNINGS: usize = 40;
 
@@ -139,7 +141,7 @@ pub struct Uses {
     /// For an indices accessor: the fewest vertices among the primitives it indexes.
     pub index_limit: Vec<Option<u64>>,
     pub view_roles: Vec<ViewRoles>,
-    /// The distinct accessors that read each buffer view as vertex attributes.
+    /// The distinct accessors that read each buffer view as vertex attributes, sorted.
     pub view_vertex_accessors: Vec<Vec<usize>>,
 }
 
@@ -185,9 +187,7 @@ impl Uses {
                     }
                     if let Some(v) = view_of(a) {
                         uses.view_roles[v].vertex = true;
-                        if !uses.view_vertex_accessors[v].contains(&a) {
-                            uses.view_vertex_accessors[v].push(a);
-                        }
+                        uses.view_vertex_accessors[v].push(a);
                     }
                 }
                 for target in primitive.targets.iter().flatten() {
@@ -204,13 +204,14 @@ impl Uses {
                         uses.accessor_roles[a].vertex = true;
                         if let Some(v) = view_of(a) {
                             uses.view_roles[v].vertex = true;
-                            if !uses.view_vertex_accessors[v].contains(&a) {
-                                uses.view_vertex_accessors[v].push(a);
-                            }
+                            uses.view_vertex_accessors[v].push(a);
                         }
                     }
                 }
-                if let Some(a) = primitive.indices.map(|a| a.value()).filter(|&a| a < accessors)
+                if let Some(a) = primitive
+                    .indices
+                    .map(|a| a.value())
+                    .filter(|&a| a < accessors)
                 {
                     uses.label(a, || format!("indices of {mesh_name}"));
                     uses.accessor_roles[a].indices = true;
@@ -249,6 +250,10 @@ impl Uses {
                     }
                 }
             }
+        }
+        for accessors in &mut uses.view_vertex_accessors {
+            accessors.sort_unstable();
+            accessors.dedup();
         }
         for image in &root.images {
             if let Some(roles) = image

@@ -136,7 +136,10 @@ fn extension_lists(raw: &Value, report: &mut Report) {
             }
         }
         if !duplicates.is_empty() {
-            report.add(format!("{key} lists {} more than once", list(&duplicates, 4)));
+            report.add(format!(
+                "{key} lists {} more than once",
+                list(&duplicates, 4)
+            ));
         }
     }
     let unused: Vec<&String> = required.iter().filter(|r| !used.contains(r)).collect();
@@ -237,7 +240,11 @@ fn path_text(path: &[Segment]) -> String {
             Segment::Index(i) => s.push_str(&format!("[{i}]")),
         }
     }
-    if s.is_empty() { "the root".to_owned() } else { s }
+    if s.is_empty() {
+        "the root".to_owned()
+    } else {
+        s
+    }
 }
 
 /// UNDECLARED_EXTENSION and UNEXPECTED_EXTENSION_OBJECT: every `extensions` object
@@ -245,36 +252,62 @@ fn path_text(path: &[Segment]) -> String {
 /// extensions define.
 fn extension_objects(raw: &Value, report: &mut Report) {
     let used = strings(raw, "extensionsUsed");
-    // Per extension name: where it appears undeclared, where it appears misplaced.
-    let mut undeclared: Vec<(String, Vec<String>)> = Vec::new();
-    let mut misplaced: Vec<(String, Vec<String>)> = Vec::new();
+    let mut undeclared = Sightings::default();
+    let mut misplaced = Sightings::default();
     let mut path = Vec::new();
     walk(raw, &mut path, &mut |path, name| {
-        let note = |entries: &mut Vec<(String, Vec<String>)>| {
-            let at = path_text(path);
-            match entries.iter_mut().find(|(n, _)| n == name) {
-                Some((_, places)) => places.push(at),
-                None => entries.push((name.to_owned(), vec![at])),
-            }
-        };
         if !used.iter().any(|u| u == name) {
-            note(&mut undeclared);
+            undeclared.note(name, path);
         }
         if allowed_places(name).is_some_and(|places| !places.contains(&place(path))) {
-            note(&mut misplaced);
+            misplaced.note(name, path);
         }
     });
-    for (name, places) in undeclared {
+    for (name, places, count) in undeclared.0 {
         report.add(format!(
             "the extension {name} is used ({}) but not declared in extensionsUsed",
-            list(&places, 3)
+            Sightings::text(&places, count)
         ));
     }
-    for (name, places) in misplaced {
+    for (name, places, count) in misplaced.0 {
         report.add(format!(
             "the extension {name} appears where it does not apply ({}); ignored there",
-            list(&places, 3)
+            Sightings::text(&places, count)
         ));
+    }
+}
+
+/// Where each extension name was seen: the first few places and how many in all.
+#[derive(Default)]
+struct Sightings(Vec<(String, Vec<String>, usize)>);
+
+impl Sightings {
+    const PLACES_KEPT: usize = 3;
+    /// Distinct names followed; further names are not reported.
+    const NAMES_KEPT: usize = 32;
+
+    fn note(&mut self, name: &str, path: &[Segment]) {
+        let i = match self.0.iter().position(|(n, _, _)| n == name) {
+            Some(i) => i,
+            None if self.0.len() < Self::NAMES_KEPT => {
+                self.0.push((name.to_owned(), Vec::new(), 0));
+                self.0.len() - 1
+            }
+            None => return,
+        };
+        let (_, places, count) = &mut self.0[i];
+        *count += 1;
+        if places.len() < Self::PLACES_KEPT {
+            places.push(path_text(path));
+        }
+    }
+
+    fn text(places: &[String], count: usize) -> String {
+        let mut s = places.join(", ");
+        if count > places.len() {
+            s.push_str(&format!(" and {} more", count - places.len()));
+        }
+        s
     }
 }
 
@@ -427,12 +460,20 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
     (&["alphaCutoff"], Range::NonNegative),
     (&["occlusionTexture", "strength"], Range::Unit),
     (
-        &["extensions", "KHR_materials_emissive_strength", "emissiveStrength"],
+        &[
+            "extensions",
+            "KHR_materials_emissive_strength",
+            "emissiveStrength",
+        ],
         Range::NonNegative,
     ),
     (&["extensions", "KHR_materials_ior", "ior"], Range::Ior),
     (
-        &["extensions", "KHR_materials_transmission", "transmissionFactor"],
+        &[
+            "extensions",
+            "KHR_materials_transmission",
+            "transmissionFactor",
+        ],
         Range::Unit,
     ),
     (
@@ -452,7 +493,11 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_specular", "specularColorFactor"],
+        &[
+            "extensions",
+            "KHR_materials_specular",
+            "specularColorFactor",
+        ],
         Range::NonNegative,
     ),
     (
@@ -460,7 +505,11 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_clearcoat", "clearcoatRoughnessFactor"],
+        &[
+            "extensions",
+            "KHR_materials_clearcoat",
+            "clearcoatRoughnessFactor",
+        ],
         Range::Unit,
     ),
     (
@@ -472,19 +521,35 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_pbrSpecularGlossiness", "diffuseFactor"],
+        &[
+            "extensions",
+            "KHR_materials_pbrSpecularGlossiness",
+            "diffuseFactor",
+        ],
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_pbrSpecularGlossiness", "specularFactor"],
+        &[
+            "extensions",
+            "KHR_materials_pbrSpecularGlossiness",
+            "specularFactor",
+        ],
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_pbrSpecularGlossiness", "glossinessFactor"],
+        &[
+            "extensions",
+            "KHR_materials_pbrSpecularGlossiness",
+            "glossinessFactor",
+        ],
         Range::Unit,
     ),
     (
-        &["extensions", "KHR_materials_iridescence", "iridescenceFactor"],
+        &[
+            "extensions",
+            "KHR_materials_iridescence",
+            "iridescenceFactor",
+        ],
         Range::Unit,
     ),
     (
@@ -492,15 +557,27 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
         Range::AtLeastOne,
     ),
     (
-        &["extensions", "KHR_materials_iridescence", "iridescenceThicknessMinimum"],
+        &[
+            "extensions",
+            "KHR_materials_iridescence",
+            "iridescenceThicknessMinimum",
+        ],
         Range::NonNegative,
     ),
     (
-        &["extensions", "KHR_materials_iridescence", "iridescenceThicknessMaximum"],
+        &[
+            "extensions",
+            "KHR_materials_iridescence",
+            "iridescenceThicknessMaximum",
+        ],
         Range::NonNegative,
     ),
     (
-        &["extensions", "KHR_materials_anisotropy", "anisotropyStrength"],
+        &[
+            "extensions",
+            "KHR_materials_anisotropy",
+            "anisotropyStrength",
+        ],
         Range::Unit,
     ),
     (
@@ -585,7 +662,7 @@ fn materials(raw: &Value, root: &json::Root, report: &mut Report) {
         if !bad.is_empty() {
             let name = material.get("name").and_then(Value::as_str);
             report.add(format!(
-                "{}: values out of range: {}; they are clamped",
+                "{}: values out of range: {}; Kiln clamps them or uses the default",
                 named("material", i, name),
                 bad.join("; ")
             ));
@@ -669,7 +746,10 @@ fn lights(raw: &Value, report: &mut Report) {
             if let Some(a) = outer.filter(|&a| !(a > 0.0 && a <= FRAC_PI_2)) {
                 bad.push(format!("spot.outerConeAngle = {a} (must be in (0, π/2])"));
             }
-            let (inner, outer) = (inner.unwrap_or(0.0), outer.unwrap_or(std::f64::consts::FRAC_PI_4));
+            let (inner, outer) = (
+                inner.unwrap_or(0.0),
+                outer.unwrap_or(std::f64::consts::FRAC_PI_4),
+            );
             if outer <= inner {
                 bad.push(format!(
                     "spot.outerConeAngle {outer} is not greater than innerConeAngle {inner}"
@@ -701,7 +781,12 @@ mod tests {
             Place::Other
         );
         assert_eq!(
-            place(&[K("materials"), I(0), K("pbrMetallicRoughness"), K("baseColorTexture")]),
+            place(&[
+                K("materials"),
+                I(0),
+                K("pbrMetallicRoughness"),
+                K("baseColorTexture")
+            ]),
             Place::TextureInfo
         );
         assert_eq!(

@@ -35,7 +35,13 @@ pub fn check(
 /// Buffers: a zero byteLength (VALUE_NOT_IN_RANGE), a data URI that is malformed
 /// (INVALID_URI) or not of a buffer's media type (BUFFER_DATA_URI_MIME_TYPE_INVALID), and
 /// in a GLB a buffer without URI that no binary chunk fills (BUFFER_MISSING_GLB_DATA).
-fn buffer_objects(root: &json::Root, raw: &Value, glb: bool, buffers: &Buffers, report: &mut Report) {
+fn buffer_objects(
+    root: &json::Root,
+    raw: &Value,
+    glb: bool,
+    buffers: &Buffers,
+    report: &mut Report,
+) {
     for (i, buffer) in root.buffers.iter().enumerate() {
         let name = named("buffer", i, buffer.name.as_deref());
         let declared = raw
@@ -43,7 +49,9 @@ fn buffer_objects(root: &json::Root, raw: &Value, glb: bool, buffers: &Buffers, 
             .and_then(|b| b.get(i))
             .is_some_and(|b| b.get("byteLength").is_some());
         if declared && buffer.byte_length.0 == 0 {
-            report.add(format!("{name}: byteLength is 0 (a buffer holds at least 1 byte)"));
+            report.add(format!(
+                "{name}: byteLength is 0 (a buffer holds at least 1 byte)"
+            ));
         }
         match &buffer.uri {
             Some(uri) => {
@@ -59,14 +67,10 @@ fn buffer_objects(root: &json::Root, raw: &Value, glb: bool, buffers: &Buffers, 
                     }
                 }
             }
-            None if glb && !buffers.has_data(i) => {
-                let why = if i == 0 {
-                    "the GLB has no binary chunk"
-                } else {
-                    "only the first buffer can be the GLB's binary chunk"
-                };
-                report.add(format!("{name} has no URI and {why}; it holds no data"));
-            }
+            // Later buffers without a URI are placeholders, which the spec allows.
+            None if glb && i == 0 && !buffers.has_data(0) => report.add(format!(
+                "{name} has no URI and the GLB has no binary chunk to hold its data"
+            )),
             None => {}
         }
     }
@@ -90,7 +94,9 @@ pub fn media_type(header: &str) -> Result<&str, String> {
             continue;
         }
         if p.is_empty() || !p.contains('=') {
-            return Err(format!("the parameter \"{p}\" in \"{header}\" is not attribute=value"));
+            return Err(format!(
+                "the parameter \"{p}\" in \"{header}\" is not attribute=value"
+            ));
         }
     }
     if !media.is_empty() && media.split('/').count() != 2 {
@@ -116,7 +122,10 @@ fn buffer_views(root: &json::Root, uses: &Uses, report: &mut Report) {
         }
         let b = view.buffer.value();
         if let Some(buffer) = root.buffers.get(b) {
-            if offset.checked_add(length).is_none_or(|end| end > buffer.byte_length.0) {
+            if offset
+                .checked_add(length)
+                .is_none_or(|end| end > buffer.byte_length.0)
+            {
                 problems.push(format!(
                     "offset {offset} + length {length} runs past the {} bytes of buffer {b}",
                     buffer.byte_length.0
@@ -224,9 +233,9 @@ fn accessors(root: &json::Root, uses: &Uses, report: &mut Report) {
         }
         for (key, value) in [("min", &accessor.min), ("max", &accessor.max)] {
             if let Some(v) = value {
-                let ok = v
-                    .as_array()
-                    .is_some_and(|a| a.len() == layout.components && a.iter().all(Value::is_number));
+                let ok = v.as_array().is_some_and(|a| {
+                    a.len() == layout.components && a.iter().all(Value::is_number)
+                });
                 if !ok {
                     problems.push(format!(
                         "{key} is not an array of {} numbers",
@@ -296,7 +305,13 @@ fn accessors(root: &json::Root, uses: &Uses, report: &mut Report) {
                 Checked::Invalid => 4,
             };
             let parts = [
-                ("indices", sparse.indices.buffer_view.value(), sparse.indices.byte_offset.0, index_size, index_size),
+                (
+                    "indices",
+                    sparse.indices.buffer_view.value(),
+                    sparse.indices.byte_offset.0,
+                    index_size,
+                    index_size,
+                ),
                 (
                     "values",
                     sparse.values.buffer_view.value(),
@@ -332,7 +347,11 @@ fn accessors(root: &json::Root, uses: &Uses, report: &mut Report) {
 
 fn push(report: &mut Report, uses: &Uses, root: &json::Root, i: usize, problems: Vec<String>) {
     if !problems.is_empty() {
-        report.add(format!("{}: {}", uses.accessor(root, i), problems.join("; ")));
+        report.add(format!(
+            "{}: {}",
+            uses.accessor(root, i),
+            problems.join("; ")
+        ));
     }
 }
 
@@ -362,7 +381,8 @@ fn meshes(root: &json::Root, report: &mut Report) {
                 .collect();
             if let Some((_, first)) = counts.first() {
                 if counts.iter().any(|(_, c)| c != first) {
-                    let each: Vec<String> = counts.iter().map(|(s, c)| format!("{s} {c}")).collect();
+                    let each: Vec<String> =
+                        counts.iter().map(|(s, c)| format!("{s} {c}")).collect();
                     problems.push(format!(
                         "its attributes have different counts ({})",
                         list(&each, 6)
@@ -374,8 +394,12 @@ fn meshes(root: &json::Root, report: &mut Report) {
                 .iter()
                 .filter(|(_, a)| {
                     accessor(a.value()).is_some_and(|a| {
-                        a.component_type
-                            == Checked::Valid(json::accessor::GenericComponentType(ComponentType::U32))
+                        matches!(
+                            a.component_type,
+                            Checked::Valid(json::accessor::GenericComponentType(
+                                ComponentType::U32
+                            ))
+                        )
                     })
                 })
                 .map(|(s, _)| semantic_name(s))
@@ -465,7 +489,10 @@ fn meshes(root: &json::Root, report: &mut Report) {
                 }
             }
             if !problems.is_empty() {
-                report.add(format!("{mesh_name} primitive {p}: {}", problems.join("; ")));
+                report.add(format!(
+                    "{mesh_name} primitive {p}: {}",
+                    problems.join("; ")
+                ));
             }
         }
         let targets: Vec<usize> = mesh
@@ -587,22 +614,25 @@ fn nodes(root: &json::Root, report: &mut Report) {
     }
 }
 
-/// The parents of each node, in the order the file lists them.
+/// The distinct parents of each node, lowest index first.
 fn parents(root: &json::Root) -> Vec<Vec<usize>> {
     let mut parents = vec![Vec::new(); root.nodes.len()];
     for (p, node) in root.nodes.iter().enumerate() {
         for c in node.children.iter().flatten() {
             if let Some(list) = parents.get_mut(c.value()) {
-                if !list.contains(&p) {
-                    list.push(p);
-                }
+                list.push(p);
             }
         }
+    }
+    for list in &mut parents {
+        list.dedup();
     }
     parents
 }
 
-/// Nodes where a depth-first walk of the children finds a cycle closing.
+/// Nodes on cycles of the hierarchy (the first [`CYCLE_NODES_LISTED`] found), from a
+/// depth-first walk of the children: each edge back to a node on the current path closes
+/// a cycle made of the path from that node on.
 fn cycles(root: &json::Root) -> Vec<usize> {
     let n = root.nodes.len();
     // 0: not visited, 1: on the current path, 2: done.
@@ -624,9 +654,12 @@ fn cycles(root: &json::Root) -> Vec<usize> {
                         state[c] = 1;
                         stack.push((c, 0));
                     }
-                    Some(1) => {
-                        if !closing.contains(&c) {
-                            closing.push(c);
+                    Some(1) if closing.len() < CYCLE_NODES_LISTED => {
+                        let from = stack.iter().rposition(|&(n, _)| n == c).unwrap_or(0);
+                        for &(n, _) in &stack[from..] {
+                            if !closing.contains(&n) {
+                                closing.push(n);
+                            }
                         }
                     }
                     _ => {}
@@ -640,6 +673,9 @@ fn cycles(root: &json::Root) -> Vec<usize> {
     closing.sort_unstable();
     closing
 }
+
+/// Nodes on cycles that [`cycles`] collects.
+const CYCLE_NODES_LISTED: usize = 16;
 
 /// The ancestors of `node`, nearest first, following each node's first parent (at most
 /// one per node in the file, so cycles end).
@@ -673,8 +709,10 @@ fn skins(root: &json::Root, report: &mut Report) {
         if let Some(a) = skin.inverse_bind_matrices.map(|a| a.value()) {
             if let Some(accessor) = root.accessors.get(a) {
                 let format_ok = accessor.type_ == Checked::Valid(Type::Mat4)
-                    && accessor.component_type
-                        == Checked::Valid(json::accessor::GenericComponentType(ComponentType::F32));
+                    && matches!(
+                        accessor.component_type,
+                        Checked::Valid(json::accessor::GenericComponentType(ComponentType::F32))
+                    );
                 if !format_ok {
                     problems.push(format!(
                         "its inverse bind matrices (accessor {a}) are not MAT4 floats"
@@ -726,12 +764,10 @@ fn cameras(root: &json::Root, report: &mut Report) {
                 problems.push("it has both a perspective and an orthographic projection".to_owned())
             }
             (None, None) => problems.push("it has no projection".to_owned()),
-            (Some(_), None) if camera.type_ == Checked::Valid(CameraType::Orthographic) => {
-                problems.push("its type is orthographic but it has a perspective projection".to_owned())
-            }
-            (None, Some(_)) if camera.type_ == Checked::Valid(CameraType::Perspective) => {
-                problems.push("its type is perspective but it has an orthographic projection".to_owned())
-            }
+            (Some(_), None) if camera.type_ == Checked::Valid(CameraType::Orthographic) => problems
+                .push("its type is orthographic but it has a perspective projection".to_owned()),
+            (None, Some(_)) if camera.type_ == Checked::Valid(CameraType::Perspective) => problems
+                .push("its type is perspective but it has an orthographic projection".to_owned()),
             _ => {}
         }
         if let Some(p) = &camera.perspective {
@@ -750,13 +786,19 @@ fn cameras(root: &json::Root, report: &mut Report) {
         }
         if let Some(o) = &camera.orthographic {
             if o.xmag == 0.0 || o.ymag == 0.0 {
-                problems.push(format!("xmag {} and ymag {} must not be zero", o.xmag, o.ymag));
+                problems.push(format!(
+                    "xmag {} and ymag {} must not be zero",
+                    o.xmag, o.ymag
+                ));
             }
             if !(o.znear >= 0.0) {
                 problems.push(format!("znear {} is negative", o.znear));
             }
             if !(o.zfar > o.znear) {
-                problems.push(format!("zfar {} is not greater than znear {}", o.zfar, o.znear));
+                problems.push(format!(
+                    "zfar {} is not greater than znear {}",
+                    o.zfar, o.znear
+                ));
             }
         }
         if !problems.is_empty() {
@@ -791,7 +833,10 @@ mod tests {
 
     #[test]
     fn data_uri_media_types() {
-        assert_eq!(media_type("application/octet-stream;base64"), Ok("application/octet-stream"));
+        assert_eq!(
+            media_type("application/octet-stream;base64"),
+            Ok("application/octet-stream")
+        );
         assert!(media_type("application/octet-stream;;base64").is_err());
         assert_eq!(media_type("image/png;charset=x;base64"), Ok("image/png"));
         assert_eq!(data_uri_header("data:a/b;base64,AAAA"), Some("a/b;base64"));
