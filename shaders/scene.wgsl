@@ -70,6 +70,7 @@ struct Instance {
 // Instance.flags
 const INSTANCE_HAS_NORMALS: u32 = 1u;
 const INSTANCE_HAS_UVS: u32 = 2u;
+const INSTANCE_HAS_UV1: u32 = 4u;
 
 // A principled material: the seven vec4s of `principled_unpack`, emission (+ opacity in
 // w), and flags (x: thin-walled, y: transmissive, z: diffuse roughness and w: anisotropy

@@ -14,6 +14,8 @@ struct Surface {
     dpdv: vec3<f32>,
     // Interpolated vertex colour (white where the mesh has none).
     color: vec4<f32>,
+    // The second UV set (zero where the mesh has none).
+    uv1: vec2<f32>,
     material: u32,
 };
 
@@ -78,5 +80,12 @@ fn surface_at(hit: SceneHit) -> Surface {
         }
     }
     let color = b0 * unpack4x8unorm(v0.w) + hit.b1 * unpack4x8unorm(v1.w) + hit.b2 * unpack4x8unorm(v2.w);
-    return Surface(pe, ng, ns, uv, dpdu, dpdv, color, inst.material);
+    var uv1 = vec2<f32>(0.0);
+    if (FEATURE_UV1 && (inst.flags & INSTANCE_HAS_UV1) != 0u) {
+        let i0 = triangle_vertices[base];
+        let i1 = triangle_vertices[base + 1u];
+        let i2 = triangle_vertices[base + 2u];
+        uv1 = b0 * uv1_data[i0] + hit.b1 * uv1_data[i1] + hit.b2 * uv1_data[i2];
+    }
+    return Surface(pe, ng, ns, uv, dpdu, dpdv, color, uv1, inst.material);
 }

@@ -646,6 +646,13 @@ fn colour_adjustments_and_inputs_take_their_stated_values() {
         ),
         case(&on(Node::new("normal_map")), "n", "normal", c),
         case(&graph(&[("n", Node::new("object_info"))]), "n", "random", c),
+        // The probe's second UV set is the first one swapped.
+        case(
+            &graph(&[("n", Node::new("texture_coordinate"))]),
+            "n",
+            "uv1",
+            c,
+        ),
     ]);
     let near3 = |what: &str, got: [f32; 4], want: [f32; 3]| {
         for k in 0..3 {
@@ -669,6 +676,7 @@ fn colour_adjustments_and_inputs_take_their_stated_values() {
     near3("uv", v[9], [c[0], c[1], 0.0]);
     near3("flat normal map", v[10], [0.0, 0.0, 1.0]);
     assert_near("instance random", v[11][0], 0.5, 0.0);
+    near3("uv1", v[12], [c[1], c[0], 0.0]);
 }
 
 #[test]

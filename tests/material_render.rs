@@ -208,3 +208,45 @@ fn vertex_colours_reach_the_color_attribute_node() {
         );
     }
 }
+
+#[test]
+fn the_second_uv_set_reaches_the_texture_coordinate_node() {
+    // An emitter whose colour is (u1, v1, 0) of the mesh's second UV set, constant here.
+    let mut g = Graph::default();
+    g.add("tc", Node::new("texture_coordinate"));
+    g.add(
+        "s",
+        Node::new("principled_bsdf")
+            .input("base_color", [0.0; 3])
+            .input("specular_weight", 0.0)
+            .input("emission_color", link("tc", "uv1"))
+            .input("emission_strength", 1.0),
+    );
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("s", "bsdf")),
+    );
+    let mut scene = Scene::empty(Camera {
+        up: Vec3::Z,
+        ..Camera::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, 10.0)
+    });
+    let m = scene.add_material(Material::from_graph("uv1", g).unwrap());
+    let mut quad = shapes::quad();
+    quad.uvs1 = vec![glam::Vec2::new(0.25, 0.75); 4];
+    let q = scene.add_mesh(quad);
+    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
+    // A second mesh without the set shares the scene (it reads zeros).
+    let plain = scene.add_mesh(shapes::quad());
+    scene.add_instance(
+        plain,
+        m,
+        Affine3A::from_translation(Vec3::new(0.0, -5.0, 0.0)),
+    );
+    let px = render(&gpu(), &scene, settings(8, 8, 4)).radiance();
+    for p in &px {
+        assert!(
+            (*p - Vec3::new(0.25, 0.75, 0.0)).abs().max_element() < 1e-5,
+            "pixel {p}"
+        );
+    }
+}

@@ -70,7 +70,7 @@ static int32_t import(const char *path, const KilnSceneBuilder *b, KilnErrorBuff
     (void)path; (void)e;
     float p[9] = {0, 0, 0, 1, 0, 0, 0, 1, 0};
     uint32_t good[3] = {0, 1, 2}, bad[3] = {0, 1, 7};
-    KilnMeshData m = {"tri", 3, p, 0, 0, 0, 0, good, 3};
+    KilnMeshData m = {"tri", 3, p, 0, 0, 0, 0, 0, good, 3};
     uint32_t mesh = b->add_mesh(b->ctx, &m);
     m.indices = bad;
     if (b->add_mesh(b->ctx, &m) != KILN_INVALID_ID) return KILN_STATUS_ERROR;

@@ -37,6 +37,7 @@ typedef struct KilnMeshData {
     const float *positions; /* 3 per vertex */
     const float *normals;   /* 3 per vertex, or NULL */
     const float *uvs;       /* 2 per vertex, or NULL */
+    const float *uvs1;      /* a second UV set (TEXCOORD_1), 2 per vertex, or NULL */
     const float *tangents;  /* 4 per vertex, or NULL */
     const float *colors;    /* 4 per vertex, or NULL */
     const uint32_t *indices; /* 3 per triangle */

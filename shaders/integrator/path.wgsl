@@ -61,7 +61,7 @@ fn shading_point(s: Surface, hit: SceneHit, wo: vec3<f32>, front: bool) -> Shadi
     let n_object = normalize(transform_vector(transpose_rows(inst.to_world), s.ns));
     let location = vec3<f32>(inst.to_world[0].w, inst.to_world[1].w, inst.to_world[2].w);
     return ShadingPoint(
-        s.pe.p, s.ns, s.ng, s.uv, s.dpdu, s.dpdv, wo, p_object, n_object, generated, s.color,
+        s.pe.p, s.ns, s.ng, s.uv, s.uv1, s.dpdu, s.dpdv, wo, p_object, n_object, generated, s.color,
         instance_random(hit.instance), location, !front,
     );
 }

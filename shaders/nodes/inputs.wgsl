@@ -9,6 +9,8 @@ struct ShadingPoint {
     n: vec3<f32>,
     ng: vec3<f32>,
     uv: vec2<f32>,
+    // The second UV set (zero where the mesh has none).
+    uv1: vec2<f32>,
     // dp/du and dp/dv from the UVs (zero without UVs).
     dpdu: vec3<f32>,
     dpdv: vec3<f32>,
@@ -38,6 +40,7 @@ struct NdTextureCoordinate {
     generated: vec3<f32>,
     normal: vec3<f32>,
     uv: vec3<f32>,
+    uv1: vec3<f32>,
     object: vec3<f32>,
     world: vec3<f32>,
     reflection: vec3<f32>,
@@ -48,6 +51,7 @@ fn nd_texture_coordinate(sp: ShadingPoint) -> NdTextureCoordinate {
         sp.generated,
         sp.n_object,
         vec3<f32>(sp.uv, 0.0),
+        vec3<f32>(sp.uv1, 0.0),
         sp.p_object,
         sp.p,
         reflect(-sp.wo, sp.n),

@@ -20,7 +20,7 @@ fn node_probe(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgr
     let which = u32(probe_in[3u + 3u * i].x);
     let n = normalize(b.xyz);
     let sp = ShadingPoint(
-        a.xyz, n, n, vec2<f32>(a.w, b.w), vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), n,
+        a.xyz, n, n, vec2<f32>(a.w, b.w), vec2<f32>(b.w, a.w), vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), n,
         a.xyz, n, a.xyz, vec4<f32>(1.0), 0.5, vec3<f32>(0.0), false,
     );
     probe_out[i] = probe_value(which, sp);

@@ -297,6 +297,12 @@ fn build() -> Vec<NodeDef> {
                     "shading normal in object space",
                 ),
                 out("uv", Vector, ".uv", "the mesh's UV coordinates (z = 0)"),
+                out(
+                    "uv1",
+                    Vector,
+                    ".uv1",
+                    "the mesh's second UV set (z = 0; zero where it has none)",
+                ),
                 out("object", Vector, ".object", "object-space position"),
                 out("world", Vector, ".world", "world-space position"),
                 out(

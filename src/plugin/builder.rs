@@ -174,14 +174,8 @@ impl ImportState {
                 ));
             }
         }
-        if let Some(uvs) = unsafe { floats(m.uvs, n, 2) } {
-            if uvs.iter().all(|v| v.is_finite()) {
-                mesh.uvs = uvs.chunks_exact(2).map(|v| Vec2::new(v[0], v[1])).collect();
-            } else {
-                self.warnings
-                    .push(format!("mesh \"{name}\": non-finite UVs dropped"));
-            }
-        }
+        mesh.uvs = self.uv_set(m.uvs, n, &name, "UVs");
+        mesh.uvs1 = self.uv_set(m.uvs1, n, &name, "second-set UVs");
         if let Some(colors) = unsafe { floats(m.colors, n, 4) } {
             if colors.iter().all(|v| v.is_finite()) {
                 mesh.colors = colors
@@ -198,6 +192,20 @@ impl ImportState {
         self.triangles += mesh.indices.len();
         self.scene.meshes.push(mesh);
         (self.scene.meshes.len() - 1) as u32
+    }
+
+    /// `n` UVs from `p`, or none (with a warning when they are not finite).
+    fn uv_set(&mut self, p: *const f32, n: usize, mesh: &str, what: &str) -> Vec<Vec2> {
+        let Some(uvs) = (unsafe { floats(p, n, 2) }) else {
+            return Vec::new();
+        };
+        if uvs.iter().all(|v| v.is_finite()) {
+            uvs.chunks_exact(2).map(|v| Vec2::new(v[0], v[1])).collect()
+        } else {
+            self.warnings
+                .push(format!("mesh \"{mesh}\": non-finite {what} dropped"));
+            Vec::new()
+        }
     }
 
     fn material(&mut self, name: Option<String>, kmat: Option<String>) -> u32 {

@@ -8,7 +8,7 @@ use wgpu::util::DeviceExt;
 use super::context::GpuContext;
 use super::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UVS,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
 };
 use super::kernel::{KernelFeatures, NODE_PAGE_BINDING, TRIANGLE_PAGE_BINDING};
 use crate::accel::{BvhNode, SceneAccel};
@@ -44,6 +44,8 @@ pub struct GpuScene {
     pub triangle_pages: u32,
     pub triangle_vertices: wgpu::Buffer,
     pub vertices: wgpu::Buffer,
+    pub uv1: wgpu::Buffer,
+    pub has_uv1: bool,
     pub materials: wgpu::Buffer,
     pub light_triangles: wgpu::Buffer,
     pub light_cdf: wgpu::Buffer,
@@ -78,6 +80,9 @@ pub struct SceneArrays {
     pub triangles: Vec<GpuTriangle>,
     pub triangle_vertices: Vec<u32>,
     pub vertices: Vec<[u32; 4]>,
+    /// The second UV set per vertex (all vertices, zero where a mesh has none), or empty
+    /// when no mesh has one.
+    pub uv1: Vec<[f32; 2]>,
     pub materials: Vec<GpuMaterial>,
     pub light_triangles: Vec<GpuLightTriangle>,
     pub light_cdf: Vec<f32>,
@@ -262,7 +267,22 @@ impl SceneArrays {
                 0
             } else {
                 INSTANCE_HAS_UVS
+            } | if mesh.uvs1.is_empty() {
+                0
+            } else {
+                INSTANCE_HAS_UV1
             };
+        }
+        if scene.meshes.iter().any(|m| !m.uvs1.is_empty()) {
+            // Indexed like `vertices`: meshes in order, zeros for those without.
+            for (mesh, bvh) in scene.meshes.iter().zip(&accel.blas) {
+                if bvh.is_some() {
+                    a.uv1.extend(
+                        (0..mesh.positions.len())
+                            .map(|v| mesh.uvs1.get(v).map_or([0.0; 2], |t| t.to_array())),
+                    );
+                }
+            }
         }
 
         // Instances in TLAS leaf order.
@@ -542,6 +562,8 @@ impl GpuScene {
                 &mut bytes,
             )?,
             vertices: storage_buffer(ctx, "vertex attributes", &a.vertices, limit, &mut bytes)?,
+            uv1: storage_buffer(ctx, "second UV set", &a.uv1, limit, &mut bytes)?,
+            has_uv1: !a.uv1.is_empty(),
             materials: storage_buffer(ctx, "materials", &a.materials, limit, &mut bytes)?,
             light_triangles: storage_buffer(
                 ctx,
@@ -630,6 +652,9 @@ pub fn scene_bind_group_layout(
     if features.textures {
         entries.push(entry(super::kernel::TEXTURE_BINDING, read_only));
     }
+    if features.uv1 {
+        entries.push(entry(super::kernel::UV1_BINDING, read_only));
+    }
     if features.aovs {
         entries.push(entry(
             super::kernel::AOV_BINDING,
@@ -670,6 +695,7 @@ impl GpuScene {
             emissive_triangles: self.light_count > 0,
             textures: self.texture_count > 0,
             aovs: false,
+            uv1: self.has_uv1,
         }
     }
 
@@ -697,6 +723,9 @@ impl GpuScene {
         ];
         if self.texture_count > 0 {
             buffers.push((super::kernel::TEXTURE_BINDING, &self.textures));
+        }
+        if self.has_uv1 {
+            buffers.push((super::kernel::UV1_BINDING, &self.uv1));
         }
         if let Some(aov) = frame.film_aov {
             buffers.push((super::kernel::AOV_BINDING, aov));

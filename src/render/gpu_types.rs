@@ -9,6 +9,7 @@ pub const FLAG_ENVIRONMENT_MAP: u32 = 2;
 /// `Instance.flags`
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
+pub const INSTANCE_HAS_UV1: u32 = 4;
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]

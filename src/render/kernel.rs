@@ -252,6 +252,8 @@ pub struct KernelFeatures {
     pub textures: bool,
     /// AOV layers (albedo, normal, depth): binds `film_aov`.
     pub aovs: bool,
+    /// A second UV set: binds `uv1_data`.
+    pub uv1: bool,
 }
 
 impl Default for KernelFeatures {
@@ -266,6 +268,7 @@ impl Default for KernelFeatures {
             emissive_triangles: true,
             textures: true,
             aovs: true,
+            uv1: true,
         }
     }
 }
@@ -286,6 +289,8 @@ impl KernelFeatures {
 pub const TEXTURE_BINDING: u32 = 22;
 /// The binding of the AOV film, when AOVs are rendered.
 pub const AOV_BINDING: u32 = 23;
+/// The binding of the second UV set, when a mesh has one.
+pub const UV1_BINDING: u32 = 24;
 
 /// The `FEATURE_*` constants the shaders test.
 pub fn features_wgsl(features: &KernelFeatures) -> String {
@@ -313,6 +318,14 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
         // The integrator's AOV writes are behind FEATURE_AOVS; this stands in for the
         // binding so the code still names a variable.
         text.push_str("var<private> film_aov: array<vec4<f32>, 2>;\n");
+    }
+    text.push_str(&format!("const FEATURE_UV1: bool = {};\n", features.uv1));
+    if features.uv1 {
+        text.push_str(&format!(
+            "@group(0) @binding({UV1_BINDING}) var<storage, read> uv1_data: array<vec2<f32>>;\n"
+        ));
+    } else {
+        text.push_str("var<private> uv1_data: array<vec2<f32>, 1>;\n");
     }
     if features.textures {
         text.push_str(&format!(

@@ -10,6 +10,8 @@ pub struct Mesh {
     pub normals: Vec<Vec3>,
     /// Empty, or one coordinate per position.
     pub uvs: Vec<Vec2>,
+    /// A second UV set (lightmaps, decals): empty, or one coordinate per position.
+    pub uvs1: Vec<Vec2>,
     /// Empty, or one linear RGBA colour per position (the Color Attribute node; stored
     /// with 8 bits per channel, so clamped to [0, 1]).
     pub colors: Vec<Vec4>,
@@ -55,6 +57,16 @@ impl Mesh {
         }
         if let Some(i) = self.uvs.iter().position(|uv| !uv.is_finite()) {
             return Err(format!("uv {i} is not finite"));
+        }
+        if !self.uvs1.is_empty() && self.uvs1.len() != self.positions.len() {
+            return Err(format!(
+                "has {} second-set uvs for {} positions",
+                self.uvs1.len(),
+                self.positions.len()
+            ));
+        }
+        if let Some(i) = self.uvs1.iter().position(|uv| !uv.is_finite()) {
+            return Err(format!("second-set uv {i} is not finite"));
         }
         if !self.colors.is_empty() && self.colors.len() != self.positions.len() {
             return Err(format!(

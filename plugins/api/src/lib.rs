@@ -99,6 +99,8 @@ pub struct MeshData {
     pub normals: *const f32,
     /// 2 floats per vertex (v up, as glTF's and OBJ's flipped where needed), or null.
     pub uvs: *const f32,
+    /// A second set of texture coordinates (glTF TEXCOORD_1), like `uvs`, or null.
+    pub uvs1: *const f32,
     /// 4 floats per vertex (xyz tangent, w handedness), or null.
     pub tangents: *const f32,
     /// 4 floats per vertex (linear RGBA), or null.
@@ -207,6 +209,7 @@ pub struct Mesh<'a> {
     pub positions: &'a [[f32; 3]],
     pub normals: &'a [[f32; 3]],
     pub uvs: &'a [[f32; 2]],
+    pub uvs1: &'a [[f32; 2]],
     pub tangents: &'a [[f32; 4]],
     pub colors: &'a [[f32; 4]],
     pub indices: &'a [u32],
@@ -240,6 +243,7 @@ impl<'a> Builder<'a> {
             positions: ptr_or_null(mesh.positions),
             normals: ptr_or_null(mesh.normals),
             uvs: ptr_or_null(mesh.uvs),
+            uvs1: ptr_or_null(mesh.uvs1),
             tangents: ptr_or_null(mesh.tangents),
             colors: ptr_or_null(mesh.colors),
             indices: mesh.indices.as_ptr(),

@@ -19,6 +19,7 @@ pub struct Triangles {
     pub positions: Vec<[f32; 3]>,
     pub normals: Vec<[f32; 3]>,
     pub uvs: Vec<[f32; 2]>,
+    pub uvs1: Vec<[f32; 2]>,
     pub tangents: Vec<[f32; 4]>,
     pub colors: Vec<[f32; 4]>,
     pub indices: Vec<u32>,
@@ -125,17 +126,22 @@ pub fn read_primitive(
         n,
         warnings,
     );
-    mesh.uvs = optional::<[f32; 2]>(
-        root,
-        buffers,
-        attribute(primitive, Semantic::TexCoords(0)),
-        "TEXCOORD_0",
-        n,
-        warnings,
-    )
-    .into_iter()
-    .map(|[u, v]| [u, 1.0 - v])
-    .collect();
+    // glTF's v runs down the image; Kiln's, like Blender's, up.
+    let uv_set = |set: u32, name: &str, warnings: &mut Vec<String>| {
+        optional::<[f32; 2]>(
+            root,
+            buffers,
+            attribute(primitive, Semantic::TexCoords(set)),
+            name,
+            n,
+            warnings,
+        )
+        .into_iter()
+        .map(|[u, v]| [u, 1.0 - v])
+        .collect()
+    };
+    mesh.uvs = uv_set(0, "TEXCOORD_0", warnings);
+    mesh.uvs1 = uv_set(1, "TEXCOORD_1", warnings);
     if let Some(color) = attribute(primitive, Semantic::Colors(0)) {
         mesh.colors = match accessor::components(root, color) {
             Some(3) => optional::<[f32; 3]>(root, buffers, Some(color), "COLOR_0", n, warnings)

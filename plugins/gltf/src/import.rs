@@ -229,6 +229,7 @@ impl SceneImport<'_, '_> {
                     positions: &t.positions,
                     normals: &t.normals,
                     uvs: &t.uvs,
+                    uvs1: &t.uvs1,
                     tangents: &t.tangents,
                     colors: &t.colors,
                     indices: &t.indices,

@@ -137,12 +137,17 @@ pub fn texture_node(
         return None;
     }
     let file = images.file(image)?;
-    if r.tex_coord != 0 {
-        warn(format!(
-            "{role} texture uses UV set {}; Kiln meshes carry one, so UV set 0 is used",
-            r.tex_coord
-        ));
-    }
+    // Kiln meshes carry two UV sets (TEXCOORD_0 and _1).
+    let uv_output = match r.tex_coord {
+        0 => "uv",
+        1 => "uv1",
+        n => {
+            warn(format!(
+                "{role} texture uses UV set {n}; Kiln meshes carry sets 0 and 1, so set 0 is used"
+            ));
+            "uv"
+        }
+    };
     let sampler = texture.sampler.and_then(|s| root.samplers.get(s.value()));
     let (extension, interpolation) = match sampler {
         None => ("repeat", "linear"),
@@ -170,6 +175,10 @@ pub fn texture_node(
         .text("color_space", if srgb { "srgb" } else { "linear" })
         .text("extension", extension)
         .text("interpolation", interpolation);
+    if r.transform.is_none() && uv_output != "uv" {
+        let uv = graph.add("uv", Node::new("texture_coordinate"));
+        node = node.input("vector", Value::link(&uv, uv_output));
+    }
     if let Some(t) = &r.transform {
         let t = UvTransform {
             offset: [finite(t.offset[0], 0.0), finite(t.offset[1], 0.0)],
@@ -180,7 +189,7 @@ pub fn texture_node(
         let uv = graph.add("uv", Node::new("texture_coordinate"));
         let mapping = Node::new("mapping")
             .text("vector_type", "point")
-            .input("vector", Value::link(&uv, "uv"))
+            .input("vector", Value::link(&uv, uv_output))
             .input("location", Value::Color([location[0], location[1], 0.0]))
             .input("rotation", Value::Color([0.0, 0.0, rotation]))
             .input("scale", Value::Color([scale[0], scale[1], 1.0]));
