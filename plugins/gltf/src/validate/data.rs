@@ -307,6 +307,7 @@ struct Findings {
 pub fn check(root: &json::Root, buffers: &Buffers, uses: &Uses, report: &mut Report) {
     let mut budget = MAX_VALUES_SCANNED;
     let mut unchecked = Vec::new();
+    let mut reported = false;
     for (index, accessor) in root.accessors.iter().enumerate() {
         let Some(layout) = Layout::of(accessor) else {
             continue;
@@ -365,7 +366,7 @@ pub fn check(root: &json::Root, buffers: &Buffers, uses: &Uses, report: &mut Rep
             if vector3 {
                 let n = |k: usize| normalize(v[k], layout.component, normalized);
                 let length = (n(0) * n(0) + n(1) * n(1) + n(2) * n(2)).sqrt();
-                if !((length - 1.0).abs() <= UNIT_TOLERANCE) {
+                if length.is_nan() || (length - 1.0).abs() > UNIT_TOLERANCE {
                     f.non_unit += 1;
                     f.first_non_unit.get_or_insert((i, length));
                 }
@@ -474,6 +475,7 @@ pub fn check(root: &json::Root, buffers: &Buffers, uses: &Uses, report: &mut Rep
                     scanned.elements
                 )
             };
+            reported = true;
             report.add(format!(
                 "{}: {}{note}",
                 uses.accessor(root, index),
@@ -481,9 +483,11 @@ pub fn check(root: &json::Root, buffers: &Buffers, uses: &Uses, report: &mut Rep
             ));
         }
     }
-    if !unchecked.is_empty() {
+    // Said only next to problems found, which it qualifies: on a large valid file it
+    // would be noise.
+    if !unchecked.is_empty() && reported {
         report.add(format!(
-            "the values of accessor(s) {} were not checked: the file has more than the {MAX_VALUES_SCANNED} values checked per import",
+            "the values of accessor(s) {} were not checked (the file has more than the {MAX_VALUES_SCANNED} values checked per import), so the value problems above may not be all",
             list(&unchecked, 6)
         ));
     }

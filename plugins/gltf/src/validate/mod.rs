@@ -6,9 +6,11 @@
 //!
 //! Nothing here changes what is imported: the readers are bounds-checked on their own and
 //! the checks only read. They are bounded: accessor values are scanned up to
-//! [`MAX_ELEMENTS_SCANNED`] per accessor and [`MAX_VALUES_SCANNED`] per file (a warning
-//! says when a check stopped early), image files are read up to [`MAX_IMAGE_BYTES`] each
-//! and [`MAX_IMAGE_FILE_BYTES`] in all, and at most [`MAX_WARNINGS`] warnings are listed.
+//! [`MAX_ELEMENTS_SCANNED`] per accessor (a warning about an accessor says when its check
+//! stopped early) and [`MAX_VALUES_SCANNED`] per file (accessors past it are skipped,
+//! which is said only next to other value problems: on a large valid file it would be
+//! noise), image files are read up to [`MAX_IMAGE_BYTES`] each and
+//! [`MAX_IMAGE_FILE_BYTES`] in all, and at most [`MAX_WARNINGS`] warnings are listed.
 //!
 //! - [`raw`]: what only the JSON text shows (empty arrays, extension objects and their
 //!   declarations, values out of their schema ranges in materials and lights).

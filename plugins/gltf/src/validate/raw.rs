@@ -668,11 +668,21 @@ fn materials(raw: &Value, root: &json::Root, report: &mut Report) {
             ));
         }
     }
-    let mut infos = Vec::with_capacity(raw_materials.len());
+    // Per material: each texture coordinate set it samples, with the (first few)
+    // textures that sample it.
+    let mut infos: Vec<Vec<(u64, Vec<&str>)>> = Vec::with_capacity(raw_materials.len());
     for material in raw_materials {
         let mut found = Vec::new();
         texture_infos(material, "", &mut found);
-        infos.push(found);
+        let mut sets: Vec<(u64, Vec<&str>)> = Vec::new();
+        for (key, set) in found {
+            match sets.iter_mut().find(|(s, _)| *s == set) {
+                Some((_, keys)) if keys.len() < 4 => keys.push(key),
+                Some(_) => {}
+                None => sets.push((set, vec![key])),
+            }
+        }
+        infos.push(sets);
     }
     for (m, mesh) in root.meshes.iter().enumerate() {
         for (p, primitive) in mesh.primitives.iter().enumerate() {
@@ -689,13 +699,14 @@ fn materials(raw: &Value, root: &json::Root, report: &mut Report) {
                     named("mesh", m, mesh.name.as_deref())
                 )
             };
-            let mut missing: Vec<String> = Vec::new();
-            for (key, set) in found {
-                let set = u32::try_from(*set).unwrap_or(u32::MAX);
-                if !has(Semantic::TexCoords(set)) {
-                    missing.push(format!("{key} needs TEXCOORD_{set}"));
-                }
-            }
+            let missing: Vec<String> = found
+                .iter()
+                .filter(|(set, _)| {
+                    let set = u32::try_from(*set).unwrap_or(u32::MAX);
+                    !has(Semantic::TexCoords(set))
+                })
+                .map(|(set, keys)| format!("TEXCOORD_{set} (for {})", keys.join(", ")))
+                .collect();
             if !missing.is_empty() {
                 report.add(format!(
                     "{}: the material samples texture coordinates the primitive lacks: {}",

@@ -561,7 +561,7 @@ fn nodes(root: &json::Root, report: &mut Report) {
         }
         if let Some(r) = &node.rotation {
             let length = Quat::from_array(r.0).length();
-            if !((length - 1.0).abs() <= 0.00769) {
+            if length.is_nan() || (length - 1.0).abs() > 0.00769 {
                 problems.push(format!(
                     "its rotation {:?} is not a unit quaternion (length {length})",
                     r.0
@@ -677,19 +677,62 @@ fn cycles(root: &json::Root) -> Vec<usize> {
 /// Nodes on cycles that [`cycles`] collects.
 const CYCLE_NODES_LISTED: usize = 16;
 
-/// The ancestors of `node`, nearest first, following each node's first parent (at most
-/// one per node in the file, so cycles end).
-fn ancestors(parents: &[Vec<usize>], node: usize) -> Vec<usize> {
-    let mut out = Vec::new();
-    let mut at = node;
-    while let Some(&p) = parents.get(at).and_then(|p| p.first()) {
-        if p == node || out.contains(&p) || out.len() > parents.len() {
-            break;
+/// The hierarchy as a forest, each node under its first parent (several parents are
+/// reported by [`nodes`]), with depth-first entry and exit times that tell ancestors in
+/// constant time. Nodes on cycles are reachable from no root and have no times.
+struct Forest {
+    /// The root of each node's tree (itself for roots and nodes on cycles).
+    top: Vec<usize>,
+    enter: Vec<usize>,
+    exit: Vec<usize>,
+}
+
+impl Forest {
+    fn new(parents: &[Vec<usize>]) -> Self {
+        let n = parents.len();
+        let mut children = vec![Vec::new(); n];
+        let mut roots = Vec::new();
+        for (c, p) in parents.iter().enumerate() {
+            match p.first() {
+                Some(&p) => children[p].push(c),
+                None => roots.push(c),
+            }
         }
-        out.push(p);
-        at = p;
+        let mut forest = Self {
+            top: (0..n).collect(),
+            enter: vec![usize::MAX; n],
+            exit: vec![usize::MAX; n],
+        };
+        let mut clock = 0;
+        for &r in &roots {
+            forest.enter[r] = clock;
+            clock += 1;
+            let mut stack = vec![(r, 0usize)];
+            while let Some(&mut (node, ref mut next)) = stack.last_mut() {
+                if let Some(&c) = children[node].get(*next) {
+                    *next += 1;
+                    forest.enter[c] = clock;
+                    clock += 1;
+                    forest.top[c] = r;
+                    stack.push((c, 0));
+                } else {
+                    forest.exit[node] = clock;
+                    clock += 1;
+                    stack.pop();
+                }
+            }
+        }
+        forest
     }
-    out
+
+    /// Whether `a` is `b` or an ancestor of `b`.
+    fn holds(&self, a: usize, b: usize) -> bool {
+        a == b
+            || (self.enter[a] != usize::MAX
+                && self.enter[b] != usize::MAX
+                && self.enter[a] <= self.enter[b]
+                && self.exit[b] <= self.exit[a])
+    }
 }
 
 /// Skins (ignored by Kiln, which shows the bind pose, but reported): inverse bind matrices
@@ -697,7 +740,10 @@ fn ancestors(parents: &[Vec<usize>], node: usize) -> Vec<usize> {
 /// (INVALID_IBM_ACCESSOR_COUNT), joints without a common root (SKIN_NO_COMMON_ROOT), a
 /// skeleton that is not one (SKIN_SKELETON_INVALID).
 fn skins(root: &json::Root, report: &mut Report) {
-    let parents = parents(root);
+    if root.skins.is_empty() {
+        return;
+    }
+    let forest = Forest::new(&parents(root));
     for (s, skin) in root.skins.iter().enumerate() {
         let mut problems = Vec::new();
         let joints: Vec<usize> = skin
@@ -727,16 +773,13 @@ fn skins(root: &json::Root, report: &mut Report) {
                 }
             }
         }
-        // The topmost ancestor of each joint (itself if it has no parent).
-        let tops: Vec<usize> = joints
+        if joints
             .iter()
-            .map(|&j| ancestors(&parents, j).last().copied().unwrap_or(j))
-            .collect();
-        if tops.iter().any(|&t| t != tops[0]) {
+            .any(|&j| forest.top[j] != forest.top[joints[0]])
+        {
             problems.push("its joints do not share a common root".to_owned());
         } else if let Some(skeleton) = skin.skeleton.map(|s| s.value()) {
-            let under = |j: usize| j == skeleton || ancestors(&parents, j).contains(&skeleton);
-            if skeleton < root.nodes.len() && !joints.iter().all(|&j| under(j)) {
+            if skeleton < root.nodes.len() && !joints.iter().all(|&j| forest.holds(skeleton, j)) {
                 problems.push(format!(
                     "its skeleton node {skeleton} is not an ancestor of all its joints"
                 ));
@@ -750,6 +793,11 @@ fn skins(root: &json::Root, report: &mut Report) {
             ));
         }
     }
+}
+
+/// `a > b`; false if either is NaN, so that `!greater` also catches NaN.
+fn greater(a: f32, b: f32) -> bool {
+    a > b
 }
 
 /// Cameras: not exactly one projection (ONE_OF_MISMATCH), and projection values out of
@@ -771,16 +819,16 @@ fn cameras(root: &json::Root, report: &mut Report) {
             _ => {}
         }
         if let Some(p) = &camera.perspective {
-            if !(p.yfov > 0.0) {
+            if !greater(p.yfov, 0.0) {
                 problems.push(format!("yfov {} is not positive", p.yfov));
             }
-            if let Some(a) = p.aspect_ratio.filter(|a| !(*a > 0.0)) {
+            if let Some(a) = p.aspect_ratio.filter(|&a| !greater(a, 0.0)) {
                 problems.push(format!("aspectRatio {a} is not positive"));
             }
-            if !(p.znear > 0.0) {
+            if !greater(p.znear, 0.0) {
                 problems.push(format!("znear {} is not positive", p.znear));
             }
-            if let Some(f) = p.zfar.filter(|f| !(*f > p.znear)) {
+            if let Some(f) = p.zfar.filter(|&f| !greater(f, p.znear)) {
                 problems.push(format!("zfar {f} is not greater than znear {}", p.znear));
             }
         }
@@ -791,10 +839,10 @@ fn cameras(root: &json::Root, report: &mut Report) {
                     o.xmag, o.ymag
                 ));
             }
-            if !(o.znear >= 0.0) {
+            if o.znear.is_nan() || o.znear < 0.0 {
                 problems.push(format!("znear {} is negative", o.znear));
             }
-            if !(o.zfar > o.znear) {
+            if !greater(o.zfar, o.znear) {
                 problems.push(format!(
                     "zfar {} is not greater than znear {}",
                     o.zfar, o.znear
