@@ -274,13 +274,16 @@ impl Default for KernelFeatures {
 }
 
 impl KernelFeatures {
-    /// Every lobe and light type compiled in, for the same pages: the unspecialised kernel.
+    /// Every lobe and light type compiled in: the unspecialised kernel. What changes the
+    /// bindings (pages, textures, AOVs, the second UV set) stays the scene's, so the
+    /// kernel fits the scene's bind group layout.
     pub fn everything(self) -> Self {
         Self {
-            node_pages: self.node_pages,
-            triangle_pages: self.triangle_pages,
-            aovs: self.aovs,
-            ..Self::default()
+            lobes: lobes::ALL,
+            environment_map: true,
+            analytic_lights: true,
+            emissive_triangles: true,
+            ..self
         }
     }
 }
