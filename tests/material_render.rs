@@ -173,18 +173,18 @@ fn an_image_textured_material_renders_its_image() {
     assert!(c.x > 4.0 * c.y && c.x > 4.0 * c.z, "centre pixel {c}");
 }
 
-#[test]
-fn vertex_colours_reach_the_color_attribute_node() {
-    // An emitter whose colour is the mesh's vertex colour, seen head-on: the image is the
-    // colour interpolated across the quad.
+/// A quad of `mesh` filling the view, emitting the colour of `node.output` (a node with
+/// no inputs) and reflecting nothing, with an extra quad of plain mesh out of view; the
+/// image's pixels.
+fn emitted_attribute(node: &str, output: &str, mesh: kiln::scene::Mesh) -> Vec<Vec3> {
     let mut g = Graph::default();
-    g.add("vc", Node::new("vertex_color"));
+    g.add("attribute", Node::new(node));
     g.add(
         "s",
         Node::new("principled_bsdf")
             .input("base_color", [0.0; 3])
             .input("specular_weight", 0.0)
-            .input("emission_color", link("vc", "color"))
+            .input("emission_color", link("attribute", output))
             .input("emission_strength", 1.0),
     );
     g.add(
@@ -195,15 +195,26 @@ fn vertex_colours_reach_the_color_attribute_node() {
         up: Vec3::Z,
         ..Camera::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, 10.0)
     });
-    let m = scene.add_material(Material::from_graph("painted", g).unwrap());
+    let m = scene.add_material(Material::from_graph("attribute", g).unwrap());
+    let q = scene.add_mesh(mesh);
+    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
+    // A mesh without the attribute shares the scene (it reads the defaults).
+    let plain = scene.add_mesh(shapes::quad());
+    scene.add_instance(
+        plain,
+        m,
+        Affine3A::from_translation(Vec3::new(0.0, -5.0, 0.0)),
+    );
+    render(&gpu(), &scene, settings(8, 8, 4)).radiance()
+}
+
+#[test]
+fn vertex_colours_reach_the_color_attribute_node() {
     let mut quad = shapes::quad();
     quad.colors = vec![glam::Vec4::new(1.0, 0.0, 0.0, 1.0); 4];
-    let q = scene.add_mesh(quad);
-    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
-    let px = render(&gpu(), &scene, settings(8, 8, 4)).radiance();
-    for p in &px {
+    for p in emitted_attribute("vertex_color", "color", quad) {
         assert!(
-            (*p - Vec3::new(1.0, 0.0, 0.0)).abs().max_element() < 1e-3,
+            (p - Vec3::new(1.0, 0.0, 0.0)).abs().max_element() < 1e-3,
             "pixel {p}"
         );
     }
@@ -211,41 +222,11 @@ fn vertex_colours_reach_the_color_attribute_node() {
 
 #[test]
 fn the_second_uv_set_reaches_the_texture_coordinate_node() {
-    // An emitter whose colour is (u1, v1, 0) of the mesh's second UV set, constant here.
-    let mut g = Graph::default();
-    g.add("tc", Node::new("texture_coordinate"));
-    g.add(
-        "s",
-        Node::new("principled_bsdf")
-            .input("base_color", [0.0; 3])
-            .input("specular_weight", 0.0)
-            .input("emission_color", link("tc", "uv1"))
-            .input("emission_strength", 1.0),
-    );
-    g.add(
-        "out",
-        Node::new("material_output").input("surface", link("s", "bsdf")),
-    );
-    let mut scene = Scene::empty(Camera {
-        up: Vec3::Z,
-        ..Camera::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, 10.0)
-    });
-    let m = scene.add_material(Material::from_graph("uv1", g).unwrap());
     let mut quad = shapes::quad();
     quad.uvs1 = vec![glam::Vec2::new(0.25, 0.75); 4];
-    let q = scene.add_mesh(quad);
-    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
-    // A second mesh without the set shares the scene (it reads zeros).
-    let plain = scene.add_mesh(shapes::quad());
-    scene.add_instance(
-        plain,
-        m,
-        Affine3A::from_translation(Vec3::new(0.0, -5.0, 0.0)),
-    );
-    let px = render(&gpu(), &scene, settings(8, 8, 4)).radiance();
-    for p in &px {
+    for p in emitted_attribute("texture_coordinate", "uv1", quad) {
         assert!(
-            (*p - Vec3::new(0.25, 0.75, 0.0)).abs().max_element() < 1e-5,
+            (p - Vec3::new(0.25, 0.75, 0.0)).abs().max_element() < 1e-5,
             "pixel {p}"
         );
     }
