@@ -290,7 +290,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         }
         if (FEATURE_AOVS) {
             aov_a += vec4<f32>(aov_albedo, aov_depth);
-            aov_n += vec4<f32>(aov_normal, select(0.0, 1.0, aov_depth > 0.0));
+            aov_n += vec4<f32>(aov_normal, 1.0);
         }
         // Kahan summation; w counts samples.
         let y = vec4<f32>(l, 1.0) - compensation;

@@ -314,7 +314,7 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     text.push_str(&format!("const FEATURE_AOVS: bool = {};\n", features.aovs));
     if features.aovs {
         text.push_str(&format!(
-            "// Per pixel: (albedo sum, depth sum), (normal sum, hits).\n\
+            "// Per pixel: (albedo sum, depth sum), (normal sum, samples).\n\
              @group(0) @binding({AOV_BINDING}) var<storage, read_write> film_aov: array<vec4<f32>>;\n"
         ));
     } else {

@@ -212,20 +212,18 @@ impl Renderer {
 
         let kernel_start = Instant::now();
         let device = &ctx.device;
-        let layout = scene_bind_group_layout(
-            device,
-            &KernelFeatures {
-                aovs: settings.aovs,
-                ..gpu_scene.features()
-            },
-        );
-        let materials = crate::material::scene_materials_wgsl(scene)?;
-        let mut features = if settings.specialize {
-            gpu_scene.features()
-        } else {
-            gpu_scene.features().everything()
+        let scene_features = KernelFeatures {
+            aovs: settings.aovs,
+            ..gpu_scene.features()
         };
-        features.aovs = settings.aovs;
+        // `everything` keeps the bindings, so one layout serves both kernels.
+        let features = if settings.specialize {
+            scene_features
+        } else {
+            scene_features.everything()
+        };
+        let layout = scene_bind_group_layout(device, &features);
+        let materials = crate::material::scene_materials_wgsl(scene)?;
         let pipeline = path_tracing_kernel(&features, &materials).create_pipeline(
             &ctx,
             &[&layout],
@@ -457,11 +455,11 @@ impl Renderer {
         };
         let raw = read_buffer(&self.ctx, buffer, buffer.size())?;
         let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-        let film = self.read_film()?;
         let mut aovs = Aovs::default();
-        for (i, px) in raw.chunks_exact(2).enumerate() {
-            let samples = film.sums[i][3].max(1.0) as f32;
+        for px in raw.chunks_exact(2) {
             let [a, n] = [px[0], px[1]];
+            // The AOV film counts its own samples.
+            let samples = n[3].max(1.0);
             aovs.albedo.extend([a[0], a[1], a[2]].map(|v| v / samples));
             aovs.depth.push(a[3] / samples);
             let normal = glam::Vec3::new(n[0], n[1], n[2]);
