@@ -517,9 +517,6 @@ fn check_param(
     name: &str,
     value: &Param,
 ) -> Result<(), GraphError> {
-    if def.kind == "group" {
-        return Ok(());
-    }
     let Some(p) = def.param(name) else {
         return Err(ctx.err(
             Some(node),
@@ -725,17 +722,14 @@ fn topological(flat: &[FlatNode], roots: &[usize]) -> Vec<usize> {
 // ------------------------------------------------------------ constant folding
 
 /// The constant value of an input, if it has one.
-fn constant(flat: &[FlatNode], node: &FlatNode, input: usize) -> Option<Value> {
+fn constant(node: &FlatNode, input: usize) -> Option<Value> {
     match &node.inputs[input] {
         Src::Const(v) => Some(v.clone()),
         Src::Default => match &node.def.inputs[input].default {
             Default::Value(v) => Some(v.clone()),
             Default::Implicit(..) => None,
         },
-        Src::Out(..) => {
-            let _ = flat;
-            None
-        }
+        Src::Out(..) => None,
     }
 }
 
@@ -859,7 +853,7 @@ fn fold_constants(flat: &mut [FlatNode], output: usize) {
             }
         }
         let inputs: Option<Vec<Value>> = (0..flat[n].inputs.len())
-            .map(|i| constant(flat, &flat[n], i))
+            .map(|i| constant(&flat[n], i))
             .collect();
         if let Some(inputs) = inputs {
             if let Some(values) = fold(&flat[n], &inputs) {
@@ -940,7 +934,7 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
             .position(|s| s.name == name)
             .expect("principled input")
     };
-    let known = |name: &str| constant(flat, node, input(name));
+    let known = |name: &str| constant(node, input(name));
     let transmission = known("transmission_weight").map(|v| as_f32(&v));
     let transmissive = bool_param(node, "thin_walled") || transmission != Some(0.0);
     let (strength, color) = (known("emission_strength"), known("emission_color"));
@@ -1049,10 +1043,6 @@ impl Emitter<'_> {
             let node = &self.flat[n];
             let _ = writeln!(statements, "    // {} ({})", node.id, node.def.kind);
             let code = self.node_code(n)?;
-            if node.def.kind == "material_output" {
-                let _ = writeln!(statements, "    let n{n} = {code};");
-                continue;
-            }
             let _ = writeln!(statements, "    let n{n} = {code};");
         }
         let roots = roots.iter().map(|&(n, o)| self.output_expr(n, o)).collect();

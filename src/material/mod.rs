@@ -139,40 +139,43 @@ pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> 
 /// WGSL for a scene's compiled materials: the node-library items they need, each
 /// material's function, and the dispatcher `evaluate_material(id, sp)` the integrator
 /// calls. Materials not listed read their fixed parameters from the material buffer.
-pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> String {
+pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, String)> {
     let mut roots: BTreeSet<String> = ["ShadingPoint", "MaterialEval"].map(String::from).into();
     for (_, m) in materials {
         roots.extend(m.calls.iter().cloned());
     }
-    // `// @part` lines start the parts kernel assembly names in its errors.
-    let mut out = String::from("// @part node library items used (shaders/nodes/)\n");
-    out.push_str(&library::closure(roots));
+    // (label, WGSL): kernel assembly names the part an error is in.
+    let mut parts = vec![(
+        "node library items used (shaders/nodes/)".to_owned(),
+        library::closure(roots),
+    )];
     for (_, m) in materials {
-        out.push_str(&format!(
-            "// @part material \"{}\" (generated)\n",
-            m.material
+        parts.push((
+            format!("material \"{}\" (generated)", m.material),
+            m.code.clone(),
         ));
-        out.push_str(&m.code);
-        out.push('\n');
     }
-    out.push_str("// @part material dispatcher (generated)\n");
-    out.push_str("fn evaluate_material(id: u32, sp: ShadingPoint) -> MaterialEval {\n");
+    let mut dispatcher =
+        String::from("fn evaluate_material(id: u32, sp: ShadingPoint) -> MaterialEval {\n");
     if !materials.is_empty() {
-        out.push_str("    switch (id) {\n");
+        dispatcher.push_str("    switch (id) {\n");
         for (id, m) in materials {
-            out.push_str(&format!(
+            dispatcher.push_str(&format!(
                 "        case {id}u: {{ return {}(sp); }}\n",
                 m.function
             ));
         }
-        out.push_str("        default: {}\n    }\n");
+        dispatcher.push_str("        default: {}\n    }\n");
     }
-    out.push_str("    return material_from_buffer(id, sp);\n}\n");
-    out
+    dispatcher.push_str("    return material_from_buffer(id, sp);\n}\n");
+    parts.push(("material dispatcher (generated)".to_owned(), dispatcher));
+    parts
 }
 
 /// [`materials_wgsl`] for a scene: its graph materials compiled, numbered by their index.
-pub fn scene_materials_wgsl(scene: &crate::scene::Scene) -> Result<String, GraphError> {
+pub fn scene_materials_wgsl(
+    scene: &crate::scene::Scene,
+) -> Result<Vec<(String, String)>, GraphError> {
     let mut textures = scene_textures(scene).index;
     let mut compiled = Vec::new();
     for (i, m) in scene.materials.iter().enumerate() {

@@ -402,24 +402,13 @@ pub const TRIANGLE_PAGE_BINDING: u32 = 16;
 
 /// The path-tracing kernel's source, with a scene's materials
 /// (`crate::material::scene_materials_wgsl`) spliced in before the integrator.
-pub fn path_tracing_kernel(features: &KernelFeatures, materials: &str) -> KernelSource {
+pub fn path_tracing_kernel(
+    features: &KernelFeatures,
+    materials: &[(String, String)],
+) -> KernelSource {
     let mut source = KernelSource::with_library("path tracer", features);
-    // Each `// @part LABEL` line of the materials starts a part of that name.
-    let mut label = "(generated) scene materials".to_owned();
-    let mut part = String::new();
-    for line in materials.lines() {
-        if let Some(next) = line.strip_prefix("// @part ") {
-            if !part.is_empty() {
-                source.push(&label, &part);
-            }
-            label = next.to_owned();
-            part.clear();
-        }
-        part.push_str(line);
-        part.push('\n');
-    }
-    if !part.is_empty() {
-        source.push(&label, &part);
+    for (label, wgsl) in materials {
+        source.push(label, wgsl);
     }
     source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
     source
