@@ -78,33 +78,11 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     })
 }
 
-/// f32 → IEEE half bits (round to nearest even; overflow to infinity is clamped to the
-/// largest half, NaN to 0), as WGSL's `unpack2x16float` reads them.
+/// f32 → IEEE half bits, as `nd_half` (shaders/nodes/image.wgsl) reads them; NaN reads
+/// as 0 and values beyond the half range as the largest half, never as infinity.
 fn half_bits(v: f32) -> u16 {
-    if v.is_nan() {
-        return 0;
-    }
-    let v = v.clamp(-65504.0, 65504.0);
-    let bits = v.to_bits();
-    let sign = ((bits >> 16) & 0x8000) as u16;
-    let exp = ((bits >> 23) & 0xff) as i32 - 127 + 15;
-    let mantissa = bits & 0x7f_ffff;
-    if exp <= 0 {
-        if exp < -10 {
-            return sign;
-        }
-        let m = mantissa | 0x80_0000;
-        let shift = (14 - exp) as u32;
-        let half = m >> shift;
-        let rest = m & ((1 << shift) - 1);
-        let halfway = 1 << (shift - 1);
-        let round = (rest > halfway || (rest == halfway && half & 1 == 1)) as u32;
-        return sign | (half + round) as u16;
-    }
-    let half = ((exp as u32) << 10) | (mantissa >> 13);
-    let rest = mantissa & 0x1fff;
-    let round = (rest > 0x1000 || (rest == 0x1000 && half & 1 == 1)) as u32;
-    sign | (half + round).min(0x7bff) as u16
+    let v = if v.is_nan() { 0.0 } else { v.clamp(-65504.0, 65504.0) };
+    half::f16::from_f32(v).to_bits()
 }
 
 /// A scene's textures, in the order of their indices, and the index of each file.
