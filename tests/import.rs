@@ -8,6 +8,7 @@ use std::path::{Path, PathBuf};
 use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
+use base64::Engine as _;
 use glam::Vec3;
 use kiln::plugin::{ExportFilm, ExportLayer, PluginHost, PluginKind};
 
@@ -165,23 +166,7 @@ fn hostile_gltf_inputs_are_refused_with_a_message() {
         p
     };
     // 36 bytes: three positions; then three indices.
-    let b64 = |data: &[u8]| {
-        const T: &[u8] = b"ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-        let mut s = String::new();
-        for c in data.chunks(3) {
-            let n = (c[0] as u32) << 16
-                | (*c.get(1).unwrap_or(&0) as u32) << 8
-                | *c.get(2).unwrap_or(&0) as u32;
-            for i in 0..4 {
-                if i <= c.len() {
-                    s.push(T[(n >> (18 - 6 * i) & 63) as usize] as char);
-                } else {
-                    s.push('=');
-                }
-            }
-        }
-        s
-    };
+    let b64 = |data: &[u8]| base64::engine::general_purpose::STANDARD.encode(data);
     let triangle = |positions: [f32; 9], indices: [u32; 3], count: &str| {
         let mut data: Vec<u8> = bytemuck::cast_slice(&positions).to_vec();
         data.extend(bytemuck::cast_slice(&indices));
@@ -240,6 +225,32 @@ fn hostile_gltf_inputs_are_refused_with_a_message() {
             t.elapsed()
         );
     }
+
+    // A texture whose PNG header claims 100000 × 100000 pixels: refused before decoding;
+    // the triangle is kept and the import says what happened to the texture.
+    let textured = ok.replace(
+        r#""meshes":[{"primitives":[{"attributes":{"POSITION":0},"indices":1}]}],"#,
+        &format!(
+            r#""meshes":[{{"primitives":[{{"attributes":{{"POSITION":0}},"indices":1,"material":0}}]}}],
+            "materials":[{{"pbrMetallicRoughness":{{"baseColorTexture":{{"index":0}}}}}}],
+            "textures":[{{"source":0}}],
+            "images":[{{"uri":"data:image/png;base64,{}"}}],"#,
+            b64(&common::png_header(100_000, 100_000))
+        ),
+    );
+    assert_ne!(textured, ok, "the material was not spliced in");
+    let t = Instant::now();
+    let imported = host.import(&gltf("huge_texture.gltf", &textured)).unwrap();
+    assert!(t.elapsed() < Duration::from_secs(5));
+    assert_eq!(imported.scene.triangle_count(), 1);
+    assert!(
+        imported
+            .warnings
+            .iter()
+            .any(|w| w.contains("image") || w.contains("texture")),
+        "no warning about the huge image: {:?}",
+        imported.warnings
+    );
 }
 
 #[test]

@@ -837,7 +837,7 @@ fn bad_images_are_errors_naming_the_node() {
 
     // A PNG header claiming 100000 × 100000 pixels is refused before any allocation.
     let huge = dir.path().join("huge.png");
-    std::fs::write(&huge, png_header(100_000, 100_000)).unwrap();
+    std::fs::write(&huge, common::png_header(100_000, 100_000)).unwrap();
     let e = kiln::scene::Material::from_graph("m", image_graph(huge.to_str().unwrap(), &[]))
         .unwrap_err();
     assert_eq!(e.node.as_deref(), Some("img"), "{e}");
@@ -854,33 +854,6 @@ fn bad_images_are_errors_naming_the_node() {
     );
     let e = kiln::material::compile("m", &g2, "m").unwrap_err();
     assert_eq!(e.socket.as_deref(), Some("file"), "{e}");
-}
-
-/// The signature and IHDR chunk of a PNG with the given size (no image data).
-fn png_header(width: u32, height: u32) -> Vec<u8> {
-    let mut ihdr = b"IHDR".to_vec();
-    ihdr.extend(width.to_be_bytes());
-    ihdr.extend(height.to_be_bytes());
-    ihdr.extend([8, 6, 0, 0, 0]);
-    let crc = {
-        let mut c = !0u32;
-        for &b in &ihdr {
-            c ^= b as u32;
-            for _ in 0..8 {
-                c = if c & 1 != 0 {
-                    0xedb8_8320 ^ (c >> 1)
-                } else {
-                    c >> 1
-                };
-            }
-        }
-        !c
-    };
-    let mut out = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
-    out.extend(13u32.to_be_bytes());
-    out.extend(ihdr);
-    out.extend(crc.to_be_bytes());
-    out
 }
 
 #[test]

@@ -81,7 +81,11 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
 /// f32 → IEEE half bits, as `nd_half` (shaders/nodes/image.wgsl) reads them; NaN reads
 /// as 0 and values beyond the half range as the largest half, never as infinity.
 fn half_bits(v: f32) -> u16 {
-    let v = if v.is_nan() { 0.0 } else { v.clamp(-65504.0, 65504.0) };
+    let v = if v.is_nan() {
+        0.0
+    } else {
+        v.clamp(-65504.0, 65504.0)
+    };
     half::f16::from_f32(v).to_bits()
 }
 

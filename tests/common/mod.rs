@@ -65,3 +65,30 @@ pub fn rmse(a: &[Vec3], b: &[Vec3]) -> f64 {
         .sum();
     (sum / (3 * a.len()) as f64).sqrt()
 }
+
+/// The signature and IHDR chunk of a PNG with the given size (no image data).
+pub fn png_header(width: u32, height: u32) -> Vec<u8> {
+    let mut ihdr = b"IHDR".to_vec();
+    ihdr.extend(width.to_be_bytes());
+    ihdr.extend(height.to_be_bytes());
+    ihdr.extend([8, 6, 0, 0, 0]);
+    let crc = {
+        let mut c = !0u32;
+        for &b in &ihdr {
+            c ^= b as u32;
+            for _ in 0..8 {
+                c = if c & 1 != 0 {
+                    0xedb8_8320 ^ (c >> 1)
+                } else {
+                    c >> 1
+                };
+            }
+        }
+        !c
+    };
+    let mut out = vec![0x89, b'P', b'N', b'G', 0x0d, 0x0a, 0x1a, 0x0a];
+    out.extend(13u32.to_be_bytes());
+    out.extend(ihdr);
+    out.extend(crc.to_be_bytes());
+    out
+}
