@@ -284,16 +284,7 @@ fn info(backend: Option<Backend>) -> Result<()> {
 fn load(path: Option<&Path>, plugins: &PluginHost) -> Result<(Scene, String)> {
     match path {
         Some(p) if plugins.handles(PluginKind::Importer, p) => {
-            let imported = import_file(plugins, p)?;
-            let mut scene = imported.scene;
-            if !imported.has_camera {
-                scene.camera = kiln::scene::frame_camera(&scene);
-            }
-            if !imported.has_lights && scene.environment == Vec3::ZERO {
-                // A file without lights is shown under a neutral white sky.
-                scene.environment = Vec3::splat(0.8);
-            }
-            Ok((scene, p.display().to_string()))
+            Ok((import_file(plugins, p)?.scene, p.display().to_string()))
         }
         Some(p) => Ok((scene::load_scene(p)?, p.display().to_string())),
         None => Ok((
@@ -313,10 +304,7 @@ fn import_file(plugins: &PluginHost, file: &Path) -> Result<kiln::plugin::Import
 
 fn import(plugins: &PluginHost, file: &Path, output: &Path) -> Result<()> {
     let imported = import_file(plugins, file)?;
-    let mut scene = imported.scene;
-    if !imported.has_camera {
-        scene.camera = kiln::scene::frame_camera(&scene);
-    }
+    let scene = imported.scene;
     scene::save_scene(&scene, output, &imported.images)?;
     eprintln!(
         "wrote {}: {} meshes, {} materials, {} instances, {} lights",

@@ -24,9 +24,10 @@ pub const MAX_IMAGE_BYTES: usize = 1 << 30;
 /// What an import produced.
 pub struct Imported {
     pub scene: Scene,
-    /// Whether the file had a camera (otherwise one frames the scene).
+    /// Whether the file had a camera (otherwise `scene` has one framing it).
     pub has_camera: bool,
-    /// Whether the file had lights or emissive materials.
+    /// Whether the file had lights or emissive materials (otherwise `scene` has a white
+    /// sky).
     pub has_lights: bool,
     /// Things the file holds that Kiln could not use, and data it refused.
     pub warnings: Vec<String>,
@@ -323,20 +324,28 @@ impl ImportState {
         (self.scene.lights.len() - 1) as u32
     }
 
-    pub(super) fn finish(self) -> Result<Imported, String> {
+    /// The import, made renderable: a file without a camera gets one that frames it, and
+    /// one without lights a neutral white sky.
+    pub(super) fn finish(mut self) -> Imported {
         let has_lights = !self.scene.lights.is_empty()
             || self
                 .scene
                 .instances
                 .iter()
                 .any(|i| self.scene.materials[i.material].is_emissive());
-        Ok(Imported {
+        if !self.has_camera {
+            self.scene.camera = crate::scene::frame_camera(&self.scene);
+        }
+        if !has_lights && self.scene.environment == Vec3::ZERO {
+            self.scene.environment = Vec3::splat(0.8);
+        }
+        Imported {
             scene: self.scene,
             has_camera: self.has_camera,
             has_lights,
             warnings: self.warnings,
             images: self.images,
-        })
+        }
     }
 }
 

@@ -245,11 +245,7 @@ impl PluginHost {
         plugin.call(path, |error| unsafe {
             import(c_path.as_ptr(), &raw, error)
         })?;
-        state.finish().map_err(|message| PluginError::Failed {
-            plugin: plugin.info.name.clone(),
-            path: path.display().to_string(),
-            message,
-        })
+        Ok(state.finish())
     }
 
     /// Writes `film` to `path` with the exporter for its extension.
