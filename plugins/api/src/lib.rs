@@ -479,6 +479,28 @@ impl StaticDescriptor {
     }
 }
 
+/// The body of `kiln_plugin_descriptor`: the descriptor of `$t`, built on first call.
+#[doc(hidden)]
+#[macro_export]
+macro_rules! __kiln_descriptor {
+    ($kind:expr, $trait:path, $t:ty, $import:expr, $export:expr) => {{
+        static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
+            ::std::sync::OnceLock::new();
+        &DESCRIPTOR
+            .get_or_init(|| {
+                $crate::StaticDescriptor::new(
+                    $kind,
+                    <$t as $trait>::NAME,
+                    <$t as $trait>::VERSION,
+                    <$t as $trait>::EXTENSIONS,
+                    $import,
+                    $export,
+                )
+            })
+            .descriptor
+    }};
+}
+
 /// Exports `$t: Importer` as this library's plugin: the descriptor symbol and a C shim
 /// that catches panics and reports errors.
 #[macro_export]
@@ -501,20 +523,13 @@ macro_rules! export_importer {
                 };
                 unsafe { $crate::guarded(error, run) }
             }
-            static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
-                ::std::sync::OnceLock::new();
-            &DESCRIPTOR
-                .get_or_init(|| {
-                    $crate::StaticDescriptor::new(
-                        $crate::KIND_IMPORTER,
-                        <$t as $crate::Importer>::NAME,
-                        <$t as $crate::Importer>::VERSION,
-                        <$t as $crate::Importer>::EXTENSIONS,
-                        Some(import),
-                        None,
-                    )
-                })
-                .descriptor
+            $crate::__kiln_descriptor!(
+                $crate::KIND_IMPORTER,
+                $crate::Importer,
+                $t,
+                Some(import),
+                None
+            )
         }
     };
 }
@@ -548,20 +563,13 @@ macro_rules! export_exporter {
                 };
                 unsafe { $crate::guarded(error, run) }
             }
-            static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
-                ::std::sync::OnceLock::new();
-            &DESCRIPTOR
-                .get_or_init(|| {
-                    $crate::StaticDescriptor::new(
-                        $crate::KIND_EXPORTER,
-                        <$t as $crate::Exporter>::NAME,
-                        <$t as $crate::Exporter>::VERSION,
-                        <$t as $crate::Exporter>::EXTENSIONS,
-                        None,
-                        Some(export),
-                    )
-                })
-                .descriptor
+            $crate::__kiln_descriptor!(
+                $crate::KIND_EXPORTER,
+                $crate::Exporter,
+                $t,
+                None,
+                Some(export)
+            )
         }
     };
 }
