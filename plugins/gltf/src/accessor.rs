@@ -46,33 +46,36 @@ fn type_components(t: Type) -> usize {
     }
 }
 
-/// One component as a float: normalised integers per glTF 2.0 §3.11.
-fn decode_float(b: &[u8], c: ComponentType, normalized: bool) -> f32 {
+/// One component as stored (integers as integers).
+pub(crate) fn component(b: &[u8], c: ComponentType) -> f64 {
     match c {
-        ComponentType::F32 => f32::from_le_bytes([b[0], b[1], b[2], b[3]]),
-        ComponentType::I8 => {
-            let v = b[0] as i8 as f32;
-            if normalized { (v / 127.0).max(-1.0) } else { v }
-        }
-        ComponentType::U8 => {
-            let v = b[0] as f32;
-            if normalized { v / 255.0 } else { v }
-        }
-        ComponentType::I16 => {
-            let v = i16::from_le_bytes([b[0], b[1]]) as f32;
-            if normalized {
-                (v / 32767.0).max(-1.0)
-            } else {
-                v
-            }
-        }
-        ComponentType::U16 => {
-            let v = u16::from_le_bytes([b[0], b[1]]) as f32;
-            if normalized { v / 65535.0 } else { v }
-        }
-        // Normalised UNSIGNED_INT is not allowed; read the value.
-        ComponentType::U32 => u32::from_le_bytes([b[0], b[1], b[2], b[3]]) as f32,
+        ComponentType::I8 => f64::from(b[0] as i8),
+        ComponentType::U8 => f64::from(b[0]),
+        ComponentType::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
+        ComponentType::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
+        ComponentType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
+        ComponentType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
     }
+}
+
+/// A stored value as the accessor means it (glTF 2.0 §3.11 for normalised integers;
+/// normalised UNSIGNED_INT is not allowed, and reads as its value).
+pub(crate) fn normalize(v: f64, c: ComponentType, normalized: bool) -> f64 {
+    if !normalized {
+        return v;
+    }
+    match c {
+        ComponentType::I8 => (v / 127.0).max(-1.0),
+        ComponentType::U8 => v / 255.0,
+        ComponentType::I16 => (v / 32767.0).max(-1.0),
+        ComponentType::U16 => v / 65535.0,
+        _ => v,
+    }
+}
+
+/// One component as a float.
+fn decode_float(b: &[u8], c: ComponentType, normalized: bool) -> f32 {
+    normalize(component(b, c), c, normalized) as f32
 }
 
 fn decode_index(b: &[u8], c: ComponentType) -> u32 {

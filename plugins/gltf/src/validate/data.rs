@@ -18,6 +18,7 @@ use gltf::json::accessor::{ComponentType, Type};
 use gltf::json::validation::Checked;
 
 use super::{MAX_ELEMENTS_SCANNED, MAX_VALUES_SCANNED, Report, Uses, list};
+use crate::accessor::{component, normalize};
 use crate::buffers::Buffers;
 
 /// Tolerance on the length of unit vectors (the validator's: a little more than the error
@@ -101,32 +102,6 @@ impl Layout {
         for (k, v) in out.iter_mut().enumerate().take(self.components) {
             *v = component(&bytes[self.offset_of(k)..], self.component);
         }
-    }
-}
-
-/// One component as stored (integers as integers).
-fn component(b: &[u8], c: ComponentType) -> f64 {
-    match c {
-        ComponentType::I8 => f64::from(b[0] as i8),
-        ComponentType::U8 => f64::from(b[0]),
-        ComponentType::I16 => f64::from(i16::from_le_bytes([b[0], b[1]])),
-        ComponentType::U16 => f64::from(u16::from_le_bytes([b[0], b[1]])),
-        ComponentType::U32 => f64::from(u32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-        ComponentType::F32 => f64::from(f32::from_le_bytes([b[0], b[1], b[2], b[3]])),
-    }
-}
-
-/// A stored value as the accessor means it (glTF 2.0 §3.11 for normalised integers).
-fn normalize(v: f64, c: ComponentType, normalized: bool) -> f64 {
-    if !normalized {
-        return v;
-    }
-    match c {
-        ComponentType::I8 => (v / 127.0).max(-1.0),
-        ComponentType::U8 => v / 255.0,
-        ComponentType::I16 => (v / 32767.0).max(-1.0),
-        ComponentType::U16 => v / 65535.0,
-        _ => v,
     }
 }
 
