@@ -60,9 +60,27 @@ fn anisotropy_rotation_turns_the_highlight_with_the_tangent() {
 }
 
 #[test]
-fn anisotropy_without_uvs_uses_a_smooth_fallback_tangent() {
-    let mut quad = shapes::quad();
-    quad.uvs.clear();
-    let px = brushed_floor(quad, 0.1);
-    assert!(mean(&px).x > 0.0);
+fn anisotropy_without_uvs_turns_the_normal_frame_tangent() {
+    // Without UVs there is no dp/du: the tangent is the first axis of the orthonormal frame
+    // around the normal (Duff et al. 2017, `frame_from_normal`), which for the floor's +y
+    // normal is +x, the direction the quad's u runs. So the floor without UVs renders
+    // what it renders with them, at any rotation, and the rotation still turns it.
+    let mut bare = shapes::quad();
+    bare.uvs.clear();
+    let without_uvs = brushed_floor(bare.clone(), 0.1);
+    let with_uvs = brushed_floor(shapes::quad(), 0.1);
+    let turned = brushed_floor(bare, 0.35);
+    let scale = mean(&with_uvs).x as f64;
+    assert!(scale > 0.0, "a black floor: the highlight is not in view");
+    let same = rmse(&without_uvs, &with_uvs) / scale;
+    let different = rmse(&without_uvs, &turned) / scale;
+    eprintln!("relative RMSE: without vs with UVs {same}, turned a quarter more {different}");
+    assert!(
+        same < 0.02,
+        "the fallback tangent is not the normal frame's: {same}"
+    );
+    assert!(
+        different > 0.2,
+        "turning the fallback tangent changes nothing: {different}"
+    );
 }

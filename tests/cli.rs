@@ -59,7 +59,8 @@ fn malformed_scene_names_line_and_column() {
     )
     .unwrap();
     let (code, err) = run(&["render", path.to_str().unwrap(), "-o", "x.png"]);
-    assert_clean_error(code, &err, 1, "broken.kiln:3:");
+    // Line 3, column 28: the third `0` of `(0, 0 0)`, where a comma or `)` belongs.
+    assert_clean_error(code, &err, 1, "broken.kiln:3:28:");
 }
 
 #[test]

@@ -124,6 +124,16 @@ fn emissive_enclosure_furnace_is_one_with_triangle_light_sampling() {
 /// The furnace for a principled material: a faceted sphere of it in a uniform environment
 /// of radiance 1. Returns the image's mean and the mean over pixels fully on the sphere.
 fn principled_furnace(material: Material, light_sampling: bool, spp: u32) -> (f32, f32) {
+    let (image, on_sphere) = principled_furnace_pixels(material, light_sampling, spp);
+    (image, mean(&on_sphere).x)
+}
+
+/// [`principled_furnace`]'s image mean and the pixels fully on the sphere.
+fn principled_furnace_pixels(
+    material: Material,
+    light_sampling: bool,
+    spp: u32,
+) -> (f32, Vec<Vec3>) {
     let ctx = gpu();
     let mut scene = furnace_scene(0.5, 1.0);
     scene.materials[0] = Material {
@@ -140,7 +150,16 @@ fn principled_furnace(material: Material, light_sampling: bool, spp: u32) -> (f3
         .filter(|(_, c)| c.x < 1e-3)
         .map(|(p, _)| *p)
         .collect();
-    (mean(&px).x, mean(&on_sphere).x)
+    (mean(&px).x, on_sphere)
+}
+
+/// The standard error of the mean of the pixels' red channel, from their spread: a bound
+/// on the Monte Carlo error of the mean where every pixel has the same expectation.
+fn standard_error_of_mean(pixels: &[Vec3]) -> f32 {
+    let n = pixels.len() as f32;
+    let m = mean(pixels).x;
+    let variance = pixels.iter().map(|p| (p.x - m).powi(2)).sum::<f32>() / (n - 1.0);
+    (variance / n).sqrt()
 }
 
 fn white() -> Material {
@@ -154,7 +173,7 @@ fn white() -> Material {
 #[test]
 fn furnace_smooth_layers_of_white_conserve_energy_exactly() {
     // Smooth glass, smooth white metal, a smooth coat over white diffuse, a thin wall:
-    // every path's weight is exactly 1 in expectation, with no energy lost or created.
+    // no energy is lost or created, so the sphere reads exactly 1 up to Monte Carlo noise.
     let cases = [
         (
             "smooth glass",
@@ -193,10 +212,24 @@ fn furnace_smooth_layers_of_white_conserve_energy_exactly() {
     ];
     for (name, material) in cases {
         for light_sampling in [false, true] {
-            let (_, on_sphere) = principled_furnace(material.clone(), light_sampling, 256);
+            // With BSDF sampling alone each bounce picks a lobe in proportion to its share
+            // of the energy and weights it f cos / pdf = 1; what noise remains comes from
+            // Russian roulette (which ends 5% of paths past the third bounce and weights the
+            // rest by 1/0.95) and, with next-event estimation, from MIS-weighted sums. Both
+            // are exact in expectation, and every pixel's expectation is 1, so the pixels'
+            // spread is noise alone: the sphere's mean must be 1 within four standard
+            // errors of the mean (a false alarm once in ~16000 runs), and those errors
+            // must be small enough for that to mean something (4 SE < 0.01).
+            let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, 256);
+            let (m, se) = (mean(&pixels).x, standard_error_of_mean(&pixels));
+            eprintln!("{name}, light sampling {light_sampling}: mean {m}, standard error {se}");
             assert!(
-                (on_sphere - 1.0).abs() < 0.02,
-                "{name} (light sampling {light_sampling}): {on_sphere}"
+                se < 0.0025,
+                "{name} (light sampling {light_sampling}): standard error {se} too large to test"
+            );
+            assert!(
+                (m - 1.0).abs() < 4.0 * se + 1e-5,
+                "{name} (light sampling {light_sampling}): mean {m}, standard error {se}"
             );
         }
     }
@@ -245,9 +278,19 @@ fn furnace_white_glass_stays_white_at_every_roughness() {
 
 #[test]
 fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
-    // Layers over a diffuse base lose what albedo scaling cannot return (the energy a
-    // rough specular layer holds back from the base); nothing may reflect more than it
-    // receives. The floors are measurements on this sphere less a margin.
+    // Each case's expectation, bounded per configuration: within four standard errors of
+    // the mean (see `furnace_smooth_layers_of_white_conserve_energy_exactly`) plus 0.005
+    // for what the tabulated albedos (16² and 8² entries, interpolated) leave, with
+    // BSDF sampling and with next-event estimation alike.
+    //
+    // Rough white metal is compensated for multiple scattering (Kulla & Conty 2017) and
+    // rough Oren–Nayar diffuse is energy-preserving (EON), so both are exactly white: 1.
+    // Uncompensated GGX measured 0.89 here, which this bound fails. Sheen over diffuse
+    // scales the base by the sheen's albedo, which loses nothing either. A rough specular
+    // layer or coat over a diffuse base loses what albedo scaling cannot return (the light
+    // the base sends back up and the layer reflects down again): 0.990 measured on this
+    // sphere at roughness 0.5 and IOR 1.5 (the coat and the specular layer are the same
+    // lobe, so the two agree to the bit), and never more than 1.
     let cases = [
         (
             "rough white metal",
@@ -256,7 +299,7 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
                 roughness: 0.5,
                 ..white()
             },
-            0.85,
+            1.0,
         ),
         (
             "white plastic",
@@ -264,17 +307,16 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
                 roughness: 0.5,
                 ..white()
             },
-            0.9,
+            0.990,
         ),
         (
-            // Energy-preserving (EON-style compensation): loses nothing.
             "rough (Oren–Nayar) white diffuse",
             Material {
                 diffuse_roughness: 1.0,
                 specular_weight: 0.0,
                 ..white()
             },
-            0.98,
+            1.0,
         ),
         (
             "sheen over white diffuse",
@@ -283,7 +325,7 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
                 specular_weight: 0.0,
                 ..white()
             },
-            0.95,
+            1.0,
         ),
         (
             "rough coat over white diffuse",
@@ -293,15 +335,27 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
                 specular_weight: 0.0,
                 ..white()
             },
-            0.9,
+            0.990,
         ),
     ];
-    for (name, material, floor) in cases {
-        let (_, on_sphere) = principled_furnace(material, true, 256);
-        assert!(on_sphere <= 1.02, "{name} creates energy: {on_sphere}");
-        assert!(
-            on_sphere >= floor,
-            "{name} loses too much: {on_sphere} < {floor}"
-        );
+    for (name, material, expected) in cases {
+        for light_sampling in [false, true] {
+            let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, 256);
+            let (m, se) = (mean(&pixels).x, standard_error_of_mean(&pixels));
+            eprintln!("{name}, light sampling {light_sampling}: mean {m}, standard error {se}");
+            assert!(
+                se < 0.0025,
+                "{name} (light sampling {light_sampling}): standard error {se} too large to test"
+            );
+            let bound = 4.0 * se + 0.005;
+            assert!(
+                m <= 1.0 + 4.0 * se,
+                "{name} (light sampling {light_sampling}) creates energy: {m} ± {se}"
+            );
+            assert!(
+                (m - expected).abs() < bound,
+                "{name} (light sampling {light_sampling}): {m}, expected {expected} ± {bound}"
+            );
+        }
     }
 }

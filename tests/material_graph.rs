@@ -329,8 +329,61 @@ mod random_graphs {
         g
     }
 
+    /// The case saved in tests/material_graph.proptest-regressions, kept as a plain test so
+    /// that it runs even if the strategy changes and the saved seed draws something else.
+    #[test]
+    fn saved_regression_graph_compiles_to_wgsl_naga_accepts() {
+        let r = Recipe {
+            nodes: vec![
+                (23, vec![0; 16]),
+                (35, [0, 0, 181813].into_iter().chain([0; 13]).collect()),
+                (
+                    29,
+                    vec![
+                        0, 0, 0, 0, 0, 883888, 810781690, 1491251228, 659804826, 3410598157,
+                        941585502, 2999617159, 337941281, 3503748511, 2765700171, 1002993382,
+                    ],
+                ),
+                (
+                    29,
+                    vec![
+                        3721592420, 2828449880, 961664440, 1098470598, 1497447500, 3751015802,
+                        1970009009, 1259969231, 3249966144, 208169386, 3483773904, 820967387,
+                        411751727, 1537567071, 188922359, 4102123990,
+                    ],
+                ),
+                (
+                    16,
+                    vec![
+                        2586941767, 2940236954, 2722001500, 3201404051, 1838218195, 556815603,
+                        3334310184, 1548370087, 2354837781, 422380312, 3691918197, 2649572163,
+                        2859358550, 3544293112, 920482437, 363547315,
+                    ],
+                ),
+                (
+                    12,
+                    vec![
+                        145398947, 140896700, 1792784705, 1443426680, 3226615556, 2569757146,
+                        874151407, 1431912913, 1524600900, 4197086630, 3779246541, 3058945021,
+                        1208300270, 85661394, 776627360, 1981883940,
+                    ],
+                ),
+            ],
+            surface_input: 3191564178,
+        };
+        let g = build(&r);
+        if let Err(e) = validate_kernel(&g) {
+            panic!("{e}\n{g:#?}");
+        }
+    }
+
     proptest! {
-        #![proptest_config(ProptestConfig { cases: 300, failure_persistence: None, ..ProptestConfig::default() })]
+        // Failures are saved to, and replayed from, tests/material_graph.proptest-regressions.
+        #![proptest_config(ProptestConfig {
+            cases: 300,
+            failure_persistence: Some(Box::new(proptest::test_runner::FileFailurePersistence::SourceParallel("proptest-regressions"))),
+            ..ProptestConfig::default()
+        })]
 
         #[test]
         fn well_typed_graphs_compile_to_wgsl_naga_accepts(r in recipe()) {

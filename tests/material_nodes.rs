@@ -163,6 +163,16 @@ fn math_operations_match_blender_values() {
         ("sign", -2.0, 0.0, 0.0, -1.0),
         ("compare", 1.0, 1.05, 0.1, 1.0),
         ("compare", 1.0, 1.5, 0.1, 0.0),
+        // Cycles' smoothminf: h = max(c - |a - b|, 0) / c, min(a, b) - h³ c / 6.
+        // h = 2/3 here: 1 - (8/27)(3/6) = 1 - 4/27.
+        ("smooth_min", 1.0, 2.0, 3.0, 1.0 - 4.0 / 27.0),
+        // Farther apart than the blend distance: the plain minimum.
+        ("smooth_min", 1.0, 5.0, 1.0, 1.0),
+        // A zero distance is the plain minimum (no division by zero).
+        ("smooth_min", 4.0, 2.0, 0.0, 2.0),
+        // -smoothmin(-a, -b, c): -(-2 - 4/27).
+        ("smooth_max", 1.0, 2.0, 3.0, 2.0 + 4.0 / 27.0),
+        ("smooth_max", 1.0, 5.0, 1.0, 5.0),
         ("round", 2.5, 0.0, 0.0, 3.0),
         ("floor", -1.5, 0.0, 0.0, -2.0),
         ("ceil", -1.5, 0.0, 0.0, -1.0),
@@ -170,6 +180,12 @@ fn math_operations_match_blender_values() {
         ("fraction", 1.25, 0.0, 0.0, 0.25),
         ("truncated_modulo", -3.0, 2.0, 0.0, -1.0),
         ("floored_modulo", -3.0, 2.0, 0.0, 1.0),
+        // Cycles' wrapf(value, max, min) wraps into [min, max).
+        ("wrap", 5.0, 3.0, 1.0, 1.0),
+        ("wrap", -0.5, 1.0, 0.0, 0.5),
+        ("wrap", 2.5, 3.0, 1.0, 2.5),
+        // A zero-width range gives min.
+        ("wrap", 2.0, 1.0, 1.0, 1.0),
         ("snap", 7.0, 3.0, 0.0, 6.0),
         ("pingpong", 5.0, 3.0, 0.0, 1.0),
         ("sine", PI / 2.0, 0.0, 0.0, 1.0),
@@ -215,7 +231,7 @@ fn math_operations_match_blender_values() {
         .iter()
         .filter(|o| !covered.contains(**o))
         .collect();
-    assert!(missing.len() <= 3, "untested operations: {missing:?}");
+    assert!(missing.is_empty(), "untested operations: {missing:?}");
 }
 
 #[test]

@@ -158,6 +158,52 @@ mod tests {
         assert!((out - (c - Vec3::splat(0.04))).length() < 1e-6, "{out}");
     }
 
+    /// The display-encoded (2.2) value AgX gives a grey input.
+    fn agx_display(v: f32) -> Vec3 {
+        let out = Tonemap::Agx.apply(Vec3::splat(v));
+        Vec3::new(
+            out.x.powf(1.0 / 2.2),
+            out.y.powf(1.0 / 2.2),
+            out.z.powf(1.0 / 2.2),
+        )
+    }
+
+    #[test]
+    fn agx_takes_its_published_values_at_middle_grey_and_the_ends_of_its_range() {
+        // AgX's log encoding spans middle grey (0.18) -10 to +6.5 stops (Sobotka; Blender's
+        // AgX base), so 0.18 sits at 10/16.5 of the curve, where Wrensch's published
+        // polynomial (Minimal AgX) gives 0.4967: middle grey lands at half the display range.
+        // The top of the range (0.18 · 2^6.5) reaches the curve's end, 0.9984; ten stops
+        // under middle grey is black. Greys stay grey (the inset and outset rows sum to 1
+        // within 2e-4).
+        for (input, want) in [
+            (0.18, 0.4967),
+            (0.18 * 6.5f32.exp2(), 0.9984),
+            (0.18 * (-10.0f32).exp2(), 0.0),
+        ] {
+            let got = agx_display(input);
+            assert!(
+                (got - Vec3::splat(want)).abs().max_element() < 2e-3,
+                "AgX({input}) = {got}, published {want}"
+            );
+        }
+    }
+
+    #[test]
+    fn aces_takes_its_published_values() {
+        // Stephen Hill's fit of the ACES 1.0 RRT + sRGB ODT (BakingLab's ACES.hlsl): middle
+        // grey 0.18 maps to 0.1056 display-linear (the reference ODT puts it at 4.8 of 48
+        // nits, 0.10), 1.0 to 0.6191 and 16 to 0.9899. The input and output matrices keep
+        // greys grey.
+        for (input, want) in [(0.18, 0.105_59), (1.0, 0.619_12), (16.0, 0.989_93)] {
+            let got = Tonemap::Aces.apply(Vec3::splat(input));
+            assert!(
+                (got - Vec3::splat(want)).abs().max_element() < 1e-3,
+                "ACES({input}) = {got}, published {want}"
+            );
+        }
+    }
+
     #[test]
     fn srgb_encoding_matches_reference_points() {
         assert_eq!(to_srgb8(Vec3::ZERO, 0.0, Tonemap::None), [0, 0, 0]);

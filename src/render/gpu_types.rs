@@ -96,14 +96,123 @@ pub struct GpuStats {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use crate::accel::BvhNode;
+    use naga::proc::Layouter;
+
+    /// The struct `name` of `module`: its size and, per member, (name, offset, size), as
+    /// naga's layouter computes them for the WGSL.
+    fn wgsl_layout(module: &naga::Module, name: &str) -> (u32, Vec<(String, u32, u32)>) {
+        let mut layouter = Layouter::default();
+        layouter
+            .update(module.to_ctx())
+            .expect("scene.wgsl lays out");
+        let (handle, ty) = module
+            .types
+            .iter()
+            .find(|(_, t)| t.name.as_deref() == Some(name))
+            .unwrap_or_else(|| panic!("no struct {name} in shaders/scene.wgsl"));
+        let naga::TypeInner::Struct { members, .. } = &ty.inner else {
+            panic!("{name} is not a struct");
+        };
+        let fields = members
+            .iter()
+            .map(|m| {
+                (
+                    m.name.clone().unwrap_or_default(),
+                    m.offset,
+                    layouter[m.ty].size,
+                )
+            })
+            .collect();
+        (layouter[handle].size, fields)
+    }
+
+    /// Asserts that the Rust struct has the WGSL struct's size and, field by field (every
+    /// field of both, in order), the same names, offsets and sizes.
+    macro_rules! assert_same_layout {
+        ($module:expr, $rust:ident, $wgsl:literal, [$($field:ident),+ $(,)?]) => {{
+            // Naming every field in a pattern makes a field missing from the list a compile
+            // error, so no Rust field goes unchecked.
+            let $rust { $($field: _),+ } = <$rust as bytemuck::Zeroable>::zeroed();
+            let (size, wgsl) = wgsl_layout($module, $wgsl);
+            let rust: Vec<(String, u32, u32)> = vec![$((
+                stringify!($field).to_owned(),
+                std::mem::offset_of!($rust, $field) as u32,
+                {
+                    fn size_of_field<T, F>(_: impl Fn(&T) -> &F) -> usize {
+                        std::mem::size_of::<F>()
+                    }
+                    size_of_field(|s: &$rust| &s.$field) as u32
+                },
+            )),+];
+            assert_eq!(
+                std::mem::size_of::<$rust>() as u32,
+                size,
+                "size of {} vs WGSL {}",
+                stringify!($rust),
+                $wgsl
+            );
+            assert_eq!(rust, wgsl, "fields of {} vs WGSL {} (name, offset, size)", stringify!($rust), $wgsl);
+        }};
+    }
 
     #[test]
-    fn sizes_match_the_wgsl_layout() {
-        assert_eq!(std::mem::size_of::<GpuParams>(), 176);
-        assert_eq!(std::mem::size_of::<GpuInstance>(), 112);
-        assert_eq!(std::mem::size_of::<GpuTriangle>(), 48);
-        assert_eq!(std::mem::size_of::<GpuMaterial>(), 144);
-        assert_eq!(std::mem::size_of::<GpuLightTriangle>(), 64);
-        assert_eq!(std::mem::size_of::<crate::accel::BvhNode>(), 32);
+    fn every_gpu_struct_matches_the_wgsl_layout_field_by_field() {
+        let module = naga::front::wgsl::parse_str(include_str!("../../shaders/scene.wgsl"))
+            .expect("scene.wgsl parses");
+        assert_same_layout!(
+            &module,
+            GpuParams,
+            "Params",
+            [
+                film_size,
+                tile_origin,
+                tile_size,
+                sample_start,
+                sample_count,
+                seed,
+                max_bounces,
+                flags,
+                light_count,
+                instance_count,
+                opaque_one,
+                triangle_page_shift,
+                node_page_shift,
+                cam_position,
+                cam_right,
+                cam_up,
+                cam_forward,
+                cam_lens,
+                environment,
+                light_totals,
+            ]
+        );
+        assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);
+        assert_same_layout!(&module, GpuTriangle, "Triangle", [p0, p1, p2]);
+        assert_same_layout!(
+            &module,
+            GpuInstance,
+            "Instance",
+            [to_world, to_object, blas_root, material, flags, _pad]
+        );
+        assert_same_layout!(
+            &module,
+            GpuMaterial,
+            "Material",
+            [principled, emission, flags]
+        );
+        assert_same_layout!(
+            &module,
+            GpuLightTriangle,
+            "LightTriangle",
+            [p0, p1, p2, emission]
+        );
+        assert_same_layout!(
+            &module,
+            GpuAnalyticLight,
+            "AnalyticLight",
+            [position, axis, intensity, shape]
+        );
+        assert_same_layout!(&module, GpuStats, "Stats", [rays, non_finite]);
     }
 }

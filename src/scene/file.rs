@@ -947,7 +947,8 @@ mod tests {
     fn syntax_error_names_line_and_column() {
         let err = parse("(\n  version: 1,\n  camera: (position: (0, 0 0)),\n)").unwrap_err();
         match err {
-            SceneError::Parse { line, .. } => assert_eq!(line, 3),
+            // The third `0` of `(0, 0 0)`, where a comma or `)` belongs.
+            SceneError::Parse { line, column, .. } => assert_eq!((line, column), (3, 28)),
             other => panic!("expected a parse error, got {other}"),
         }
     }

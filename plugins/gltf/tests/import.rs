@@ -460,8 +460,89 @@ fn vertex_colours_multiply_the_base_colour() {
         2,
         "the material and the vertex-colour default"
     );
-    assert!(r.material(r.instances[0].1).contains("vertex_color"));
-    assert!(r.material(r.instances[1].1).contains("vertex_color"));
+    // What each imported graph feeds the base colour, evaluated on the GPU at a vertex
+    // whose COLOR_0 is green: the factor times the colour, and the colour alone where the
+    // primitive has no material.
+    let green = [0.0, 1.0, 0.0, 1.0];
+    let with_factor = base_colour_at_vertex_colour(r.material(r.instances[0].1), green);
+    let default = base_colour_at_vertex_colour(r.material(r.instances[1].1), green);
+    for (what, got, want) in [
+        ("factor 0.5 × green", with_factor, [0.0, 0.5, 0.0]),
+        ("no material × green", default, [0.0, 1.0, 0.0]),
+    ] {
+        assert!(
+            got.iter().zip(want).all(|(g, w)| (g - w).abs() < 1e-4),
+            "{what}: base colour {got:?}, expected {want:?}"
+        );
+    }
+}
+
+/// The base colour `kmat` computes on a surface whose vertex colour is `color`: the graph
+/// with the principled node's base-colour input moved to its emission (nothing else
+/// emitting or reflecting, black sky), rendered on a quad that fills the view.
+fn base_colour_at_vertex_colour(kmat: &str, color: [f32; 4]) -> [f32; 3] {
+    use glam::{Affine3A, Vec3, Vec4};
+    use kiln::material::{Input, Value};
+    use kiln::render::{GpuContext, RenderControl, RenderSettings, Renderer};
+    use kiln::scene::{Camera, Material, Scene, shapes};
+
+    let (_, mut graph) = kiln::material::parse_material(kmat, "test.gltf").expect("parses");
+    let surface = graph
+        .nodes
+        .values_mut()
+        .find(|n| n.kind == "principled_bsdf")
+        .expect("a principled node");
+    let base = surface
+        .inputs
+        .remove("base_color")
+        .expect("the base colour is wired");
+    surface.inputs.clear();
+    surface
+        .inputs
+        .insert("base_color".into(), Input::Value(Value::Vec3([0.0; 3])));
+    surface
+        .inputs
+        .insert("specular_weight".into(), Input::Value(Value::Float(0.0)));
+    surface.inputs.insert("emission_color".into(), base);
+    surface
+        .inputs
+        .insert("emission_strength".into(), Input::Value(Value::Float(1.0)));
+
+    let mut scene = Scene::empty(Camera {
+        up: Vec3::Z,
+        ..Camera::look_at(Vec3::new(0.0, 2.0, 0.0), Vec3::ZERO, 10.0)
+    });
+    scene.environment = Vec3::ZERO;
+    let m = scene.add_material(Material::from_graph("probe", graph).expect("compiles"));
+    let mut quad = shapes::quad();
+    quad.colors = vec![Vec4::from(color); 4];
+    let q = scene.add_mesh(quad);
+    scene.add_instance(q, m, Affine3A::from_scale(Vec3::splat(4.0)));
+    let settings = RenderSettings {
+        width: 4,
+        height: 4,
+        samples_per_pixel: 2,
+        max_bounces: 4,
+        seed: 1,
+        light_sampling: true,
+        page_bytes: None,
+        specialize: true,
+        aovs: false,
+    };
+    let ctx = GpuContext::new(None).expect("an adapter");
+    let mut renderer = Renderer::new(ctx, &scene, settings).expect("renderer");
+    renderer
+        .render(0..2, RenderControl::default())
+        .expect("renders");
+    let pixels = renderer.read_film().expect("film").radiance();
+    let first = pixels[0];
+    assert!(
+        pixels
+            .iter()
+            .all(|p| (*p - first).abs().max_element() < 1e-5),
+        "the quad does not fill the view evenly: {pixels:?}"
+    );
+    first.to_array()
 }
 
 /// The real host (Kiln's plugin loader and builder) on the same scene: textures decoded,
