@@ -2,6 +2,7 @@
 #![allow(dead_code)]
 pub mod chi2;
 pub mod node_reference;
+pub mod resource;
 
 use std::sync::Arc;
 

@@ -556,10 +556,9 @@ fn kiln_host_accepts_the_imported_scene() {
         std::env::consts::DLL_PREFIX,
         std::env::consts::DLL_SUFFIX
     ));
-    if !library.exists() {
-        eprintln!("skipped: {} not built", library.display());
+    let Some(library) = common::resource::require(&library, "the kiln_gltf plugin library") else {
         return;
-    }
+    };
     let mut host = kiln::plugin::PluginHost::default();
     host.load_file(&library).expect("the plugin loads");
     let dir = common::scratch_dir();

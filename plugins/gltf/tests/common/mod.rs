@@ -11,6 +11,11 @@ use std::time::{Duration, Instant};
 
 use kiln_plugin_api as api;
 
+/// Finding resources outside the repository (fails under CI when one is missing): the
+/// workspace's own test helper, shared by path rather than copied.
+#[path = "../../../../tests/common/resource.rs"]
+pub mod resource;
+
 #[derive(Clone, Debug, Default)]
 pub struct RecordedMesh {
     pub name: String,
@@ -244,11 +249,12 @@ pub fn import(path: &Path) -> (Result<(), String>, Recorded) {
     (result, recorded)
 }
 
-/// [`import`] on another thread; None if it did not finish within `limit`.
+/// [`import`] on another thread, with the time it took; an error saying whether it did not
+/// finish within `limit` or the thread panicked.
 pub fn import_with_timeout(
     path: &Path,
     limit: Duration,
-) -> Option<(Result<(), String>, Recorded, Duration)> {
+) -> Result<(Result<(), String>, Recorded, Duration), String> {
     let (tx, rx) = mpsc::channel();
     let path = path.to_owned();
     std::thread::spawn(move || {
@@ -256,7 +262,10 @@ pub fn import_with_timeout(
         let (result, recorded) = import(&path);
         let _ = tx.send((result, recorded, start.elapsed()));
     });
-    rx.recv_timeout(limit).ok()
+    rx.recv_timeout(limit).map_err(|e| match e {
+        mpsc::RecvTimeoutError::Timeout => format!("no result within {limit:?}"),
+        mpsc::RecvTimeoutError::Disconnected => "the importing thread panicked".to_owned(),
+    })
 }
 
 /// A scratch folder of its own for files a test writes, removed when dropped.
