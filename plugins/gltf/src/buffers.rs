@@ -1,9 +1,10 @@
 //! The bytes behind a document: buffers loaded from data URIs, files next to the `.gltf`
 //! or the GLB's binary chunk, and bounds-checked slices of their buffer views.
 //!
-//! Buffers are loaded eagerly and a buffer that cannot be loaded fails the import with
-//! its name: a missing `.bin` is a broken file, not a detail to render around. Images are
-//! not loaded here (see `images`).
+//! Buffers are loaded eagerly and a buffer whose file is missing or unreadable fails the
+//! import with its name: a missing `.bin` is a broken file, not a detail to render around.
+//! A URI with a scheme this importer does not fetch (`http:`, …) is not an error until a
+//! buffer view reads it. Images are not loaded here (see `images`).
 
 use std::path::Path;
 
@@ -12,11 +13,12 @@ use gltf::json;
 
 use crate::document::{MAX_FILE_BYTES, read_file};
 
-/// The loaded buffers, in document order, each cut to its declared `byteLength`. None
-/// for a buffer without a URI that the GLB binary chunk does not fill (a placeholder the
-/// validator accepts): reading it fails where it is used.
+/// The loaded buffers, in document order, each cut to its declared `byteLength`.
 pub struct Buffers {
-    data: Vec<Option<Vec<u8>>>,
+    /// Per buffer, its bytes or why it has none. A buffer without bytes is an error only
+    /// where a buffer view reads it, so a file that declares an unreachable buffer it never
+    /// uses still imports (the glTF-Validator finds such files valid).
+    data: Vec<Result<Vec<u8>, String>>,
 }
 
 /// Where a URI points.
@@ -104,7 +106,7 @@ impl Buffers {
                 None => match blob.take() {
                     Some(blob) => blob,
                     None => {
-                        data.push(None);
+                        data.push(Err("no URI, no GLB binary chunk".to_owned()));
                         continue;
                     }
                 },
@@ -121,9 +123,10 @@ impl Buffers {
                         read_file(&path).map_err(|e| format!("{name}: {e}"))?
                     }
                     Uri::Unsupported(scheme) => {
-                        return Err(format!(
-                            "{name}: \"{scheme}:\" URIs are not supported (only relative paths and data URIs)"
-                        ));
+                        data.push(Err(format!(
+                            "its \"{scheme}:\" URI is not fetched (only relative paths and data URIs are read)"
+                        )));
+                        continue;
                     }
                 },
             };
@@ -136,14 +139,14 @@ impl Buffers {
             }
             // Bytes past byteLength (GLB padding) are not part of the buffer.
             bytes.truncate(length.min(MAX_FILE_BYTES) as usize);
-            data.push(Some(bytes));
+            data.push(Ok(bytes));
         }
         Ok(Self { data })
     }
 
     /// Whether buffer `index` has bytes (it exists and was given a URI or the GLB chunk).
     pub fn has_data(&self, index: usize) -> bool {
-        matches!(self.data.get(index), Some(Some(_)))
+        matches!(self.data.get(index), Some(Ok(_)))
     }
 
     /// The bytes of buffer view `index`, and its stride if it declares one.
@@ -158,11 +161,7 @@ impl Buffers {
             .get(buffer)
             .ok_or_else(|| format!("buffer view {index}: buffer {buffer} does not exist"))?
             .as_ref()
-            .ok_or_else(|| {
-                format!(
-                    "buffer view {index}: buffer {buffer} has no data (no URI, no GLB binary chunk)"
-                )
-            })?;
+            .map_err(|why| format!("buffer view {index}: buffer {buffer} has no data: {why}"))?;
         let offset = view.byte_offset.map_or(0, |o| o.0);
         let length = view.byte_length.0;
         let end = offset
