@@ -57,11 +57,13 @@ fn wait_until_rendering(child: &mut Child, lines: &Receiver<String>) -> Vec<Stri
     panic!("kiln did not start rendering:\n{}", seen.join("\n"));
 }
 
+/// SIGINT, as Ctrl-C sends it, through the shell's `kill` (a builtin wherever there
+/// is a shell, unlike a `kill` executable).
 fn interrupt(child: &Child) {
-    let status = Command::new("kill")
-        .args(["-INT", &child.id().to_string()])
+    let status = Command::new("sh")
+        .args(["-c", &format!("kill -INT {}", child.id())])
         .status()
-        .expect("kill runs");
+        .expect("sh runs");
     assert!(status.success(), "kill -INT {} failed", child.id());
 }
 
