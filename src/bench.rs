@@ -23,6 +23,21 @@ pub struct BenchArgs {
     /// Image size of the timed renders (square).
     #[arg(long, default_value_t = 512)]
     pub size: u32,
+    /// Only the scenes whose name contains this text (any case); may be given several
+    /// times. Every scene by default.
+    #[arg(long = "scene", value_name = "TEXT")]
+    pub scenes: Vec<String>,
+}
+
+impl BenchArgs {
+    fn wants(&self, scene: &str) -> bool {
+        let scene = scene.to_lowercase();
+        self.scenes.is_empty()
+            || self
+                .scenes
+                .iter()
+                .any(|s| scene.contains(&s.to_lowercase()))
+    }
 }
 
 /// A displaced sphere on a floor, lit by a quad light and a dim sky.
@@ -115,21 +130,28 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
     let import = measure_import(args.triangles);
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
-    let mut scenes = vec![
-        ("Cornell box".to_owned(), scene::default_scene()?),
-        (
-            format!("displaced sphere ({} tris)", args.triangles),
-            large_scene(args.triangles),
-        ),
-    ];
+    let mut scenes = Vec::new();
+    if args.wants("Cornell box") {
+        scenes.push(("Cornell box".to_owned(), scene::default_scene()?));
+    }
+    let sphere = format!("displaced sphere ({} tris)", args.triangles);
+    if args.wants(&sphere) {
+        scenes.push((sphere, large_scene(args.triangles)));
+    }
     // The bundled material scenes, when run from the source tree.
     for file in ["materials.kiln", "showcase.kiln"] {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets/scenes")
             .join(file);
-        if path.exists() {
+        if args.wants(file) && path.exists() {
             scenes.push((file.to_owned(), scene::load_scene(&path)?));
         }
+    }
+    if scenes.is_empty() {
+        anyhow::bail!(
+            "no benchmark scene matches --scene {}",
+            args.scenes.join(", --scene ")
+        );
     }
     println!(
         "Adapter: {}; {}x{} px, max bounces from each scene, NEE + MIS.",

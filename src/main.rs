@@ -392,15 +392,6 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     eprintln!("adapter: {}", ctx.describe());
     let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
         .with_context(|| format!("cannot prepare {name} for rendering"))?;
-    let info = renderer.build_info;
-    eprintln!(
-        "scene: {name}: {} triangles, {} instances, {} emissive triangles; BVH {:.0} ms, kernel {:.0} ms",
-        info.triangles,
-        info.instances,
-        info.emissive_triangles,
-        info.accel_build.as_secs_f64() * 1e3,
-        info.kernel_build.as_secs_f64() * 1e3
-    );
 
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -413,6 +404,16 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         })
         .context("cannot install the Ctrl-C handler")?;
     }
+    // Printed once Ctrl-C is handled: from this line on, an interrupt writes the image.
+    let info = renderer.build_info;
+    eprintln!(
+        "scene: {name}: {} triangles, {} instances, {} emissive triangles; BVH {:.0} ms, kernel {:.0} ms",
+        info.triangles,
+        info.instances,
+        info.emissive_triangles,
+        info.accel_build.as_secs_f64() * 1e3,
+        info.kernel_build.as_secs_f64() * 1e3
+    );
     let pixels = settings.width as u64 * settings.height as u64;
     let bar = if args.quiet {
         ProgressBar::hidden()

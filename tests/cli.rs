@@ -98,10 +98,32 @@ fn render_writes_a_png_of_the_requested_size() {
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
 
+/// The average samples per pixel and render seconds of the summary line
+/// "wrote OUT: 12.5 spp average in 2.00 s …".
+fn spp_and_seconds(stderr: &str) -> (f64, f64) {
+    let line = stderr
+        .lines()
+        .find(|l| l.starts_with("wrote "))
+        .unwrap_or_else(|| panic!("no summary line:\n{stderr}"));
+    let words: Vec<&str> = line.split_whitespace().collect();
+    let at = |word: &str, offset: isize| -> f64 {
+        let i = words
+            .iter()
+            .position(|w| *w == word)
+            .unwrap_or_else(|| panic!("no \"{word}\" in \"{line}\""));
+        words[(i as isize + offset) as usize]
+            .parse()
+            .unwrap_or_else(|e| panic!("\"{line}\": {e}"))
+    };
+    (at("spp", -1), at("in", 1))
+}
+
 #[test]
 fn time_limit_stops_early_and_still_writes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("partial.exr");
+    let (limit, spp) = (2.0, 100_000.0);
+    let started = std::time::Instant::now();
     let (code, err) = run(&[
         "render",
         "--size",
@@ -109,14 +131,42 @@ fn time_limit_stops_early_and_still_writes() {
         "--spp",
         "100000",
         "--time-limit",
-        "1",
+        "2",
         "-q",
         "-o",
         out.to_str().unwrap(),
     ]);
+    let wall = started.elapsed().as_secs_f64();
     assert_eq!(code, 0, "stderr:\n{err}");
-    assert!(err.contains("time limit reached"), "{err}");
-    assert!(out.exists());
+    assert!(err.contains("(time limit reached)"), "{err}");
+    // 100 000 spp at 64×64 is over an hour on lavapipe (≈ 0.1 Msamples/s); the limit
+    // must have ended it. 120 s leaves room for startup and kernel compile on a loaded
+    // machine (measured: 2 s of compile).
+    assert!(wall < 120.0, "kiln ran {wall:.0} s with a {limit} s limit");
+    let (average, seconds) = spp_and_seconds(&err);
+    assert!(
+        average > 0.0 && average < spp,
+        "{average} spp average of {spp} requested:\n{err}"
+    );
+    // The render ran up to the limit (the summary rounds to 1/100 s), not past it by
+    // more than a generous hang guard.
+    assert!(
+        seconds >= limit - 0.01 && seconds < limit + 60.0,
+        "rendered {seconds} s with a {limit} s limit"
+    );
+    // What accumulated was written: a complete image of the cornell box, not a black
+    // or uniform one.
+    let img = image::open(&out).unwrap().into_rgb32f();
+    assert_eq!((img.width(), img.height()), (64, 64));
+    let luminance: Vec<f32> = img.pixels().map(|p| p.0.iter().sum::<f32>()).collect();
+    assert!(luminance.iter().all(|v| v.is_finite()));
+    let (lo, hi) = luminance
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    assert!(
+        hi > 1.0 && hi > 10.0 * lo.max(1e-3),
+        "a flat image: luminance from {lo} to {hi}"
+    );
 }
 
 #[test]

@@ -48,6 +48,8 @@ pub struct GpuContext {
     /// a scene rendered again with the same features and materials, or a restarted
     /// render, skips naga and the driver's compile.
     pub(crate) pipelines: std::sync::Mutex<std::collections::HashMap<u64, wgpu::ComputePipeline>>,
+    /// Pipelines compiled on this context (cache misses), so the cache can be checked.
+    pub(crate) pipelines_compiled: std::sync::atomic::AtomicUsize,
 }
 
 fn instance(backend: Option<Backend>) -> wgpu::Instance {
@@ -146,11 +148,19 @@ impl GpuContext {
             queue,
             info,
             pipelines: Default::default(),
+            pipelines_compiled: Default::default(),
         }))
     }
 
     pub fn describe(&self) -> String {
         describe_adapter(&self.info)
+    }
+
+    /// How many compute pipelines this context has compiled; a kernel source served from
+    /// the pipeline cache does not count.
+    pub fn pipelines_compiled(&self) -> usize {
+        self.pipelines_compiled
+            .load(std::sync::atomic::Ordering::Relaxed)
     }
 
     pub fn limits(&self) -> wgpu::Limits {

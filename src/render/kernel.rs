@@ -207,6 +207,8 @@ impl KernelSource {
                 message: e.to_string(),
             });
         }
+        ctx.pipelines_compiled
+            .fetch_add(1, std::sync::atomic::Ordering::Relaxed);
         if let Ok(mut cache) = ctx.pipelines.lock() {
             cache.insert(key, pipeline.clone());
         }
