@@ -198,11 +198,44 @@ fn parse_rgb(s: &str) -> Result<Vec3, String> {
     Ok(Vec3::from(rgb))
 }
 
+/// Gives the process a private runtime directory when the session has none (a headless
+/// machine, a CI job, a farm node). Mesa's window-system code looks for one on every device
+/// creation and otherwise prints "Error: XDG_RUNTIME_DIR is invalid or not set", the first
+/// line a newcomer would read, although compute needs no window system. Only an unset or
+/// missing directory is replaced; one per user, private (0700), reused across runs.
+#[cfg(unix)]
+fn ensure_runtime_dir() {
+    use std::os::unix::fs::{DirBuilderExt, MetadataExt, PermissionsExt};
+    if std::env::var_os("XDG_RUNTIME_DIR").is_some_and(|d| Path::new(&d).is_dir()) {
+        return;
+    }
+    let Ok(uid) = std::fs::metadata("/proc/self").map(|m| m.uid()) else {
+        return;
+    };
+    let dir = std::env::temp_dir().join(format!("kiln-runtime-{uid}"));
+    let _ = std::fs::DirBuilder::new().mode(0o700).create(&dir);
+    // Use it only if it is ours and private (not one another user planted).
+    let usable = std::fs::symlink_metadata(&dir)
+        .is_ok_and(|m| m.is_dir() && m.uid() == uid && m.permissions().mode() & 0o077 == 0);
+    if usable {
+        // SAFETY: called first thing in main, before any other thread exists.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", &dir) };
+    }
+}
+
 fn main() -> ExitCode {
+    #[cfg(unix)]
+    ensure_runtime_dir();
     tracing_subscriber::fmt()
         .with_env_filter(
             tracing_subscriber::EnvFilter::try_from_env("KILN_LOG")
-                .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("warn")),
+                // wgpu-hal's EGL loader logs an error for each display platform it tries
+                // before the one that works (DRI2 on a machine without a GPU); a GL backend
+                // that fails altogether is Kiln's own error ("no usable GPU adapter").
+                // KILN_LOG=debug shows them.
+                .unwrap_or_else(|_| {
+                    tracing_subscriber::EnvFilter::new("warn,wgpu_hal::gles::egl=off")
+                }),
         )
         .with_writer(std::io::stderr)
         .init();
@@ -396,9 +429,15 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = Arc::clone(&cancel);
-        // A second Ctrl-C while the partial image is written exits at once.
+        let out_dir = match args.output.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+            _ => PathBuf::from("."),
+        };
+        // A second Ctrl-C while the partial image is written exits at once, leaving the
+        // previous file (if any) as it was and no temporary file behind.
         ctrlc::set_handler(move || {
             if cancel.swap(true, Ordering::SeqCst) {
+                kiln_plugin_api::atomic::remove_partial_files(&out_dir);
                 std::process::exit(130);
             }
         })

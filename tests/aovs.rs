@@ -28,11 +28,27 @@ fn aovs_describe_the_first_surface_and_leave_the_image_alone() {
         (film.radiance(), r.read_aovs().unwrap())
     };
     let (plain, none) = render(s);
+    // Without bounces the image holds only what camera rays see directly; the AOVs still
+    // describe the first surface (checked below at every bounce limit).
+    let mut no_bounces = s;
+    no_bounces.max_bounces = 0;
+    no_bounces.aovs = true;
+    let (_, first_hit_only) = render(no_bounces);
     assert!(none.is_none(), "AOVs not asked for");
     s.aovs = true;
     let (beauty, aovs) = render(s);
     assert_eq!(plain, beauty, "rendering AOVs changed the image");
     let aovs = aovs.expect("AOVs asked for");
+    let first_hit_only = first_hit_only.expect("AOVs asked for");
+    assert_eq!(
+        (&aovs.albedo, &aovs.normal, &aovs.depth),
+        (
+            &first_hit_only.albedo,
+            &first_hit_only.normal,
+            &first_hit_only.depth
+        ),
+        "the bounce limit changed the AOVs"
+    );
     for i in 0..64 {
         let albedo = Vec3::from_slice(&aovs.albedo[3 * i..]);
         let normal = Vec3::from_slice(&aovs.normal[3 * i..]);

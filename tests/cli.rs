@@ -282,3 +282,37 @@ fn material_wgsl_prints_a_kernel_naga_accepts() {
     );
     assert!(!snippet.contains("@compute"));
 }
+
+#[test]
+fn a_headless_run_prints_no_driver_errors() {
+    // No runtime directory, as on a fresh headless machine or a farm node: Mesa would print
+    // "Error: XDG_RUNTIME_DIR is invalid or not set" and wgpu-hal an EGL error for each
+    // display platform it tries, on a run that works.
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    for args in [
+        vec!["info"],
+        vec![
+            "render",
+            "--size",
+            "8x8",
+            "--spp",
+            "1",
+            "-o",
+            out.to_str().unwrap(),
+        ],
+    ] {
+        let run = std::process::Command::new(env!("CARGO_BIN_EXE_kiln"))
+            .args(&args)
+            .env_remove("XDG_RUNTIME_DIR")
+            .env_remove("KILN_LOG")
+            .output()
+            .unwrap();
+        let stderr = String::from_utf8_lossy(&run.stderr);
+        assert!(run.status.success(), "kiln {args:?} failed:\n{stderr}");
+        assert!(
+            !stderr.to_lowercase().contains("error"),
+            "kiln {args:?} printed an error on a run that worked:\n{stderr}"
+        );
+    }
+}

@@ -152,4 +152,12 @@ fn a_second_ctrl_c_quits_at_once_without_a_half_written_image() {
         let img = image::open(&out).expect("a complete image");
         assert_eq!((img.width(), img.height()), (2048, 2048));
     }
+    // And no temporary file is left behind, wherever the write was.
+    let left: Vec<_> = std::fs::read_dir(dir.path())
+        .unwrap()
+        .flatten()
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .filter(|n| n.ends_with(".part"))
+        .collect();
+    assert!(left.is_empty(), "temporary files left behind: {left:?}");
 }

@@ -202,10 +202,6 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             }
             radiance += throughput * emission * w;
         }
-        if (depth >= params.max_bounces) {
-            break;
-        }
-
         // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
         // Surfaces light passes through keep their front, so inside and outside differ.
         let transmissive = material.flags.y != 0u;
@@ -224,6 +220,10 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             aov_albedo = mix(p.base_color * mix(p.base_weight, 1.0, p.metallic), p.transmission_color, p.transmission_weight * dielectric);
             aov_normal = ns;
             aov_depth = hit.t;
+        }
+        // Past the AOVs, so that a render without bounces still has its first hit's.
+        if (depth >= params.max_bounces) {
+            break;
         }
 
         if (nee) {

@@ -8,6 +8,33 @@ use std::fs::File;
 use std::io::{BufWriter, Write};
 use std::path::Path;
 
+/// The suffix of the temporary files [`write_atomically`] writes.
+pub const PARTIAL_FILE_SUFFIX: &str = ".part";
+
+/// The prefix of the temporary files [`write_atomically`] writes in this process: it holds
+/// the process id, so that a process ended in the middle of a write (a second Ctrl-C) can
+/// remove its own temporary files, and only those, with [`remove_partial_files`]. Exporter
+/// plugins link their own copy of this crate but run in the same process, so they share it.
+pub fn partial_file_prefix() -> String {
+    format!(".kiln-{}-", std::process::id())
+}
+
+/// Removes the temporary files this process has left in `dir` (see
+/// [`partial_file_prefix`]); for a process about to exit in the middle of a write.
+pub fn remove_partial_files(dir: &Path) {
+    let prefix = partial_file_prefix();
+    let Ok(entries) = std::fs::read_dir(dir) else {
+        return;
+    };
+    for entry in entries.flatten() {
+        let name = entry.file_name();
+        let name = name.to_string_lossy();
+        if name.starts_with(&prefix) && name.ends_with(PARTIAL_FILE_SUFFIX) {
+            let _ = std::fs::remove_file(entry.path());
+        }
+    }
+}
+
 /// Writes `path` through `write`, atomically. Errors name `path`.
 pub fn write_atomically(
     path: &Path,
@@ -19,8 +46,8 @@ pub fn write_atomically(
         _ => Path::new("."),
     };
     let mut temp = tempfile::Builder::new()
-        .prefix(".kiln-")
-        .suffix(".part")
+        .prefix(&partial_file_prefix())
+        .suffix(PARTIAL_FILE_SUFFIX)
         .tempfile_in(dir)
         .map_err(|e| {
             fail(format!(
