@@ -5,7 +5,10 @@
 //!   roughness 0.07..1 and cos θo (8 × 8);
 //! - `shaders/bsdf/ggx_albedo_table.wgsl`: directional albedo E(μ, roughness) of the white
 //!   single-scattering GGX conductor (16 × 16) and its cosine-weighted average E_avg;
-//! - `shaders/bsdf/diffuse_albedo_table.wgsl`: the same for the rough (Oren–Nayar) diffuse.
+//! - `shaders/bsdf/diffuse_albedo_table.wgsl`: the same for the rough (Oren–Nayar) diffuse;
+//! - `src/render/tables/dielectric_energy.rs`: the directional energy albedo (R + T) of the
+//!   white rough dielectric, outside and inside, over (η−1)/(η+1), roughness and cos θo
+//!   (2 × 16³), bound as a uniform buffer for `shaders/bsdf/dielectric_energy.wgsl`.
 //!
 //! Run with `cargo run --release --example albedo_tables`.
 

@@ -156,7 +156,8 @@ pub struct Node {
     pub params: BTreeMap<String, Param>,
     #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
     pub inputs: BTreeMap<String, Input>,
-    /// Where the editor draws the node; no meaning to the compiler.
+    /// Where a graph editor draws the node (kept through load and save); no meaning to
+    /// the compiler.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<[f32; 2]>,
 }

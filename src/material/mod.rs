@@ -196,7 +196,7 @@ pub fn scene_materials_wgsl(
 }
 
 /// The graph of a fixed-parameter material: one principled node holding its values, so
-/// the editor (and importers) can start from any material.
+/// that every material can be edited, saved and compiled as a graph.
 pub fn graph_from_principled(m: &crate::scene::Material) -> Graph {
     let v = |c: glam::Vec3| Input::Value(Value::Vec3(c.to_array()));
     let f = |x: f32| Input::Value(Value::Float(x));

@@ -37,8 +37,8 @@ pub enum GpuError {
     Runtime { during: String, message: String },
 }
 
-/// An adapter, its device and queue. Shared (`Arc`) between the renderer and, later, the
-/// editor, so one device serves both.
+/// An adapter, its device and queue. Shared (`Arc`) by every renderer and probe of a
+/// process, so that one device (and its pipeline cache) serves them all.
 pub struct GpuContext {
     pub adapter: wgpu::Adapter,
     pub device: wgpu::Device,

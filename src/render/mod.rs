@@ -2,7 +2,7 @@
 //! ([`gpu_scene`]), and the progressive [`Renderer`] that accumulates samples into a film.
 //!
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
-//! (the CLI, the editor, benchmarks) drive it in sample ranges and read the film back.
+//! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
 pub mod context;
 pub mod gpu_scene;

@@ -1,8 +1,9 @@
 //! The principled surface material: the parameters of Blender's Principled BSDF / OpenPBR
 //! Surface, evaluated by `shaders/bsdf/principled.wgsl`. Defaults are Blender's.
 //!
-//! This is the fixed parameter set every material has; the material-graph compiler will
-//! compute these parameters per shading point instead.
+//! This is the fixed parameter set every material has. A material made from a node graph
+//! keeps its compiled graph beside it, which computes these parameters per shading point
+//! (the fixed values are then what the graph folds to, where it is constant).
 
 use std::sync::Arc;
 

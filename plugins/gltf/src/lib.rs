@@ -10,7 +10,7 @@
 //! file against the rules parsing does not enforce and reports what breaks them.
 //!
 //! Not imported: animations, skins and morph targets (rest pose), orthographic cameras,
-//! second UV sets, points and lines, and extensions outside [`extensions::HANDLED`]
+//! UV sets past the second (TEXCOORD_0 and TEXCOORD_1 are), points and lines, and extensions outside [`extensions::HANDLED`]
 //! (reported, or refused when the file requires them). Every read of the file is
 //! bounds-checked: broken files give warnings or an error, never a panic.
 
