@@ -125,11 +125,13 @@ fn measure(
     })
 }
 
-pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
+/// Runs the benchmarks and writes their report, a Markdown table as docs/BENCHMARKS.md
+/// keeps it, to `out` row by row as each is measured (the library never prints: the CLI
+/// passes standard output).
+pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Write) -> Result<()> {
     // The import first, so the memory it measures is not hidden under the renders' peak.
     let import = measure_import(args.triangles);
     let ctx = GpuContext::new(backend)?;
-    eprintln!("adapter: {}", ctx.describe());
     let mut scenes = Vec::new();
     if args.wants("Cornell box") {
         scenes.push(("Cornell box".to_owned(), scene::default_scene()?));
@@ -153,21 +155,24 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
             args.scenes.join(", --scene ")
         );
     }
-    println!(
+    writeln!(
+        out,
         "Adapter: {}; {}x{} px, max bounces from each scene, NEE + MIS.",
         ctx.describe(),
         args.size,
         args.size
-    );
-    println!();
-    println!(
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
         "| scene | kernel | triangles | BVH build | kernel build (naga + pipeline) | first dispatch | Msamples/s | Mrays/s |"
-    );
-    println!("|---|---|---:|---:|---:|---:|---:|---:|");
+    )?;
+    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|")?;
     for (name, scene) in &scenes {
         for specialize in [true, false] {
             let row = measure(&ctx, name, scene, args, specialize)?;
-            println!(
+            writeln!(
+                out,
                 "| {} | {} | {} | {:.1} ms | {:.0} ms | {:.0} ms | {:.3} | {:.2} |",
                 row.name,
                 if specialize {
@@ -181,20 +186,21 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>) -> Result<()> {
                 row.first_dispatch.as_secs_f64() * 1e3,
                 row.samples_per_sec / 1e6,
                 row.rays_per_sec / 1e6
-            );
+            )?;
         }
     }
-    println!();
+    writeln!(out)?;
     match import {
-        Ok((time, extra, triangles)) => println!(
+        Ok((time, extra, triangles)) => writeln!(
+            out,
             "glTF import ({triangles} triangles, .glb through the plugin): {:.0} ms, peak memory +{}",
             time.as_secs_f64() * 1e3,
             extra.map_or("unknown".into(), |b| format!(
                 "{:.0} MiB",
                 b as f64 / (1u64 << 20) as f64
             ))
-        ),
-        Err(e) => println!("glTF import: not measured ({e:#})"),
+        )?,
+        Err(e) => writeln!(out, "glTF import: not measured ({e:#})")?,
     }
     Ok(())
 }

@@ -247,7 +247,7 @@ fn main() -> ExitCode {
         Command::Plugins => list_plugins(&plugins()),
         Command::Import { file, output } => import(&plugins(), &file, &output),
         Command::Info => info(backend),
-        Command::Bench(args) => kiln::bench::run(&args, backend),
+        Command::Bench(args) => kiln::bench::run(&args, backend, &mut std::io::stdout()),
         Command::Material(command) => material(command),
     };
     match result {
