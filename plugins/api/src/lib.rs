@@ -8,9 +8,12 @@
 //!
 //! Rust plugins implement [`Importer`] or [`Exporter`] and call [`export_importer!`] or
 //! [`export_exporter!`], which generate the descriptor and C shims that turn panics into
-//! errors. See `docs/PLUGINS.md` for complete examples.
+//! errors. See `docs/PLUGINS.md` for complete examples. [`kmat`] writes the material
+//! graphs importers hand over; [`recording`] is a host for a plugin's own tests.
 
 pub mod atomic;
+pub mod kmat;
+pub mod recording;
 
 use std::ffi::{CStr, CString, c_char, c_void};
 

@@ -7,20 +7,7 @@ use std::path::Path;
 use exr::prelude::{FlatSamples, ReadChannels, ReadLayers};
 use kiln_exr::kiln_plugin_descriptor;
 use kiln_plugin_api as api;
-
-struct TestLayer {
-    name: CString,
-    channels: u32,
-    data: Vec<f32>,
-}
-
-/// A film the test owns; `with_view` lends a view of it.
-struct TestFilm {
-    width: u32,
-    height: u32,
-    radiance: Vec<f32>,
-    layers: Vec<TestLayer>,
-}
+use kiln_plugin_api::recording::{TestFilm, TestLayer};
 
 /// Awkward floats that lossy paths or careless conversions would change.
 const SPECIAL: [f32; 8] = [
@@ -49,56 +36,28 @@ fn sample(seed: u32, i: usize) -> f32 {
     (x % 100_000) as f32 / 7.0 - 3000.0
 }
 
-impl TestFilm {
-    fn new(width: u32, height: u32) -> Self {
-        let n = (width * height) as usize;
-        let layer = |name: &str, channels: u32, seed: u32| TestLayer {
-            name: CString::new(name).unwrap(),
-            channels,
-            data: (0..n * channels as usize)
-                .map(|i| sample(seed, i))
-                .collect(),
-        };
-        Self {
-            width,
-            height,
-            radiance: (0..n * 4).map(|i| sample(1, i)).collect(),
-            layers: vec![
-                layer("albedo", 3, 2),
-                layer("normal", 3, 3),
-                layer("depth", 1, 4),
-            ],
-        }
-    }
-
-    fn with_view<T>(&self, f: impl FnOnce(&api::FilmView) -> T) -> T {
-        let layers: Vec<api::LayerView> = self
-            .layers
-            .iter()
-            .map(|l| api::LayerView {
-                name: l.name.as_ptr(),
-                channels: l.channels,
-                data: if l.data.is_empty() {
-                    std::ptr::null()
-                } else {
-                    l.data.as_ptr()
-                },
-            })
-            .collect();
-        let radiance = if self.radiance.is_empty() {
-            std::ptr::null()
-        } else {
-            self.radiance.as_ptr()
-        };
-        f(&api::FilmView {
-            width: self.width,
-            height: self.height,
-            radiance,
-            // The EXR exporter never reads the display image.
-            display: std::ptr::null(),
-            layer_count: layers.len() as u32,
-            layers: layers.as_ptr(),
-        })
+/// A `width`×`height` film whose radiance and albedo, normal and depth layers hold
+/// seeded values, awkward floats among them.
+fn test_film(width: u32, height: u32) -> TestFilm {
+    let n = (width * height) as usize;
+    let layer = |name: &str, channels: u32, seed: u32| TestLayer {
+        name: CString::new(name).unwrap(),
+        channels,
+        data: (0..n * channels as usize)
+            .map(|i| sample(seed, i))
+            .collect(),
+    };
+    TestFilm {
+        width,
+        height,
+        radiance: (0..n * 4).map(|i| sample(1, i)).collect(),
+        // The EXR exporter never reads the display image.
+        display: Vec::new(),
+        layers: vec![
+            layer("albedo", 3, 2),
+            layer("normal", 3, 3),
+            layer("depth", 1, 4),
+        ],
     }
 }
 
@@ -107,28 +66,12 @@ fn descriptor() -> &'static api::PluginDescriptor {
     unsafe { &*kiln_plugin_descriptor() }
 }
 
-fn export(path: &Path, film: &TestFilm, options: &str) -> (i32, String) {
-    let export = descriptor()
-        .export
-        .expect("an exporter has an export function");
-    let path = CString::new(path.to_str().unwrap()).unwrap();
-    let options = CString::new(options).unwrap();
-    let mut message = vec![0 as c_char; 1024];
-    let mut error = api::ErrorBuffer {
-        data: message.as_mut_ptr(),
-        capacity: message.len(),
-    };
-    let status =
-        film.with_view(|view| unsafe { export(path.as_ptr(), view, options.as_ptr(), &mut error) });
-    let text = unsafe { CStr::from_ptr(message.as_ptr()) }
-        .to_string_lossy()
-        .into_owned();
-    (status, text)
+fn export(path: &Path, film: &TestFilm, options: &str) -> Result<(), String> {
+    film.export(descriptor(), path, options)
 }
 
 fn expect_error(path: &Path, film: &TestFilm, options: &str) -> String {
-    let (status, message) = export(path, film, options);
-    assert_eq!(status, api::STATUS_ERROR, "export should fail");
+    let message = export(path, film, options).expect_err("export should fail");
     assert!(!message.is_empty(), "an error comes with a message");
     message
 }
@@ -219,7 +162,7 @@ fn descriptor_declares_an_exr_exporter_of_this_abi() {
 fn every_channel_of_every_layer_reads_back_bit_identical_for_each_compression() {
     let dir = tempfile::tempdir().unwrap();
     // Odd sizes and more than 16 rows, so ZIP's and PIZ's blocks end part-way.
-    let film = TestFilm::new(37, 23);
+    let film = test_film(37, 23);
     let want = expected_channels(&film);
     for compression in [
         "",
@@ -230,8 +173,7 @@ fn every_channel_of_every_layer_reads_back_bit_identical_for_each_compression() 
         "compression=piz",
     ] {
         let path = dir.path().join("film.exr");
-        let (status, message) = export(&path, &film, compression);
-        assert_eq!(status, api::STATUS_OK, "{compression}: {message}");
+        assert_eq!(export(&path, &film, compression), Ok(()), "{compression}");
         let (got, parts) = read_channels(&path);
         assert_eq!(parts, 1, "one part, layers as channel prefixes");
         assert_bit_identical(&got, &want);
@@ -242,8 +184,8 @@ fn every_channel_of_every_layer_reads_back_bit_identical_for_each_compression() 
 fn default_compression_is_zip() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("film.exr");
-    let film = TestFilm::new(8, 20);
-    assert_eq!(export(&path, &film, "").0, api::STATUS_OK);
+    let film = test_film(8, 20);
+    assert_eq!(export(&path, &film, ""), Ok(()));
     let meta = exr::meta::MetaData::read_from_file(&path, false).unwrap();
     assert_eq!(
         meta.headers[0].compression,
@@ -255,9 +197,9 @@ fn default_compression_is_zip() {
 fn a_film_without_aovs_is_plain_rgba() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("rgba.exr");
-    let mut film = TestFilm::new(4, 3);
+    let mut film = test_film(4, 3);
     film.layers.clear();
-    assert_eq!(export(&path, &film, "").0, api::STATUS_OK);
+    assert_eq!(export(&path, &film, ""), Ok(()));
     let (got, _) = read_channels(&path);
     assert_bit_identical(&got, &expected_channels(&film));
     // Readers of plain RGBA files see it too.
@@ -283,7 +225,7 @@ fn a_film_without_aovs_is_plain_rgba() {
 fn writes_leave_only_the_image_readable_by_all() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("film.exr");
-    assert_eq!(export(&path, &TestFilm::new(3, 3), "").0, api::STATUS_OK);
+    assert_eq!(export(&path, &test_film(3, 3), ""), Ok(()));
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
     #[cfg(unix)]
     {
@@ -297,7 +239,7 @@ fn writes_leave_only_the_image_readable_by_all() {
 fn bad_options_are_refused_and_nothing_is_written() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("film.exr");
-    let film = TestFilm::new(2, 2);
+    let film = test_film(2, 2);
     for (options, needle) in [
         ("compression=pxr24", "lossy"),
         ("compression=dwaa", "lossy"),
@@ -316,7 +258,7 @@ fn bad_options_are_refused_and_nothing_is_written() {
 #[test]
 fn unwritable_destinations_fail_with_the_path_in_the_message() {
     let dir = tempfile::tempdir().unwrap();
-    let film = TestFilm::new(2, 2);
+    let film = test_film(2, 2);
     let missing = dir.path().join("no such folder").join("film.exr");
     let message = expect_error(&missing, &film, "");
     assert!(message.contains("no such folder"), "{message}");
@@ -330,7 +272,7 @@ fn unwritable_destinations_fail_with_the_path_in_the_message() {
 fn bad_films_are_refused_with_the_path_in_the_message() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.exr");
-    let mut film = TestFilm::new(2, 2);
+    let mut film = test_film(2, 2);
     film.width = 0;
     let message = expect_error(&path, &film, "");
     assert!(
@@ -338,12 +280,12 @@ fn bad_films_are_refused_with_the_path_in_the_message() {
         "{message}"
     );
 
-    let mut film = TestFilm::new(2, 2);
+    let mut film = test_film(2, 2);
     film.radiance.clear();
     let message = expect_error(&path, &film, "");
     assert!(message.contains("radiance"), "{message}");
 
-    let mut film = TestFilm::new(2, 2);
+    let mut film = test_film(2, 2);
     film.layers[1].name = CString::new("albedo").unwrap();
     let message = expect_error(&path, &film, "");
     assert!(
@@ -351,12 +293,12 @@ fn bad_films_are_refused_with_the_path_in_the_message() {
         "{message}"
     );
 
-    let mut film = TestFilm::new(2, 2);
+    let mut film = test_film(2, 2);
     film.layers[0].channels = 0;
     let message = expect_error(&path, &film, "");
     assert!(message.contains("albedo"), "{message}");
 
-    let mut film = TestFilm::new(2, 2);
+    let mut film = test_film(2, 2);
     film.layers[0].name = CString::new("").unwrap();
     let message = expect_error(&path, &film, "");
     assert!(message.contains("no name"), "{message}");
@@ -366,7 +308,7 @@ fn bad_films_are_refused_with_the_path_in_the_message() {
 #[test]
 fn null_arguments_are_errors_not_crashes() {
     let export = descriptor().export.unwrap();
-    let film = TestFilm::new(2, 2);
+    let film = test_film(2, 2);
     let mut message = vec![0 as c_char; 256];
     let mut error = api::ErrorBuffer {
         data: message.as_mut_ptr(),

@@ -5,7 +5,7 @@
 //! Data flow: [`document`] reads the container and JSON, [`extensions`] decides whether
 //! the file can be imported at all, [`buffers`] loads the bytes, [`scene`] walks the
 //! nodes, [`geometry`] (through [`accessor`]) turns primitives into triangle lists and
-//! [`material`] (through [`texture`], [`images`] and [`kmat`]) turns materials into
+//! [`material`] (through [`texture`], [`images`] and `kiln_plugin_api::kmat`) turns materials into
 //! `.kmat` graphs; [`import`] drives them and talks to the host. [`validate`] checks the
 //! file against the rules parsing does not enforce and reports what breaks them.
 //!
@@ -21,7 +21,6 @@ pub mod extensions;
 pub mod geometry;
 pub mod images;
 pub mod import;
-pub mod kmat;
 pub mod material;
 pub mod scene;
 pub mod texture;

@@ -24,8 +24,8 @@ use gltf::json;
 use gltf::json::material::AlphaMode;
 use gltf::json::validation::Checked;
 
-use crate::kmat::{Graph, Node, Value};
 use crate::texture::{ImageFiles, TextureRef, texture_node};
+use kiln_plugin_api::kmat::{Graph, Node, Value};
 
 /// What varies between the graphs made from one glTF material.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -208,7 +208,7 @@ pub fn translate(
         .into_iter()
         .map(|w| format!("material \"{name}\": {w}"))
         .collect();
-    let kmat = t.graph.to_kmat(&name);
+    let kmat = t.graph.to_kmat(&name, &[]);
     (MaterialText { name, kmat }, warnings)
 }
 

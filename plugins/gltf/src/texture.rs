@@ -11,7 +11,7 @@ use gltf::json;
 use gltf::json::texture::{MagFilter, WrappingMode};
 use gltf::json::validation::Checked;
 
-use crate::kmat::{Graph, Node, Value};
+use kiln_plugin_api::kmat::{Graph, Node, Value};
 
 /// Resolves glTF image `index` to the `file` parameter of an image-texture node
 /// (`image:N` or a path relative to the glTF file), or None if it cannot be used (the
@@ -190,9 +190,9 @@ pub fn texture_node(
         let mapping = Node::new("mapping")
             .text("vector_type", "point")
             .input("vector", Value::link(&uv, uv_output))
-            .input("location", Value::Color([location[0], location[1], 0.0]))
-            .input("rotation", Value::Color([0.0, 0.0, rotation]))
-            .input("scale", Value::Color([scale[0], scale[1], 1.0]));
+            .input("location", Value::Vector([location[0], location[1], 0.0]))
+            .input("rotation", Value::Vector([0.0, 0.0, rotation]))
+            .input("scale", Value::Vector([scale[0], scale[1], 1.0]));
         let mapping = graph.add(&format!("{role}_mapping"), mapping);
         node = node.input("vector", Value::link(&mapping, "vector"));
     }

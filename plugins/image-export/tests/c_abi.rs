@@ -6,54 +6,29 @@ use std::path::Path;
 
 use kiln_image_export::kiln_plugin_descriptor;
 use kiln_plugin_api as api;
+use kiln_plugin_api::recording::{TestFilm, export_view};
 
-/// A film the test owns; `view` points into it.
-struct TestFilm {
-    width: u32,
-    height: u32,
-    radiance: Vec<f32>,
-    display: Vec<f32>,
+/// A `width`×`height` film showing `display`, with radiance 1.
+fn test_film(width: u32, height: u32, display: Vec<f32>) -> TestFilm {
+    TestFilm {
+        width,
+        height,
+        radiance: vec![1.0; display.len()],
+        display,
+        layers: Vec::new(),
+    }
 }
 
-impl TestFilm {
-    fn new(width: u32, height: u32, display: Vec<f32>) -> Self {
-        Self {
-            width,
-            height,
-            radiance: vec![1.0; display.len()],
-            display,
-        }
-    }
-
-    /// `n` pixels whose display values run through [0, 1] with alpha varying too.
-    fn gradient(width: u32, height: u32) -> Self {
-        let n = (width * height) as usize;
-        let display = (0..n)
-            .flat_map(|i| {
-                let t = i as f32 / (n - 1).max(1) as f32;
-                [t, 1.0 - t, (t * 7.0).fract(), 0.25 + 0.75 * t]
-            })
-            .collect();
-        Self::new(width, height, display)
-    }
-
-    fn view(&self) -> api::FilmView {
-        let ptr = |v: &Vec<f32>| {
-            if v.is_empty() {
-                std::ptr::null()
-            } else {
-                v.as_ptr()
-            }
-        };
-        api::FilmView {
-            width: self.width,
-            height: self.height,
-            radiance: ptr(&self.radiance),
-            display: ptr(&self.display),
-            layer_count: 0,
-            layers: std::ptr::null(),
-        }
-    }
+/// `n` pixels whose display values run through [0, 1] with alpha varying too.
+fn gradient(width: u32, height: u32) -> TestFilm {
+    let n = (width * height) as usize;
+    let display = (0..n)
+        .flat_map(|i| {
+            let t = i as f32 / (n - 1).max(1) as f32;
+            [t, 1.0 - t, (t * 7.0).fract(), 0.25 + 0.75 * t]
+        })
+        .collect();
+    test_film(width, height, display)
 }
 
 fn descriptor() -> &'static api::PluginDescriptor {
@@ -61,37 +36,14 @@ fn descriptor() -> &'static api::PluginDescriptor {
     unsafe { &*kiln_plugin_descriptor() }
 }
 
-/// Calls `export` through the C function pointer: the status and the error message.
-fn export_view(path: &Path, view: &api::FilmView, options: &str) -> (i32, String) {
-    let export = descriptor()
-        .export
-        .expect("an exporter has an export function");
-    let path = CString::new(path.to_str().unwrap()).unwrap();
-    let options = CString::new(options).unwrap();
-    let mut message = vec![0 as c_char; 1024];
-    let mut error = api::ErrorBuffer {
-        data: message.as_mut_ptr(),
-        capacity: message.len(),
-    };
-    let status = unsafe { export(path.as_ptr(), view, options.as_ptr(), &mut error) };
-    let text = unsafe { CStr::from_ptr(message.as_ptr()) }
-        .to_string_lossy()
-        .into_owned();
-    (status, text)
-}
-
-fn export(path: &Path, film: &TestFilm, options: &str) -> (i32, String) {
-    export_view(path, &film.view(), options)
-}
-
 fn expect_ok(path: &Path, film: &TestFilm, options: &str) {
-    let (status, message) = export(path, film, options);
-    assert_eq!(status, api::STATUS_OK, "export failed: {message}");
+    let result = film.export(descriptor(), path, options);
+    assert_eq!(result, Ok(()), "export failed");
 }
 
 fn expect_error(path: &Path, film: &TestFilm, options: &str) -> String {
-    let (status, message) = export(path, film, options);
-    assert_eq!(status, api::STATUS_ERROR, "export should fail");
+    let result = film.export(descriptor(), path, options);
+    let message = result.expect_err("export should fail");
     assert!(!message.is_empty(), "an error comes with a message");
     message
 }
@@ -120,7 +72,7 @@ fn descriptor_declares_a_png_jpeg_exporter_of_this_abi() {
 fn png_8_bit_holds_the_display_rgba_rounded_to_nearest() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.png");
-    let film = TestFilm::gradient(7, 5);
+    let film = gradient(7, 5);
     expect_ok(&path, &film, "");
     let read = image::open(&path).unwrap();
     assert_eq!(
@@ -136,7 +88,7 @@ fn png_8_bit_holds_the_display_rgba_rounded_to_nearest() {
 fn png_16_bit_holds_the_display_to_one_part_in_65535() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.png");
-    let film = TestFilm::gradient(6, 4);
+    let film = gradient(6, 4);
     expect_ok(&path, &film, "bits=16");
     let read = image::open(&path).unwrap();
     assert_eq!(read.color(), image::ColorType::Rgba16);
@@ -164,7 +116,7 @@ fn out_of_range_and_nan_values_are_clamped_and_zeroed() {
         f32::NEG_INFINITY,
         1.0,
     ];
-    expect_ok(&path, &TestFilm::new(2, 1, display), "");
+    expect_ok(&path, &test_film(2, 1, display), "");
     let pixels = image::open(&path).unwrap().to_rgba8().into_raw();
     assert_eq!(pixels, [0, 255, 0, 255, 1, 0, 0, 255]);
 }
@@ -175,7 +127,7 @@ fn jpeg_drops_alpha_and_keeps_colour_within_compression_error() {
     let path = dir.path().join("out.jpg");
     // A flat colour: JPEG's error on it is a few levels at most.
     let display = [0.8f32, 0.4, 0.2, 0.3].repeat(16 * 16);
-    expect_ok(&path, &TestFilm::new(16, 16, display), "");
+    expect_ok(&path, &test_film(16, 16, display), "");
     let read = image::open(&path).unwrap();
     assert_eq!(read.color(), image::ColorType::Rgb8, "JPEG has no alpha");
     for p in read.to_rgb8().pixels() {
@@ -188,7 +140,7 @@ fn jpeg_drops_alpha_and_keeps_colour_within_compression_error() {
 #[test]
 fn jpeg_quality_option_trades_size_for_fidelity() {
     let dir = tempfile::tempdir().unwrap();
-    let film = TestFilm::gradient(64, 64);
+    let film = gradient(64, 64);
     let low = dir.path().join("low.jpeg");
     let high = dir.path().join("high.jpeg");
     expect_ok(&low, &film, "quality=10");
@@ -206,7 +158,7 @@ fn jpeg_quality_option_trades_size_for_fidelity() {
 fn writes_leave_only_the_image_readable_by_all() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.png");
-    expect_ok(&path, &TestFilm::gradient(3, 3), "");
+    expect_ok(&path, &gradient(3, 3), "");
     let entries: Vec<_> = std::fs::read_dir(dir.path()).unwrap().collect();
     assert_eq!(entries.len(), 1, "no temporary file is left behind");
     #[cfg(unix)]
@@ -225,7 +177,7 @@ fn replacing_an_image_keeps_its_permissions() {
     let path = dir.path().join("out.png");
     std::fs::write(&path, b"old").unwrap();
     std::fs::set_permissions(&path, std::fs::Permissions::from_mode(0o600)).unwrap();
-    expect_ok(&path, &TestFilm::gradient(3, 3), "");
+    expect_ok(&path, &gradient(3, 3), "");
     let mode = std::fs::metadata(&path).unwrap().permissions().mode();
     assert_eq!(mode & 0o777, 0o600);
     assert!(image::open(&path).is_ok());
@@ -236,8 +188,8 @@ fn a_failed_export_leaves_the_previous_file_untouched() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("out.png");
     std::fs::write(&path, b"previous").unwrap();
-    expect_error(&path, &TestFilm::new(0, 0, Vec::new()), "");
-    expect_error(&path, &TestFilm::gradient(2, 2), "bits=12");
+    expect_error(&path, &test_film(0, 0, Vec::new()), "");
+    expect_error(&path, &gradient(2, 2), "bits=12");
     assert_eq!(std::fs::read(&path).unwrap(), b"previous");
     assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 1);
 }
@@ -245,7 +197,7 @@ fn a_failed_export_leaves_the_previous_file_untouched() {
 #[test]
 fn unwritable_destinations_fail_with_the_path_in_the_message() {
     let dir = tempfile::tempdir().unwrap();
-    let film = TestFilm::gradient(2, 2);
+    let film = gradient(2, 2);
     let missing = dir.path().join("no such folder").join("out.png");
     let message = expect_error(&missing, &film, "");
     assert!(message.contains("no such folder"), "{message}");
@@ -266,13 +218,13 @@ fn unwritable_destinations_fail_with_the_path_in_the_message() {
 fn bad_films_are_refused_with_the_path_in_the_message() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("bad.png");
-    let message = expect_error(&path, &TestFilm::new(0, 4, Vec::new()), "");
+    let message = expect_error(&path, &test_film(0, 4, Vec::new()), "");
     assert!(
         message.contains("bad.png") && message.contains("0×4"),
         "{message}"
     );
     // No display buffer: the view has a null pointer, so the film holds no floats.
-    let mut film = TestFilm::gradient(2, 2);
+    let mut film = gradient(2, 2);
     film.display.clear();
     let message = expect_error(&path, &film, "");
     assert!(
@@ -288,8 +240,7 @@ fn bad_films_are_refused_with_the_path_in_the_message() {
         layer_count: 0,
         layers: std::ptr::null(),
     };
-    let (status, message) = export_view(&path, &view, "");
-    assert_eq!(status, api::STATUS_ERROR);
+    let message = export_view(descriptor(), &path, &view, "").expect_err("export should fail");
     assert!(!message.is_empty());
     assert!(!path.exists());
 }
@@ -297,7 +248,7 @@ fn bad_films_are_refused_with_the_path_in_the_message() {
 #[test]
 fn bad_options_are_refused_naming_the_option() {
     let dir = tempfile::tempdir().unwrap();
-    let film = TestFilm::gradient(2, 2);
+    let film = gradient(2, 2);
     let png = dir.path().join("o.png");
     let jpg = dir.path().join("o.jpg");
     for (path, options, needle) in [
@@ -318,28 +269,29 @@ fn bad_options_are_refused_naming_the_option() {
 #[test]
 fn null_arguments_and_short_error_buffers_are_handled() {
     let export = descriptor().export.unwrap();
-    let film = TestFilm::gradient(2, 2);
-    let view = film.view();
-    let mut message = vec![0x55 as c_char; 8];
-    let mut error = api::ErrorBuffer {
-        data: message.as_mut_ptr(),
-        capacity: message.len(),
-    };
-    let status = unsafe { export(std::ptr::null(), &view, std::ptr::null(), &mut error) };
-    assert_eq!(status, api::STATUS_ERROR);
-    // Truncated to the buffer, NUL-terminated.
-    assert_eq!(message[7], 0);
-    let path = CString::new("/nonexistent-kiln-dir/x.png").unwrap();
-    let status = unsafe {
-        export(
-            path.as_ptr(),
-            std::ptr::null(),
-            std::ptr::null(),
-            &mut error,
-        )
-    };
-    assert_eq!(status, api::STATUS_ERROR);
-    // A null error buffer: the status alone reports the failure.
-    let status = unsafe { export(path.as_ptr(), &view, std::ptr::null(), std::ptr::null_mut()) };
-    assert_eq!(status, api::STATUS_ERROR);
+    let film = gradient(2, 2);
+    film.with_view(|view| {
+        let mut message = vec![0x55 as c_char; 8];
+        let mut error = api::ErrorBuffer {
+            data: message.as_mut_ptr(),
+            capacity: message.len(),
+        };
+        let status = unsafe { export(std::ptr::null(), view, std::ptr::null(), &mut error) };
+        assert_eq!(status, api::STATUS_ERROR);
+        // Truncated to the buffer, NUL-terminated.
+        assert_eq!(message[7], 0);
+        let path = CString::new("/nonexistent-kiln-dir/x.png").unwrap();
+        let status = unsafe {
+            export(
+                path.as_ptr(),
+                std::ptr::null(),
+                std::ptr::null(),
+                &mut error,
+            )
+        };
+        assert_eq!(status, api::STATUS_ERROR);
+        // A null error buffer: the status alone reports the failure.
+        let status = unsafe { export(path.as_ptr(), view, std::ptr::null(), std::ptr::null_mut()) };
+        assert_eq!(status, api::STATUS_ERROR);
+    });
 }

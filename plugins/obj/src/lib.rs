@@ -8,7 +8,6 @@
 //! already points up, as Kiln's). A missing MTL library is a warning and its meshes are
 //! grey; a mesh without a material gets the host's grey (`u32::MAX`).
 
-pub mod kmat;
 pub mod mtl;
 pub mod texture;
 

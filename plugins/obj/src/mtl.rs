@@ -27,8 +27,8 @@
 
 use tobj::Material;
 
-use crate::kmat::{Input, Kmat, Param};
 use crate::texture::{Channel, TextureRef, parse_texture};
+use kiln_plugin_api::kmat::{Graph, Node, Value};
 
 /// The height range of a bump map, in scene units, that the bump node's `distance`
 /// gives a map going from 0 to 1: MTL heights have no unit, and this is a small
@@ -71,8 +71,9 @@ const QUIET: [&str; 3] = ["ka", "map_ka", "map_aat"];
 
 struct Converter<'a> {
     material: &'a Material,
-    kmat: Kmat,
-    surface: Vec<(&'static str, Input)>,
+    graph: Graph,
+    /// The principled BSDF's inputs.
+    surface: Node,
     warnings: Vec<String>,
     has_uv_node: bool,
 }
@@ -140,97 +141,64 @@ impl<'a> Converter<'a> {
 
     /// Adds an image texture node `id` (with a mapping node for `-s`/`-o`); returns `id`.
     fn image(&mut self, id: &str, texture: &TextureRef, color_space: &str) -> String {
-        let mut inputs = Vec::new();
+        let extension = if texture.clamp { "extend" } else { "repeat" };
+        let mut node = Node::new("image_texture")
+            .text("file", &texture.file)
+            .text("color_space", color_space)
+            .text("extension", extension);
         if texture.scale.is_some() || texture.offset.is_some() {
             if !self.has_uv_node {
-                self.kmat.node("uv", "texture_coordinate", vec![], vec![]);
+                self.graph.add("uv", Node::new("texture_coordinate"));
                 self.has_uv_node = true;
             }
             let [su, sv] = texture.scale.unwrap_or([1.0, 1.0]);
             let [ou, ov] = texture.offset.unwrap_or([0.0, 0.0]);
             let mapping = format!("{id}_mapping");
             // `point`: scale, then translate, as MTL's -s and -o.
-            self.kmat.node(
+            let mapping = self.graph.add(
                 &mapping,
-                "mapping",
-                vec![("vector_type", Param::Text("point".into()))],
-                vec![
-                    ("vector", Input::link("uv", "uv")),
-                    ("scale", Input::Vector([su, sv, 1.0])),
-                    ("location", Input::Vector([ou, ov, 0.0])),
-                ],
+                Node::new("mapping")
+                    .text("vector_type", "point")
+                    .input("vector", Value::link("uv", "uv"))
+                    .input("scale", Value::Vector([su, sv, 1.0]))
+                    .input("location", Value::Vector([ou, ov, 0.0])),
             );
-            inputs.push(("vector", Input::link(&mapping, "vector")));
+            node = node.input("vector", Value::link(&mapping, "vector"));
         }
-        let extension = if texture.clamp { "extend" } else { "repeat" };
-        self.kmat.node(
-            id,
-            "image_texture",
-            vec![
-                ("file", Param::Text(texture.file.clone())),
-                ("color_space", Param::Text(color_space.into())),
-                ("extension", Param::Text(extension.into())),
-            ],
-            inputs,
-        );
-        id.to_owned()
+        self.graph.add(id, node)
     }
 
     /// A data map read as one number (`-imfchan`, luminance by default).
-    fn scalar_image(&mut self, id: &str, texture: &TextureRef) -> Input {
+    fn scalar_image(&mut self, id: &str, texture: &TextureRef) -> Value {
         let node = self.image(id, texture, "linear");
         let socket = match texture.channel {
-            Some(Channel::Matte) => return Input::link(&node, "alpha"),
+            Some(Channel::Matte) => return Value::link(&node, "alpha"),
             Some(Channel::Red) => "red",
             Some(Channel::Green) => "green",
             Some(Channel::Blue) => "blue",
-            Some(Channel::Luminance) | None => return Input::link(&node, "color"),
+            Some(Channel::Luminance) | None => return Value::link(&node, "color"),
         };
         let split = format!("{id}_channels");
-        self.kmat.node(
-            &split,
-            "separate_color",
-            vec![],
-            vec![("color", Input::link(&node, "color"))],
-        );
-        Input::link(&split, socket)
+        let node = Node::new("separate_color").input("color", Value::link(&node, "color"));
+        Value::link(&self.graph.add(&split, node), socket)
     }
 
-    /// `value × map`, or whichever of them exists.
+    /// `value × map` (the map alone for a white value), or whichever of them exists.
     fn multiply_color(
         &mut self,
         id: &str,
         value: Option<[f32; 3]>,
-        map: Option<Input>,
-    ) -> Option<Input> {
+        map: Option<Value>,
+    ) -> Option<Value> {
         match (value, map) {
-            (Some(v), None) => Some(Input::Color(v)),
-            (None, Some(m)) => Some(m),
-            // Multiplying by white changes nothing: leave the map alone.
-            (Some([1.0, 1.0, 1.0]), Some(m)) => Some(m),
-            (Some(v), Some(m)) => {
-                self.kmat.node(
-                    id,
-                    "mix_color",
-                    vec![("blend", Param::Text("multiply".into()))],
-                    vec![
-                        ("factor", Input::Float(1.0)),
-                        ("a", Input::Color(v)),
-                        ("b", m),
-                    ],
-                );
-                Some(Input::link(id, "result"))
-            }
-            (None, None) => None,
+            (Some(v), Some(m)) => Some(self.graph.multiply_color(id, Value::Color(v), m)),
+            (v, m) => m.or(v.map(Value::Color)),
         }
     }
 
     /// Sets a principled input; a later statement (a map after its value) replaces it.
-    fn set(&mut self, input: &'static str, value: Input) {
-        match self.surface.iter_mut().find(|(k, _)| *k == input) {
-            Some(slot) => slot.1 = value,
-            None => self.surface.push((input, value)),
-        }
+    fn set(&mut self, input: &str, value: Value) {
+        self.surface.set_input(input, value);
     }
 
     fn convert(mut self) -> Converted {
@@ -243,7 +211,7 @@ impl<'a> Converter<'a> {
         let kd = self.finite3("Kd", m.diffuse);
         let kd_map = self
             .texture(m.diffuse_texture.as_ref(), &["map_Kd"])
-            .map(|t| Input::link(&self.image("kd_texture", &t, "srgb"), "color"));
+            .map(|t| Value::link(&self.image("kd_texture", &t, "srgb"), "color"));
         if let Some(color) = self.multiply_color("base_color", kd, kd_map) {
             self.set("base_color", color);
         }
@@ -251,14 +219,14 @@ impl<'a> Converter<'a> {
         // Specular and roughness: the PBR extension's terms, or Phong's.
         if pbr {
             if let Some(pr) = self.number("Pr") {
-                self.set("roughness", Input::Float(pr.clamp(0.0, 1.0)));
+                self.set("roughness", Value::Float(pr.clamp(0.0, 1.0)));
             }
             if let Some(t) = self.texture(None, &["map_Pr"]) {
                 let v = self.scalar_image("pr_texture", &t);
                 self.set("roughness", v);
             }
             if let Some(pm) = self.number("Pm") {
-                self.set("metallic", Input::Float(pm.clamp(0.0, 1.0)));
+                self.set("metallic", Value::Float(pm.clamp(0.0, 1.0)));
             }
             if let Some(t) = self.texture(None, &["map_Pm"]) {
                 let v = self.scalar_image("pm_texture", &t);
@@ -266,20 +234,20 @@ impl<'a> Converter<'a> {
             }
         } else {
             if matches!(m.illumination_model, Some(0 | 1)) {
-                self.set("specular_weight", Input::Float(0.0));
+                self.set("specular_weight", Value::Float(0.0));
             } else if let Some(ks) = self.finite3("Ks", m.specular) {
                 let peak = ks.iter().copied().fold(0.0f32, f32::max).clamp(0.0, 1.0);
                 self.set(
                     "specular_weight",
-                    Input::Float(specular_weight_from_ks(peak)),
+                    Value::Float(specular_weight_from_ks(peak)),
                 );
                 if peak > 0.0 {
                     let tint = ks.map(|c| (c / peak).clamp(0.0, 1.0));
-                    self.set("specular_color", Input::Color(tint));
+                    self.set("specular_color", Value::Color(tint));
                 }
             }
             if let Some(ns) = m.shininess.and_then(|ns| self.finite("Ns", ns)) {
-                self.set("roughness", Input::Float(roughness_from_shininess(ns)));
+                self.set("roughness", Value::Float(roughness_from_shininess(ns)));
             }
         }
         if m.specular_texture.is_some() {
@@ -298,13 +266,13 @@ impl<'a> Converter<'a> {
             .filter(|c| c.iter().any(|&x| x > 0.0));
         let ke_map = self
             .texture(None, &["map_Ke"])
-            .map(|t| Input::link(&self.image("ke_texture", &t, "srgb"), "color"));
+            .map(|t| Value::link(&self.image("ke_texture", &t, "srgb"), "color"));
         let emits = ke.is_some() || ke_map.is_some();
         if let Some(color) = self.multiply_color("emission", ke, ke_map) {
             self.set("emission_color", color);
         }
         if emits {
-            self.set("emission_strength", Input::Float(1.0));
+            self.set("emission_strength", Value::Float(1.0));
         }
 
         // Opacity: d, or Tr = 1 − d.
@@ -317,15 +285,10 @@ impl<'a> Converter<'a> {
             .texture(m.dissolve_texture.as_ref(), &["map_d"])
             .map(|t| self.scalar_image("d_texture", &t));
         match (d, d_map) {
-            (Some(d), None) if d < 1.0 => self.set("alpha", Input::Float(d)),
+            (Some(d), None) if d < 1.0 => self.set("alpha", Value::Float(d)),
             (Some(d), Some(map)) if d < 1.0 => {
-                self.kmat.node(
-                    "alpha",
-                    "math",
-                    vec![("operation", Param::Text("multiply".into()))],
-                    vec![("a", map), ("b", Input::Float(d))],
-                );
-                self.set("alpha", Input::link("alpha", "value"));
+                let alpha = self.graph.multiply("alpha", map, Value::Float(d));
+                self.set("alpha", alpha);
             }
             (_, Some(map)) => self.set("alpha", map),
             _ => {}
@@ -335,10 +298,10 @@ impl<'a> Converter<'a> {
         // an IOR it would take every reflection off the surface, so it keeps the default.
         let ni = m.optical_density.and_then(|ni| self.finite("Ni", ni));
         if let Some(ni) = ni.filter(|&ni| ni > 1.0) {
-            self.set("ior", Input::Float(ni));
+            self.set("ior", Value::Float(ni));
         }
         if matches!(m.illumination_model, Some(4 | 6 | 7)) {
-            self.set("transmission_weight", Input::Float(1.0));
+            self.set("transmission_weight", Value::Float(1.0));
         }
         if let Some(tf) = self.statement("Tf") {
             let numbers: Vec<f32> = tf
@@ -346,9 +309,9 @@ impl<'a> Converter<'a> {
                 .map_while(|w| w.parse::<f32>().ok())
                 .collect();
             match numbers[..] {
-                [g] if g.is_finite() => self.set("transmission_color", Input::Color([g; 3])),
+                [g] if g.is_finite() => self.set("transmission_color", Value::Color([g; 3])),
                 [r, g, b, ..] if [r, g, b].iter().all(|x| x.is_finite()) => {
-                    self.set("transmission_color", Input::Color([r, g, b]))
+                    self.set("transmission_color", Value::Color([r, g, b]))
                 }
                 _ => self
                     .warnings
@@ -364,11 +327,11 @@ impl<'a> Converter<'a> {
             ("aniso", "anisotropy"),
         ] {
             if let Some(v) = self.number(statement) {
-                self.set(input, Input::Float(v.clamp(0.0, 1.0)));
+                self.set(input, Value::Float(v.clamp(0.0, 1.0)));
             }
         }
         if let Some(v) = self.number("anisor") {
-            self.set("anisotropy_rotation", Input::Float(v));
+            self.set("anisotropy_rotation", Value::Float(v));
         }
 
         // Shading normal: a tangent-space normal map, then a bump map on top of it.
@@ -376,30 +339,24 @@ impl<'a> Converter<'a> {
         if let Some(t) = self.texture(None, &["norm"]) {
             let image = self.image("norm_texture", &t, "linear");
             let strength = t.bump_multiplier.unwrap_or(1.0).clamp(0.0, 1.0);
-            self.kmat.node(
-                "normal_map",
-                "normal_map",
-                vec![],
-                vec![
-                    ("color", Input::link(&image, "color")),
-                    ("strength", Input::Float(strength)),
-                ],
-            );
-            normal = Some(Input::link("normal_map", "normal"));
+            let map = Node::new("normal_map")
+                .input("color", Value::link(&image, "color"))
+                .input("strength", Value::Float(strength));
+            let map = self.graph.add("normal_map", map);
+            normal = Some(Value::link(&map, "normal"));
         }
         if let Some(t) = self.texture(m.normal_texture.as_ref(), &["map_Bump", "bump"]) {
             let height = self.scalar_image("bump_texture", &t);
             let strength = t.bump_multiplier.unwrap_or(1.0).clamp(0.0, 1.0);
-            let mut inputs = vec![
-                ("height", height),
-                ("strength", Input::Float(strength)),
-                ("distance", Input::Float(BUMP_HEIGHT)),
-            ];
+            let mut bump = Node::new("bump")
+                .input("height", height)
+                .input("strength", Value::Float(strength))
+                .input("distance", Value::Float(BUMP_HEIGHT));
             if let Some(n) = normal.take() {
-                inputs.push(("normal", n));
+                bump = bump.input("normal", n);
             }
-            self.kmat.node("bump", "bump", vec![], inputs);
-            normal = Some(Input::link("bump", "normal"));
+            let bump = self.graph.add("bump", bump);
+            normal = Some(Value::link(&bump, "normal"));
         }
         if let Some(n) = normal {
             self.set("normal", n);
@@ -420,14 +377,11 @@ impl<'a> Converter<'a> {
                 .push(format!("statements not supported: {}", ignored.join(", ")));
         }
 
-        let surface = std::mem::take(&mut self.surface);
-        self.kmat
-            .node("surface", "principled_bsdf", vec![], surface);
-        self.kmat.node(
+        let surface = std::mem::replace(&mut self.surface, Node::new("principled_bsdf"));
+        let surface = self.graph.add("surface", surface);
+        self.graph.add(
             "out",
-            "material_output",
-            vec![],
-            vec![("surface", Input::link("surface", "bsdf"))],
+            Node::new("material_output").input("surface", Value::link(&surface, "bsdf")),
         );
         let comment = [format!(
             "Converted by kiln-obj from the MTL material \"{}\".",
@@ -435,7 +389,7 @@ impl<'a> Converter<'a> {
         )];
         let name = m.name.clone();
         Converted {
-            kmat: self.kmat.to_text(&name, &comment),
+            kmat: self.graph.to_kmat(&name, &comment),
             warnings: self
                 .warnings
                 .into_iter()
@@ -449,8 +403,8 @@ impl<'a> Converter<'a> {
 pub fn convert(material: &Material) -> Converted {
     Converter {
         material,
-        kmat: Kmat::default(),
-        surface: Vec::new(),
+        graph: Graph::default(),
+        surface: Node::new("principled_bsdf"),
         warnings: Vec::new(),
         has_uv_node: false,
     }

@@ -1,109 +1,14 @@
-//! The OBJ importer driven through its C ABI with a mock `SceneBuilder` that records what
-//! the plugin hands over; the generated materials are compiled by Kiln itself.
+//! The OBJ importer driven through its C ABI with the plugin API's recording
+//! `SceneBuilder`; the generated materials are compiled by Kiln itself.
 
 use std::collections::BTreeMap;
-use std::ffi::{CStr, CString, c_char, c_void};
+use std::ffi::{CStr, CString, c_char};
 use std::path::{Path, PathBuf};
 
 use kiln::material::{Input, Param, Value};
 use kiln_obj::kiln_plugin_descriptor;
 use kiln_plugin_api as api;
-
-#[derive(Debug)]
-struct RecordedMesh {
-    name: String,
-    positions: Vec<f32>,
-    normals: Option<Vec<f32>>,
-    uvs: Option<Vec<f32>>,
-    indices: Vec<u32>,
-}
-
-#[derive(Default, Debug)]
-struct Recorder {
-    meshes: Vec<RecordedMesh>,
-    materials: Vec<(String, String)>,
-    instances: Vec<(u32, u32, [f32; 16])>,
-    images: usize,
-    lights: usize,
-    cameras: usize,
-    warnings: Vec<String>,
-    /// Refuse every mesh and material, as a host out of memory would.
-    refuse: bool,
-}
-
-fn recorder<'a>(ctx: *mut c_void) -> &'a mut Recorder {
-    // The test passes a live `Recorder` as the context.
-    unsafe { &mut *ctx.cast::<Recorder>() }
-}
-
-unsafe fn text(p: *const c_char) -> String {
-    unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
-}
-
-unsafe fn floats(p: *const f32, n: usize) -> Option<Vec<f32>> {
-    (!p.is_null()).then(|| unsafe { std::slice::from_raw_parts(p, n) }.to_vec())
-}
-
-unsafe extern "C" fn add_mesh(ctx: *mut c_void, m: *const api::MeshData) -> u32 {
-    let r = recorder(ctx);
-    if r.refuse {
-        return u32::MAX;
-    }
-    let m = unsafe { &*m };
-    let n = m.vertex_count;
-    r.meshes.push(RecordedMesh {
-        name: unsafe { text(m.name) },
-        positions: unsafe { floats(m.positions, n * 3) }.expect("positions are required"),
-        normals: unsafe { floats(m.normals, n * 3) },
-        uvs: unsafe { floats(m.uvs, n * 2) },
-        indices: unsafe { std::slice::from_raw_parts(m.indices, m.index_count) }.to_vec(),
-    });
-    (r.meshes.len() - 1) as u32
-}
-
-unsafe extern "C" fn add_material(
-    ctx: *mut c_void,
-    name: *const c_char,
-    kmat: *const c_char,
-) -> u32 {
-    let r = recorder(ctx);
-    if r.refuse {
-        return u32::MAX;
-    }
-    r.materials.push(unsafe { (text(name), text(kmat)) });
-    (r.materials.len() - 1) as u32
-}
-
-unsafe extern "C" fn add_image(ctx: *mut c_void, _: *const c_char, _: *const u8, _: usize) -> u32 {
-    let r = recorder(ctx);
-    r.images += 1;
-    (r.images - 1) as u32
-}
-
-unsafe extern "C" fn add_instance(
-    ctx: *mut c_void,
-    mesh: u32,
-    material: u32,
-    m: *const [f32; 16],
-) -> u32 {
-    let r = recorder(ctx);
-    r.instances.push((mesh, material, unsafe { *m }));
-    (r.instances.len() - 1) as u32
-}
-
-unsafe extern "C" fn set_camera(ctx: *mut c_void, _: *const api::CameraData) {
-    recorder(ctx).cameras += 1;
-}
-
-unsafe extern "C" fn add_light(ctx: *mut c_void, _: *const api::LightData) -> u32 {
-    let r = recorder(ctx);
-    r.lights += 1;
-    (r.lights - 1) as u32
-}
-
-unsafe extern "C" fn warn(ctx: *mut c_void, message: *const c_char) {
-    recorder(ctx).warnings.push(unsafe { text(message) });
-}
+use kiln_plugin_api::recording::{Recorded, Recorder};
 
 fn descriptor() -> &'static api::PluginDescriptor {
     // The descriptor is static data of the library.
@@ -116,43 +21,17 @@ fn fixture(name: &str) -> PathBuf {
         .join(name)
 }
 
-/// Imports `path` through the C ABI: the status, the error message and what was added.
-fn import_with(path: &Path, mut recorder: Recorder) -> (i32, String, Recorder) {
-    let import = descriptor()
-        .import
-        .expect("an importer has an import function");
-    let builder = api::SceneBuilder {
-        ctx: (&mut recorder as *mut Recorder).cast(),
-        add_mesh,
-        add_material,
-        add_image,
-        add_instance,
-        set_camera,
-        add_light,
-        warn,
-    };
-    let path = CString::new(path.to_str().unwrap()).unwrap();
-    let mut message = vec![0 as c_char; 1024];
-    let mut error = api::ErrorBuffer {
-        data: message.as_mut_ptr(),
-        capacity: message.len(),
-    };
-    let status = unsafe { import(path.as_ptr(), &builder, &mut error) };
-    let text = unsafe { CStr::from_ptr(message.as_ptr()) }
-        .to_string_lossy()
-        .into_owned();
-    (status, text, recorder)
-}
-
-fn import(path: &Path) -> Recorder {
-    let (status, message, recorder) = import_with(path, Recorder::default());
-    assert_eq!(status, api::STATUS_OK, "import failed: {message}");
-    recorder
+fn import(path: &Path) -> Recorded {
+    let (result, recorded) = Recorder::default().import(descriptor(), path);
+    if let Err(message) = result {
+        panic!("import failed: {message}");
+    }
+    recorded
 }
 
 fn import_error(path: &Path) -> String {
-    let (status, message, _) = import_with(path, Recorder::default());
-    assert_eq!(status, api::STATUS_ERROR, "import should fail");
+    let (result, _) = Recorder::default().import(descriptor(), path);
+    let message = result.expect_err("import should fail");
     assert!(!message.is_empty(), "an error comes with a message");
     message
 }
@@ -244,32 +123,26 @@ fn each_object_becomes_one_mesh_and_one_identity_instance() {
         r.warnings
     );
     // OBJ has no cameras, lights or embedded images.
-    assert_eq!((r.cameras, r.lights, r.images), (0, 0, 0));
+    assert_eq!((r.cameras.len(), r.lights.len(), r.images.len()), (0, 0, 0));
 }
 
 #[test]
 fn normals_and_uvs_are_passed_as_written() {
     let r = import(&fixture("scene.obj"));
     let boxed = &r.meshes[1];
-    assert_eq!(boxed.positions.len(), 4 * 3);
+    assert_eq!(boxed.positions.len(), 4);
     let normals = boxed.normals.as_ref().expect("the box has normals");
-    assert!(normals.chunks(3).all(|n| n == [0.0, 0.0, 1.0]));
+    assert!(normals.iter().all(|n| *n == [0.0, 0.0, 1.0]));
     let uvs = boxed.uvs.as_ref().expect("the box has texture coordinates");
     // Each vertex keeps its (u, v): v is not flipped.
-    let pairs: Vec<([f32; 3], [f32; 2])> = boxed
-        .positions
-        .chunks(3)
-        .zip(uvs.chunks(2))
-        .map(|(p, t)| ([p[0], p[1], p[2]], [t[0], t[1]]))
-        .collect();
-    for (p, t) in pairs {
+    for (p, t) in boxed.positions.iter().zip(uvs) {
         assert_eq!([p[0], p[1]], t, "vertex {p:?} has uv {t:?}");
     }
     let plain = &r.meshes[0];
     assert!(plain.normals.is_none() && plain.uvs.is_none());
     assert_eq!(
         plain.positions,
-        [0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 1.0, 1.0, 0.0]
+        [[0.0, 0.0, 0.0], [1.0, 0.0, 0.0], [1.0, 1.0, 0.0]]
     );
     let metal = &r.meshes[4];
     assert!(metal.normals.is_none() && metal.uvs.is_some());
@@ -529,8 +402,8 @@ fn a_host_refusing_everything_gets_no_instances() {
         refuse: true,
         ..Recorder::default()
     };
-    let (status, message, r) = import_with(&fixture("scene.obj"), refusing);
-    assert_eq!(status, api::STATUS_OK, "{message}");
+    let (result, r) = refusing.import(descriptor(), &fixture("scene.obj"));
+    assert_eq!(result, Ok(()));
     assert!(r.meshes.is_empty() && r.instances.is_empty());
 }
 
@@ -551,16 +424,7 @@ fn null_arguments_are_errors_not_crashes() {
             .is_empty()
     );
     let mut recorder = Recorder::default();
-    let builder = api::SceneBuilder {
-        ctx: (&mut recorder as *mut Recorder).cast(),
-        add_mesh,
-        add_material,
-        add_image,
-        add_instance,
-        set_camera,
-        add_light,
-        warn,
-    };
+    let builder = recorder.scene_builder();
     let status = unsafe { import(std::ptr::null(), &builder, std::ptr::null_mut()) };
     assert_eq!(status, api::STATUS_ERROR);
 }
