@@ -136,7 +136,7 @@ fn normals_and_uvs_are_passed_as_written() {
     let uvs = boxed.uvs.as_ref().expect("the box has texture coordinates");
     // Each vertex keeps its (u, v): v is not flipped.
     for (p, t) in boxed.positions.iter().zip(uvs) {
-        assert_eq!([p[0], p[1]], t, "vertex {p:?} has uv {t:?}");
+        assert_eq!([p[0], p[1]], *t, "vertex {p:?} has uv {t:?}");
     }
     let plain = &r.meshes[0];
     assert!(plain.normals.is_none() && plain.uvs.is_none());
