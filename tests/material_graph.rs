@@ -252,6 +252,26 @@ fn the_compiler_names_no_node_type() {
     );
 }
 
+/// The compiler learns what a surface does (transmission, emission, lobes) from the
+/// declaration of the node feeding the output: every node with a BSDF output declares it,
+/// and no other node does.
+#[test]
+fn every_surface_node_declares_its_traits() {
+    let mut surfaces = 0;
+    for def in library() {
+        let surface = def.outputs.iter().any(|o| o.ty == SocketType::Bsdf);
+        assert_eq!(
+            def.traits.is_some(),
+            surface,
+            "{}: traits declared {}, BSDF output {surface}",
+            def.kind,
+            def.traits.is_some()
+        );
+        surfaces += usize::from(surface);
+    }
+    assert!(surfaces >= 1, "no surface node in the library");
+}
+
 #[test]
 fn the_example_materials_compile() {
     let dir = concat!(env!("CARGO_MANIFEST_DIR"), "/assets/materials");

@@ -839,40 +839,20 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         }
     };
     let node = &flat[surface];
-    let input = |name: &str| {
-        node.def
+    // Only nodes with a BSDF output feed the material output, and each declares its
+    // traits (a test checks the library).
+    let traits = node.def.traits.expect("a surface node declares its traits");
+    let known = |name: &str| {
+        // The traits read the inputs of their own declaration.
+        let i = node
+            .def
             .inputs
             .iter()
             .position(|s| s.name == name)
-            .expect("principled input")
+            .unwrap_or_else(|| panic!("{} has no input {name}", node.def.kind));
+        constant(node, i)
     };
-    let known = |name: &str| constant(node, input(name));
-    let transmission = known("transmission_weight").map(|v| v.as_f32());
-    let transmissive = params(node).flag("thin_walled") || transmission != Some(0.0);
-    let (strength, color) = (known("emission_strength"), known("emission_color"));
-    let (constant_emission, varying_emission) = match (strength, color) {
-        (Some(s), Some(c)) => {
-            let e = c.as_vec3().map(|x| x.max(0.0) * s.as_f32().max(0.0));
-            (e.iter().any(|&x| x > 0.0).then_some(e), false)
-        }
-        (Some(s), None) if s.as_f32() == 0.0 => (None, false),
-        (None, Some(c)) if c.as_vec3() == [0.0; 3] => (None, false),
-        _ => (None, true),
-    };
-    let weight = |name: &str| known(name).map(|v| v.as_f32());
-    let lobes = super::principled_lobes(
-        weight("coat_weight"),
-        weight("sheen_weight"),
-        weight("metallic"),
-        transmission,
-        weight("specular_weight"),
-    );
-    MaterialTraits {
-        transmissive,
-        constant_emission,
-        varying_emission,
-        lobes,
-    }
+    traits(&known, params(node))
 }
 
 // -------------------------------------------------------------------- emission

@@ -15,7 +15,7 @@ use std::collections::BTreeMap;
 use std::fmt::Write as _;
 use std::sync::OnceLock;
 
-use super::compile::GraphError;
+use super::compile::{GraphError, MaterialTraits};
 use super::graph::{Param, RampStop, SocketType, Value};
 
 /// The node a material renders: the root of compilation, part of the graph model rather
@@ -84,6 +84,11 @@ pub type Generate = fn(&mut dyn Emit) -> Result<String, GraphError>;
 /// computed exactly as the WGSL does, and the node stays code.
 pub type Fold = fn(&[Value], Params) -> Option<Vec<Value>>;
 
+/// What a surface (BSDF) node lets the renderer know without running it, from the values
+/// of its constant inputs (by name; `None` for an input that is not constant) and its
+/// parameters.
+pub type SurfaceTraits = fn(&dyn Fn(&str) -> Option<Value>, Params) -> MaterialTraits;
+
 /// What the compiler offers a [`Generate`] function, for the node being emitted.
 pub trait Emit {
     /// The WGSL expression of input `name`, in the input's type.
@@ -148,6 +153,8 @@ pub struct NodeDef {
     pub inputs: Vec<SocketDef>,
     pub outputs: Vec<OutputDef>,
     pub params: Vec<ParamDef>,
+    /// What a node with a BSDF output lets the renderer know of the material.
+    pub traits: Option<SurfaceTraits>,
     /// Constant folding; nodes without stay code even when their inputs are constant.
     pub fold: Option<Fold>,
     pub code: Code,
@@ -388,6 +395,7 @@ fn build() -> Vec<NodeDef> {
                 ),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_texture_coordinate(sp)"),
         },
@@ -426,6 +434,7 @@ fn build() -> Vec<NodeDef> {
                 ),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_geometry(sp)"),
         },
@@ -440,6 +449,7 @@ fn build() -> Vec<NodeDef> {
                 out("alpha", Float, ".a", "alpha"),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("sp.vertex_color"),
         },
@@ -464,6 +474,7 @@ fn build() -> Vec<NodeDef> {
                 ),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_object_info(sp)"),
         },
@@ -478,6 +489,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("fac", Float, "", "reflectance")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_fresnel({ior}, {normal}, sp)"),
         },
@@ -500,6 +512,7 @@ fn build() -> Vec<NodeDef> {
                 out("facing", Float, ".y", "1 - |cos θ| biased by blend"),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_layer_weight({blend}, {normal}, sp)"),
         },
@@ -511,6 +524,7 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![float("value", 0.5, "the number")],
             outputs: vec![out("value", Float, "", "the number")],
             params: vec![],
+            traits: None,
             fold: Some(fold_value),
             code: Code::Template("{value}"),
         },
@@ -522,6 +536,7 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![color("color", [0.5, 0.5, 0.5], "the colour")],
             outputs: vec![out("color", Color, "", "the colour")],
             params: vec![],
+            traits: None,
             fold: Some(fold_vec3),
             code: Code::Template("{color}"),
         },
@@ -533,6 +548,7 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![vector("vector", [0.0; 3], "the vector")],
             outputs: vec![out("vector", Vector, "", "the vector")],
             params: vec![],
+            traits: None,
             fold: Some(fold_vec3),
             code: Code::Template("{vector}"),
         },
@@ -574,6 +590,7 @@ fn build() -> Vec<NodeDef> {
                     "bilinear, or the nearest texel",
                 ),
             ],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_image({file}, {vector}.xy, {color_space}, {extension}, {interpolation})",
@@ -597,6 +614,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: tex_out(),
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("node_checker({vector}, {color1}, {color2}, {scale})"),
         },
@@ -625,6 +643,7 @@ fn build() -> Vec<NodeDef> {
                 ],
                 "shape of the gradient",
             )],
+            traits: None,
             fold: None,
             code: Code::Template("node_gradient({vector}, {gradient_type})"),
         },
@@ -656,6 +675,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: tex_out(),
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_noise({vector}, {scale}, {detail}, {roughness}, {lacunarity}, {distortion})",
@@ -714,6 +734,7 @@ fn build() -> Vec<NodeDef> {
                     "the metric",
                 ),
             ],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_voronoi({vector}, {scale}, {smoothness}, {exponent}, {randomness}, {feature}, {distance})",
@@ -752,6 +773,7 @@ fn build() -> Vec<NodeDef> {
                 ),
                 choice("profile", &["sine", "saw", "triangle"], "shape of one wave"),
             ],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_wave({vector}, {scale}, {distortion}, {detail}, {detail_scale}, {detail_roughness}, {phase_offset}, {wave_type}, {direction}, {profile})",
@@ -796,6 +818,7 @@ fn build() -> Vec<NodeDef> {
                 out("fac", Float, ".fac", "1 on mortar, 0 on brick"),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_brick({vector}, {color1}, {color2}, {mortar}, {scale}, {mortar_size}, {mortar_smooth}, {bias}, {brick_width}, {row_height}, {offset}, {offset_frequency}, {squash}, {squash_frequency})",
@@ -817,6 +840,7 @@ fn build() -> Vec<NodeDef> {
                 out("color", Color, ".color", "random colour"),
             ],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("node_white_noise({vector})"),
         },
@@ -844,6 +868,7 @@ fn build() -> Vec<NodeDef> {
                     doc: "clamp the result to [0, 1]",
                 },
             ],
+            traits: None,
             fold: Some(fold_math),
             code: Code::Template("nd_clamp_if(node_math({operation}, {a}, {b}, {c}), {clamp})"),
         },
@@ -863,6 +888,7 @@ fn build() -> Vec<NodeDef> {
                 &["min_max", "range"],
                 "range swaps min and max when min > max",
             )],
+            traits: None,
             fold: Some(fold_clamp),
             code: Code::Template("node_clamp({clamp_type}, {value}, {min}, {max})"),
         },
@@ -892,6 +918,7 @@ fn build() -> Vec<NodeDef> {
                     doc: "clamp the result to the output range",
                 },
             ],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_map_range({interpolation}, {value}, {from_min}, {from_max}, {to_min}, {to_max}, {steps}, {clamp})",
@@ -922,6 +949,7 @@ fn build() -> Vec<NodeDef> {
                 ),
             ],
             params: vec![choice("operation", VECTOR_MATH_OPERATIONS, "the operation")],
+            traits: None,
             fold: None,
             code: Code::Template("node_vector_math({operation}, {a}, {b}, {c}, {scale})"),
         },
@@ -941,6 +969,7 @@ fn build() -> Vec<NodeDef> {
                 kind: ParamKind::Bool(true),
                 doc: "clamp the factor to [0, 1]",
             }],
+            traits: None,
             fold: Some(fold_mix_float),
             code: Code::Template("mix({a}, {b}, nd_clamp_if({factor}, {clamp_factor}))"),
         },
@@ -960,6 +989,7 @@ fn build() -> Vec<NodeDef> {
                 kind: ParamKind::Bool(true),
                 doc: "clamp the factor to [0, 1]",
             }],
+            traits: None,
             fold: None,
             code: Code::Template("mix({a}, {b}, vec3<f32>(nd_clamp_if({factor}, {clamp_factor})))"),
         },
@@ -983,6 +1013,7 @@ fn build() -> Vec<NodeDef> {
                     doc: "clamp the result to [0, 1]",
                 },
             ],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "nd_clamp3_if(node_mix_color({blend}, clamp({factor}, 0.0, 1.0), {a}, {b}), {clamp_result})",
@@ -1010,6 +1041,7 @@ fn build() -> Vec<NodeDef> {
                     "between stops",
                 ),
             ],
+            traits: None,
             fold: None,
             code: Code::Generated(generate_color_ramp),
         },
@@ -1027,6 +1059,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "adjusted colour")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_hue_saturation_value({hue}, {saturation}, {value}, {fac}, {color})",
@@ -1043,6 +1076,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "inverted colour")],
             params: vec![],
+            traits: None,
             fold: Some(fold_invert),
             code: Code::Template("node_invert({fac}, {color})"),
         },
@@ -1057,6 +1091,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "result")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("node_gamma({color}, {gamma})"),
         },
@@ -1072,6 +1107,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "result")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("node_bright_contrast({color}, {bright}, {contrast})"),
         },
@@ -1083,6 +1119,7 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![color("color", [0.5; 3], "input colour")],
             outputs: vec![out("value", Float, "", "luminance")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("node_rgb_to_bw({color})"),
         },
@@ -1099,6 +1136,7 @@ fn build() -> Vec<NodeDef> {
                 out("blue", Float, ".z", "blue, or value"),
             ],
             params: vec![choice("mode", &["rgb", "hsv"], "channels")],
+            traits: None,
             fold: None,
             code: Code::Template("nd_separate_color({color}, {mode})"),
         },
@@ -1114,6 +1152,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("color", Color, "", "colour")],
             params: vec![choice("mode", &["rgb", "hsv"], "channels")],
+            traits: None,
             fold: None,
             code: Code::Template("nd_combine_color(vec3<f32>({red}, {green}, {blue}), {mode})"),
         },
@@ -1129,6 +1168,7 @@ fn build() -> Vec<NodeDef> {
                 out("z", Float, ".z", "z"),
             ],
             params: vec![],
+            traits: None,
             fold: Some(fold_separate_xyz),
             code: Code::Template("{vector}"),
         },
@@ -1144,6 +1184,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("vector", Vector, "", "vector")],
             params: vec![],
+            traits: None,
             fold: Some(fold_combine_xyz),
             code: Code::Template("vec3<f32>({x}, {y}, {z})"),
         },
@@ -1164,6 +1205,7 @@ fn build() -> Vec<NodeDef> {
                 &["point", "texture", "vector", "normal"],
                 "point: scale, rotate, translate; texture: the inverse; vector: no translation; normal: inverse-transpose, normalised",
             )],
+            traits: None,
             fold: None,
             code: Code::Template(
                 "node_mapping({vector_type}, {vector}, {location}, {rotation}, {scale})",
@@ -1188,6 +1230,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("normal", Vector, "", "world-space normal")],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("nd_normal_map({strength}, {color}, sp)"),
         },
@@ -1212,6 +1255,7 @@ fn build() -> Vec<NodeDef> {
                 kind: ParamKind::Bool(false),
                 doc: "bump inward",
             }],
+            traits: None,
             fold: None,
             code: Code::Generated(generate_bump),
         },
@@ -1270,6 +1314,7 @@ fn build() -> Vec<NodeDef> {
                 kind: ParamKind::Bool(false),
                 doc: "a surface with no inside",
             }],
+            traits: Some(principled_bsdf_traits),
             fold: None,
             code: Code::Generated(generate_principled_bsdf),
         },
@@ -1286,6 +1331,7 @@ fn build() -> Vec<NodeDef> {
             }],
             outputs: vec![],
             params: vec![],
+            traits: None,
             fold: None,
             code: Code::Template("{surface}"),
         },
@@ -1493,4 +1539,37 @@ fn generate_principled_bsdf(e: &mut dyn Emit) -> Result<String, GraphError> {
         "nd_safe_normal",
     ]);
     Ok(code)
+}
+
+// ------------------------------------------------------------------ surface traits
+
+/// Transmissive where it may let light through, emissive as its emission inputs say, and
+/// the lobes its weights can reach.
+fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params) -> MaterialTraits {
+    let transmission = known("transmission_weight").map(|v| v.as_f32());
+    let transmissive = params.flag("thin_walled") || transmission != Some(0.0);
+    let (strength, color) = (known("emission_strength"), known("emission_color"));
+    let (constant_emission, varying_emission) = match (strength, color) {
+        (Some(s), Some(c)) => {
+            let e = c.as_vec3().map(|x| x.max(0.0) * s.as_f32().max(0.0));
+            (e.iter().any(|&x| x > 0.0).then_some(e), false)
+        }
+        (Some(s), None) if s.as_f32() == 0.0 => (None, false),
+        (None, Some(c)) if c.as_vec3() == [0.0; 3] => (None, false),
+        _ => (None, true),
+    };
+    let weight = |name: &str| known(name).map(|v| v.as_f32());
+    let lobes = super::principled_lobes(
+        weight("coat_weight"),
+        weight("sheen_weight"),
+        weight("metallic"),
+        transmission,
+        weight("specular_weight"),
+    );
+    MaterialTraits {
+        transmissive,
+        constant_emission,
+        varying_emission,
+        lobes,
+    }
 }
