@@ -32,15 +32,15 @@ fn material_principled(m: Material) -> Principled {
     return principled_unpack(
         m.principled[0], m.principled[1], m.principled[2], m.principled[3],
         m.principled[4], m.principled[5], m.principled[6],
-        m.flags.x != 0u,
-        bitcast<f32>(m.flags.z),
+        m.thin_walled != 0u,
+        m.diffuse_roughness,
     );
 }
 
 // The fixed-parameter material of the material buffer (materials without a graph).
 fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
     let m = materials[id];
-    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, bitcast<f32>(m.flags.w));
+    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, m.anisotropy_rotation);
 }
 
 // A small hash of the instance index in [0, 1), for the Object Info node.
@@ -208,7 +208,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
 
         // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
         // Surfaces light passes through keep their front, so inside and outside differ.
-        let transmissive = material.flags.y != 0u;
+        let transmissive = material.transmissive != 0u;
         let flip = !transmissive && !front;
         let ng = select(s.ng, -s.ng, flip);
         let ns = select(s.ns, -s.ns, flip);

@@ -359,7 +359,7 @@ impl Renderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_bind_group(super::bindings::SCENE_GROUP, &self.bind_group, &[]);
             pass.dispatch_workgroups(
                 size[0].div_ceil(WORKGROUP_SIZE).max(1),
                 size[1].div_ceil(WORKGROUP_SIZE).max(1),
