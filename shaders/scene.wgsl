@@ -38,9 +38,12 @@ struct Params {
     cam_lens: vec4<f32>,
     // rgb: uniform environment radiance; w: probability of picking the environment in NEE
     environment: vec4<f32>,
-    // x: total power of emissive triangles (sum of luminance * area); y: probability of
-    // picking an emissive triangle in NEE; z: number of analytic lights.
-    light_totals: vec4<f32>,
+    // Total power of the emissive triangles (sum of luminance * area).
+    light_power: f32,
+    // Probability of picking an emissive triangle in NEE.
+    triangle_pick: f32,
+    analytic_light_count: u32,
+    _pad: u32,
 };
 
 // A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;

@@ -86,7 +86,7 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     // One light: the environment, an emissive triangle or an analytic light, each family
     // picked with the probability the host estimated from its power.
     let p_env = params.environment.w;
-    let p_tri = params.light_totals.y;
+    let p_tri = params.triangle_pick;
     let u_pick = rand();
     let u = rand2();
     var ls: LightSample;
@@ -97,7 +97,7 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
         ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / p_tri, u);
         ls.pdf *= p_tri;
     } else {
-        if (!FEATURE_ANALYTIC_LIGHTS || params.light_totals.z < 1.0) {
+        if (!FEATURE_ANALYTIC_LIGHTS || params.analytic_light_count == 0u) {
             return vec3<f32>(0.0);
         }
         ls = sample_analytic_light(pick_analytic_light(u_pick), s.pe.p, u);
@@ -144,7 +144,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let t_scene = select(3.0e38, hit.t, hit.hit);
         // Sphere lights and sun disks in front of the surface (or the sky).
         var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
-        if (FEATURE_ANALYTIC_LIGHTS && params.light_totals.z >= 1.0) {
+        if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
             light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
         }
         if (any(extinction > vec3<f32>(0.0))) {
@@ -197,7 +197,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             if (nee && !prev_delta) {
                 // Light sampling knows the surface by its buffer emission (0 for emission
                 // that varies over it, which only BSDF sampling finds).
-                let light_pdf = params.light_totals.y * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
+                let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
             radiance += throughput * emission * w;

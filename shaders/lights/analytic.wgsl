@@ -24,7 +24,7 @@ fn spot_falloff(cos_axis: f32, cos_outer: f32, cos_inner: f32) -> f32 {
 // The light picked by u in [0, 1) among the analytic lights (u counts from where the
 // environment's and the triangles' pick probabilities end).
 fn pick_analytic_light(u: f32) -> u32 {
-    let count = u32(params.light_totals.z);
+    let count = params.analytic_light_count;
     for (var i = 0u; i < count; i++) {
         if (u < analytic_lights[i].shape.w) {
             return i;
@@ -91,7 +91,7 @@ struct AnalyticHit {
 
 fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
     var result = AnalyticHit(false, t_max, vec3<f32>(0.0), 0.0);
-    let count = u32(params.light_totals.z);
+    let count = params.analytic_light_count;
     for (var i = 0u; i < count; i++) {
         let l = analytic_lights[i];
         let pick = l.intensity.w;

@@ -51,7 +51,12 @@ pub struct GpuParams {
     pub cam_forward: [f32; 4],
     pub cam_lens: [f32; 4],
     pub environment: [f32; 4],
-    pub light_totals: [f32; 4],
+    /// Total power of the emissive triangles (sum of luminance × area).
+    pub light_power: f32,
+    /// Probability that next-event estimation picks an emissive triangle.
+    pub triangle_pick: f32,
+    pub analytic_light_count: u32,
+    pub _pad: u32,
 }
 
 #[repr(C)]
@@ -208,7 +213,10 @@ mod tests {
                 cam_forward,
                 cam_lens,
                 environment,
-                light_totals,
+                light_power,
+                triangle_pick,
+                analytic_light_count,
+                _pad,
             ]
         );
         assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);

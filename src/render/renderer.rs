@@ -185,12 +185,9 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
             cam.focus_distance,
         ],
         environment: scene.environment.extend(gpu.environment_pick).into(),
-        light_totals: [
-            gpu.light_power,
-            gpu.triangle_pick,
-            gpu.analytic_light_count as f32,
-            0.0,
-        ],
+        light_power: gpu.light_power,
+        triangle_pick: gpu.triangle_pick,
+        analytic_light_count: gpu.analytic_light_count,
         ..GpuParams::default()
     }
 }
