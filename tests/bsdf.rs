@@ -398,15 +398,38 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
         .collect()
 }
 
+/// The θ of every band edge of `bins`, computed in f64 (the GPU's acos errs by up to 1.6e-4
+/// rad on lavapipe), as the pdf kernels read them: f32 bits in x.
+fn band_edges(bins: SphereBins) -> Vec<[u32; 4]> {
+    let dz = 2.0 / bins.theta_bins as f64;
+    (0..=bins.theta_bins)
+        .map(|i| {
+            let theta = (1.0 - i as f64 * dz).clamp(-1.0, 1.0).acos();
+            [(theta as f32).to_bits(), 0, 0, 0]
+        })
+        .collect()
+}
+
 /// Quadrature orders of `shaders/tests/bsdf_pdf.wgsl`: the coarse k × k rule and the fine
 /// rule for cells whose values vary by over 2x (configurations may set lower ones, see
 /// `Lobe::encode`).
 const PDF_ORDERS: [u32; 2] = [16, 96];
 
+/// Fractions of the quadrature orders: as configured, and the two coarser rules whose
+/// results bound the error of the first (`QuadratureError`). Half the orders is the
+/// textbook choice; two thirds is not nested with the full orders, so that its points do
+/// not line up with theirs (see `QuadratureError` for why that matters).
+const FULL_ORDER: (u32, u32) = (1, 1);
+const COARSER_ORDERS: [(u32, u32); 2] = [(1, 2), (2, 3)];
+
+/// `order` scaled by the fraction `scale`, rounded, at least 1.
+fn scaled_order(order: u32, (num, den): (u32, u32)) -> u32 {
+    ((order * num + den / 2) / den).max(1)
+}
+
 /// Integrates every configuration's pdf over every cell, with the kernel's quadrature orders
-/// divided by `coarsening` (1: as configured; 2: half, for the error estimate of
-/// `QuadratureError`).
-fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins, coarsening: u32) -> Vec<Vec<f64>> {
+/// scaled by the fraction `scale` (`FULL_ORDER` or one of `COARSER_ORDERS`).
+fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins, scale: (u32, u32)) -> Vec<Vec<f64>> {
     let mut input = vec![
         [
             lobes.len() as u32,
@@ -414,14 +437,24 @@ fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins, coarsening: u32) -> Vec<Vec<
             bins.theta_bins as u32,
             bins.phi_bins as u32,
         ],
-        [0, 0, PDF_ORDERS[0] / coarsening, PDF_ORDERS[1] / coarsening],
+        [
+            0,
+            0,
+            scaled_order(PDF_ORDERS[0], scale),
+            scaled_order(PDF_ORDERS[1], scale),
+        ],
     ];
     for l in lobes {
         let mut config = l.encode();
-        config[0][2] /= coarsening;
-        config[0][3] /= coarsening;
+        // 0 means "the header's order", which stays 0.
+        for order in &mut config[0][2..] {
+            if *order != 0 {
+                *order = scaled_order(*order, scale);
+            }
+        }
         input.extend(config);
     }
+    input.extend(band_edges(bins));
     let cells = bins.cell_count();
     let n = (lobes.len() * cells) as u32;
     let out = run_lobe_kernel(
@@ -451,9 +484,9 @@ impl ChiSquareRun {
     fn new(lobes: Vec<Lobe>, samples: u32, seed: u32) -> Self {
         let bins = SphereBins::for_sample_count(samples as usize);
         let stats = sample_lobes(&lobes, bins, samples, seed);
-        let expected = integrate_pdfs(&lobes, bins, 1);
-        let half = integrate_pdfs(&lobes, bins, 2);
-        let error = QuadratureError::per_config(&expected, &half);
+        let expected = integrate_pdfs(&lobes, bins, FULL_ORDER);
+        let coarser = COARSER_ORDERS.map(|scale| integrate_pdfs(&lobes, bins, scale));
+        let error = QuadratureError::per_config(&expected, &coarser);
         Self {
             lobes,
             samples,
@@ -464,20 +497,28 @@ impl ChiSquareRun {
     }
 }
 
+/// The f32 rounding bound of a cell's integral as a fraction of its value: the largest sum
+/// (the coarse rule's 16^2 = 256 values, or the fine rule's 96 rows of 96: 192 steps) plus 8
+/// for the products after it, times 2^-24 (see `QuadratureError`).
+const CELL_ROUNDING: f64 = (PDF_ORDERS[0] * PDF_ORDERS[0] + 8) as f64 * f32::EPSILON as f64 / 2.0;
+
 /// A bound on the error of a configuration's integrated pdf (its total over the sphere),
 /// derived per configuration from the quadrature itself rather than measured once and
 /// written down.
 ///
-/// - `discretisation`: |I(h) - I(h/2)|, the change of the total between the quadrature at
-///   half the orders and at the full ones (the a-posteriori estimate of Richardson's
+/// - `discretisation`: the largest change of the total between the quadrature at the full
+///   orders and at each of `COARSER_ORDERS` (the a-posteriori estimate of Richardson's
 ///   method). If the error behaves as C h^p with p >= 1 — p = 2 for the midpoint rule where
 ///   the pdf is smooth, p = 1 in cells cut by a hard edge of the support — the full-order
-///   error is |I(h) - I(h/2)| / (2^p - 1) <= |I(h) - I(h/2)|.
-/// - `rounding`: the cells are f32 sums of at most (fine order)^2 = 96^2 values, taken as 96
-///   rows of 96 (or 16^2 = 256 values in one sum for the coarse rule); a sum of m f32 values
+///   error is |I(h) - I(2h)| / (2^p - 1) <= |I(h) - I(2h)|. At a hard edge the O(h) term
+///   also depends on where the edge falls between points, and nested orders can agree by
+///   coincidence: at 89.9° and IOR 4 the refraction lobe's support ends 4.4e-4 below the
+///   horizon (where the generalised half vector crosses it), and the fine rules of 96 and 48
+///   points both put that edge at 5.8e-4, agreeing to 2e-7 while both are 1.6e-4 off. The
+///   non-nested two-thirds order puts it elsewhere and exposes the error.
+/// - `rounding`: the cells are f32 sums, bounded by `CELL_ROUNDING`; a sum of m f32 values
 ///   is off by at most (m - 1) 2^-24 of the sum of their magnitudes (Higham, Accuracy and
-///   Stability, 4.2). All values are >= 0, so 256 * 2^-24 of the integral bounds every cell
-///   and thus the total.
+///   Stability, 4.2), and all values are >= 0, so the bound for every cell bounds the total.
 #[derive(Clone, Copy, Debug)]
 struct QuadratureError {
     discretisation: f64,
@@ -485,18 +526,18 @@ struct QuadratureError {
 }
 
 impl QuadratureError {
-    fn per_config(full: &[Vec<f64>], half: &[Vec<f64>]) -> Vec<Self> {
+    fn per_config(full: &[Vec<f64>], coarser: &[Vec<Vec<f64>>]) -> Vec<Self> {
         full.iter()
-            .zip(half)
-            .map(|(full, half)| {
+            .enumerate()
+            .map(|(c, full)| {
                 let total: f64 = full.iter().sum();
-                let total_half: f64 = half.iter().sum();
-                // + 8 for the few products after the sums.
-                let worst_sum =
-                    (PDF_ORDERS[0] * PDF_ORDERS[0]).max(2 * PDF_ORDERS[1]) as f64 + 8.0;
+                let discretisation = coarser
+                    .iter()
+                    .map(|integrals| (total - integrals[c].iter().sum::<f64>()).abs())
+                    .fold(0.0, f64::max);
                 Self {
-                    discretisation: (total - total_half).abs(),
-                    rounding: worst_sum * f64::from(f32::EPSILON) / 2.0 * total,
+                    discretisation,
+                    rounding: CELL_ROUNDING * total,
                 }
             })
             .collect()
@@ -659,13 +700,16 @@ fn sharp_run() -> &'static ChiSquareRun {
         let samples = 1 << 18;
         let bins = SphereBins::for_sample_count(samples as usize);
         let stats = sample_lobes(&lobes, bins, samples, 3);
-        let mut expected = integrate_pdfs(&lobes, bins, 1);
-        let mut half = integrate_pdfs(&lobes, bins, 2);
-        // The same cells are refined at both orders, chosen from the full-order integrals.
+        let mut expected = integrate_pdfs(&lobes, bins, FULL_ORDER);
+        let mut coarser = COARSER_ORDERS.map(|scale| integrate_pdfs(&lobes, bins, scale));
+        // The same cells are refined at every order, chosen from the full-order integrals.
         let cells = cells_to_refine(&lobes, bins, &stats, &expected);
         refine_pdfs(&lobes, bins, &cells, REFINE_POINTS, &mut expected);
-        refine_pdfs(&lobes, bins, &cells, REFINE_POINTS / 2, &mut half);
-        let error = QuadratureError::per_config(&expected, &half);
+        for (scale, integrals) in COARSER_ORDERS.iter().zip(&mut coarser) {
+            let points = scaled_order(REFINE_POINTS, *scale);
+            refine_pdfs(&lobes, bins, &cells, points, integrals);
+        }
+        let error = QuadratureError::per_config(&expected, &coarser);
         ChiSquareRun {
             lobes,
             samples,
@@ -740,15 +784,7 @@ fn refine_pdfs(
     for l in lobes {
         input.extend(l.encode());
     }
-    let dz = 2.0 / rows as f64;
-    input.extend((0..=rows).map(|i| {
-        [
-            ((1.0 - i as f64 * dz).clamp(-1.0, 1.0).acos() as f32).to_bits(),
-            0,
-            0,
-            0,
-        ]
-    }));
+    input.extend(band_edges(bins));
     let mut tasks = 0u32;
     for &(c, cell) in cells {
         let blocks = theta_blocks(cell) * REFINE_BLOCKS;
@@ -1097,32 +1133,37 @@ fn cross_check_kernel(lobe: &Lobe, bins: SphereBins, mode: u32, dirs: &[Vec3]) -
     bytemuck::cast_slice(&out).to_vec()
 }
 
-/// Distance of a direction from the nearest band edge of `bins` (in cos θ) and from the
-/// nearest sector edge (arc length on the unit sphere, so directions near the poles, where
-/// φ is ill-conditioned, count as near every sector edge).
-fn edge_distance(bins: SphereBins, dir: Vec3) -> (f64, f64) {
+/// How far a direction lies outside a cell of `bins`: in cos θ from the cell's band, and in
+/// arc length on the unit sphere from its sector (sin θ times the gap in φ, so near the
+/// poles, where φ is ill-conditioned and all sectors meet, every sector is near); (0, 0)
+/// inside the cell.
+fn distance_to_cell(bins: SphereBins, dir: Vec3, cell: usize) -> (f64, f64) {
+    use std::f64::consts::TAU;
     let d = dir.as_dvec3().normalize();
     let dz = 2.0 / bins.theta_bins as f64;
-    let u = (1.0 - d.z) / dz;
-    let dphi = std::f64::consts::TAU / bins.phi_bins as f64;
-    let v = d.y.atan2(d.x).rem_euclid(std::f64::consts::TAU) / dphi;
+    let z_top = 1.0 - (cell / bins.phi_bins) as f64 * dz;
+    let band_gap = (d.z - z_top).max(z_top - dz - d.z).max(0.0);
+    let dphi = TAU / bins.phi_bins as f64;
+    let start = (cell % bins.phi_bins) as f64 * dphi;
+    let into = (d.y.atan2(d.x) - start).rem_euclid(TAU);
+    let phi_gap = if into <= dphi {
+        0.0
+    } else {
+        (into - dphi).min(TAU - into)
+    };
     let sin_theta = (1.0 - d.z * d.z).max(0.0).sqrt();
-    (
-        (u - u.round()).abs() * dz,
-        (v - v.round()).abs() * dphi * sin_theta,
-    )
+    (band_gap, phi_gap * sin_theta)
 }
 
-/// How close to a cell edge (see `edge_distance`) the GPU may bin a direction into the
-/// neighbouring cell: it normalises in f32 (relative error ~1e-7) and takes atan2 in f32,
-/// which lavapipe computes to a few ulps (Vulkan itself only promises 4096 ulps, ~2e-3 rad
-/// near 2π: on a driver that uses it, this bound is what fails). 1e-5 is ~100 ulps of the
+/// How far outside its CPU cell (see `distance_to_cell`) the GPU may bin a direction: it
+/// normalises in f32 (relative error ~1e-7) and takes atan2 in f32, which lavapipe
+/// computes to a few ulps (Vulkan itself only promises 4096 ulps, ~2e-3 rad near 2π: on a
+/// driver that uses that latitude, this bound is what fails). 1e-5 is ~100 ulps of the
 /// largest coordinates.
 const BIN_EDGE_TOLERANCE: f64 = 1e-5;
 
-/// Checks the GPU's cell of every direction against `SphereBins::cell`: equal, or
-/// neighbours with the direction within `BIN_EDGE_TOLERANCE` of their shared edge. Returns
-/// how many differed.
+/// Checks the GPU's cell of every direction against `SphereBins::cell`: equal, or a cell
+/// within `BIN_EDGE_TOLERANCE` of the direction. Returns how many differed.
 fn compare_cells(what: &str, bins: SphereBins, dirs: &[Vec3], gpu_cells: &[u32]) -> usize {
     let mut differ = 0;
     for (&dir, &gpu) in dirs.iter().zip(gpu_cells) {
@@ -1134,20 +1175,16 @@ fn compare_cells(what: &str, bins: SphereBins, dirs: &[Vec3], gpu_cells: &[u32])
             continue;
         }
         differ += 1;
-        let (band_distance, sector_distance) = edge_distance(bins, dir);
-        let (cpu_band, cpu_sector) = (cpu / bins.phi_bins, cpu % bins.phi_bins);
-        let (gpu_band, gpu_sector) = (gpu / bins.phi_bins, gpu % bins.phi_bins);
-        let sectors_apart = (cpu_sector + bins.phi_bins - gpu_sector) % bins.phi_bins;
-        let band_ok = cpu_band == gpu_band
-            || (cpu_band.abs_diff(gpu_band) == 1 && band_distance < BIN_EDGE_TOLERANCE);
-        let sector_ok = cpu_sector == gpu_sector
-            || ((sectors_apart == 1 || sectors_apart == bins.phi_bins - 1)
-                && sector_distance < BIN_EDGE_TOLERANCE);
         assert!(
-            gpu < bins.cell_count() && band_ok && sector_ok,
-            "{what}: the GPU bins {dir} into cell {gpu} (band {gpu_band}, sector \
-             {gpu_sector}), the CPU into {cpu} (band {cpu_band}, sector {cpu_sector}); \
-             {band_distance:.2e} from a band edge, {sector_distance:.2e} from a sector edge"
+            gpu < bins.cell_count(),
+            "{what}: the GPU bins {dir} into cell {gpu} of {}",
+            bins.cell_count()
+        );
+        let (band_gap, arc_gap) = distance_to_cell(bins, dir, gpu);
+        assert!(
+            band_gap < BIN_EDGE_TOLERANCE && arc_gap < BIN_EDGE_TOLERANCE,
+            "{what}: the GPU bins {dir} into cell {gpu}, the CPU into {cpu}; the direction is \
+             {band_gap:.2e} in cos θ and {arc_gap:.2e} in arc length outside the GPU's cell"
         );
     }
     differ
@@ -1168,7 +1205,14 @@ fn fibonacci_sphere(count: usize) -> Vec<Vec3> {
 
 /// Directions on and within a few f32 ulps of every band and sector edge, and the poles.
 fn edge_directions(bins: SphereBins) -> Vec<Vec3> {
-    let mut dirs = vec![Vec3::Z, Vec3::NEG_Z, Vec3::X, Vec3::Y, Vec3::NEG_X, Vec3::NEG_Y];
+    let mut dirs = vec![
+        Vec3::Z,
+        Vec3::NEG_Z,
+        Vec3::X,
+        Vec3::Y,
+        Vec3::NEG_X,
+        Vec3::NEG_Y,
+    ];
     let dz = 2.0 / bins.theta_bins as f64;
     let dphi = std::f64::consts::TAU / bins.phi_bins as f64;
     for band in 0..=bins.theta_bins {
@@ -1222,11 +1266,18 @@ fn gpu_binning_matches_cpu_sphere_bins() {
         ] {
             let gpu = cross_check_kernel(lobe, bins, 0, &dirs);
             let differ = compare_cells(what, bins, &dirs, &gpu);
-            eprintln!("{bins:?} {what}: {differ} of {} directions binned differently (at edges)", dirs.len());
+            eprintln!(
+                "{bins:?} {what}: {differ} of {} directions binned differently (at edges)",
+                dirs.len()
+            );
         }
         for lobe in binning_lobes() {
             let raw = &raw_samples(std::slice::from_ref(&lobe), samples, 29)[0];
-            let dirs: Vec<Vec3> = raw.iter().filter(|s| s.valid && !s.delta).map(|s| s.wi).collect();
+            let dirs: Vec<Vec3> = raw
+                .iter()
+                .filter(|s| s.valid && !s.delta)
+                .map(|s| s.wi)
+                .collect();
             let gpu = cross_check_kernel(&lobe, bins, 0, &dirs);
             let differ = compare_cells(&lobe.label, bins, &dirs, &gpu);
             // bsdf_sample draws the same directions (sample i of configuration 0 seeds its
@@ -1238,13 +1289,41 @@ fn gpu_binning_matches_cpu_sphere_bins() {
             for &c in &gpu {
                 from_cells[c as usize] += 1;
             }
-            assert_eq!(stats.valid - stats.delta, dirs.len() as u64, "{}", lobe.label);
-            let moved: u64 = stats.histogram.iter().zip(&from_cells).map(|(a, b)| a.abs_diff(*b)).sum();
-            assert_eq!(moved, 0, "{}: bsdf_sample's histogram is not its directions' cells", lobe.label);
-            let cpu = common::chi2::histogram(&bins, &dirs.iter().map(|&d| Some(d)).collect::<Vec<_>>());
-            let moved: u64 = stats.histogram.iter().zip(&cpu).map(|(a, b)| a.abs_diff(*b)).sum();
-            assert!(moved <= 2 * differ as u64, "{}: {moved} / 2 samples in other cells, {differ} at edges", lobe.label);
-            eprintln!("{bins:?} {}: {differ} of {} samples binned differently (at edges)", lobe.label, dirs.len());
+            assert_eq!(
+                stats.valid - stats.delta,
+                dirs.len() as u64,
+                "{}",
+                lobe.label
+            );
+            let moved: u64 = stats
+                .histogram
+                .iter()
+                .zip(&from_cells)
+                .map(|(a, b)| a.abs_diff(*b))
+                .sum();
+            assert_eq!(
+                moved, 0,
+                "{}: bsdf_sample's histogram is not its directions' cells",
+                lobe.label
+            );
+            let cpu =
+                common::chi2::histogram(&bins, &dirs.iter().map(|&d| Some(d)).collect::<Vec<_>>());
+            let moved: u64 = stats
+                .histogram
+                .iter()
+                .zip(&cpu)
+                .map(|(a, b)| a.abs_diff(*b))
+                .sum();
+            assert!(
+                moved <= 2 * differ as u64,
+                "{}: {moved} / 2 samples in other cells, {differ} at edges",
+                lobe.label
+            );
+            eprintln!(
+                "{bins:?} {}: {differ} of {} samples binned differently (at edges)",
+                lobe.label,
+                dirs.len()
+            );
         }
     }
 }
@@ -1277,13 +1356,17 @@ fn integration_lobes() -> Vec<Lobe> {
 fn gpu_pdf_integration_matches_cpu_sphere_bins() {
     let bins = SphereBins::for_sample_count(SAMPLES as usize);
     let lobes = integration_lobes();
-    let gpu = integrate_pdfs(&lobes, bins, 1);
-    let gpu_half = integrate_pdfs(&lobes, bins, 2);
+    let gpu = integrate_pdfs(&lobes, bins, FULL_ORDER);
+    let gpu_half = integrate_pdfs(&lobes, bins, COARSER_ORDERS[0]);
     let dz = 2.0 / bins.theta_bins as f64;
     let dphi = std::f64::consts::TAU / bins.phi_bins as f64;
+    // Below a quarter of an expected sample at the chi-square's sample count, a difference
+    // is invisible to it: this absolute slack covers slivers of support (a pole cell cut by
+    // a lobe's edge) that both orders of one rule miss and the other rule sees.
+    let slack = 0.25 / SAMPLES as f64;
     for (c, lobe) in lobes.iter().enumerate() {
         // The CPU integrates the same pdf (evaluated by the GPU at SphereBins' own
-        // quadrature points) with SphereBins' midpoint rule.
+        // quadrature points) with SphereBins' midpoint rule, at two orders.
         let cpu_at = |k: usize| {
             let dirs: Vec<Vec3> = bins.all_quadrature(k).iter().map(|p| p.0).collect();
             let values: Vec<f64> = cross_check_kernel(lobe, bins, 1, &dirs)
@@ -1293,33 +1376,40 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
             bins.integrate(k, &values)
         };
         let (cpu, cpu_half) = (cpu_at(8), cpu_at(4));
+        // Each side's error is bounded as in `QuadratureError`, cell by cell: the change
+        // between its two orders plus f32 rounding.
         let mut worst = (0.0f64, 0usize);
         for cell in 0..bins.cell_count() {
             let (g, p) = (gpu[c][cell], cpu[cell]);
             let allowed = (g - gpu_half[c][cell]).abs()
                 + (p - cpu_half[cell]).abs()
-                + 264.0 * f64::from(f32::EPSILON) * (g + p);
-            let ratio = (g - p).abs() / allowed.max(f64::MIN_POSITIVE);
+                + CELL_ROUNDING * (g + p)
+                + slack;
+            let ratio = (g - p).abs() / allowed;
             if ratio > worst.0 {
                 worst = (ratio, cell);
             }
         }
         let cell = worst.1;
-        eprintln!(
-            "MEASURE {}: worst cell {cell}: gpu {:.6e} (half {:.6e}) cpu {:.6e} (half {:.6e}) ratio {:.3}; totals gpu {:.6} cpu {:.6}",
+        let report = format!(
+            "{}: cell {cell}: GPU {:.6e} (half order {:.6e}), CPU {:.6e} (half order {:.6e}); \
+             totals GPU {:.6}, CPU {:.6}",
             lobe.label,
             gpu[c][cell],
             gpu_half[c][cell],
             cpu[cell],
             cpu_half[cell],
-            worst.0,
             gpu[c].iter().sum::<f64>(),
             cpu.iter().sum::<f64>()
+        );
+        eprintln!("{report}: {:.2} of the tolerance", worst.0);
+        assert!(
+            worst.0 <= 1.0,
+            "integrals disagree beyond their error bounds: {report}"
         );
         if lobe.kind == 0 {
             // The diffuse pdf |cos θ| / π on wo's side integrates in closed form over a
             // cell: (z_top² - z_bottom²) / 2 · Δφ / π.
-            let mut worst = (0.0f64, 0usize);
             for cell in 0..bins.cell_count() {
                 let z_top = 1.0 - (cell / bins.phi_bins) as f64 * dz;
                 let z_bottom = z_top - dz;
@@ -1329,12 +1419,14 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
                 } else {
                     0.0
                 };
-                let error = (gpu[c][cell] - exact).abs() / exact.max(1e-300);
-                if error > worst.0 || (exact == 0.0 && gpu[c][cell] != 0.0) {
-                    worst = (error, cell);
-                }
+                let g = gpu[c][cell];
+                let allowed = (g - gpu_half[c][cell]).abs() + CELL_ROUNDING * exact;
+                assert!(
+                    (g - exact).abs() <= allowed,
+                    "{}: cell {cell} integrates to {g:.6e} on the GPU, exactly {exact:.6e}",
+                    lobe.label
+                );
             }
-            eprintln!("MEASURE {} exact: worst relative error {:.3e} in cell {}", lobe.label, worst.0, worst.1);
         }
     }
 }
