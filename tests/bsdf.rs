@@ -560,10 +560,20 @@ fn principled_run() -> &'static ChiSquareRun {
     RUN.get_or_init(|| ChiSquareRun::new(principled_lobes(), 1 << 18, 13))
 }
 
+/// The bound on misplaced probability this file used to apply to every configuration, a
+/// number measured from the code (5e-3), kept only as a cap so that no configuration is
+/// checked more loosely than before: where the quadrature's own bound (`QuadratureError`)
+/// is larger — roughness 0.2 lobes seen at 0° or 89.9°, a few degrees wide at the pole or
+/// hugging the horizon, whose derived bounds reach 1.7e-2 — the cap decides. Elsewhere the
+/// derived bound is far tighter (median 2e-5). Integrating those few configurations densely
+/// (`refine_pdfs`, as `sharp_run` does) would let the derived bound replace the cap.
+const MEASURED_CAP: f64 = 5e-3;
+
 /// Chi-square of the directions a lobe produced against its normalised pdf, and separate
 /// checks that the pdf integrates to at most 1 and that the fraction of samples absorbed
 /// (no direction) is what the pdf leaves, both to within the configuration's own
-/// quadrature error bound (`QuadratureError`) and 5 sigma of sampling noise.
+/// quadrature error bound (`QuadratureError`, capped by `MEASURED_CAP`) and 5 sigma of
+/// sampling noise.
 fn check_lobe(
     lobe: &Lobe,
     stats: &SampleStats,
@@ -575,17 +585,8 @@ fn check_lobe(
     let n = samples as f64;
     let in_cells: u64 = stats.histogram.iter().sum();
     let integral: f64 = expected.iter().sum();
-    let tolerance = error.bound();
+    let tolerance = error.bound().min(MEASURED_CAP);
     let (outcome, stray) = chi2_conditional(&stats.histogram, expected, tolerance);
-    eprintln!(
-        "MEASURE {}: integral {integral:.6} in_cells {:.6} diff {:+.2e} disc {:.2e} round {:.2e} stray {:.2e}",
-        lobe.label,
-        in_cells as f64 / n,
-        in_cells as f64 / n - integral,
-        error.discretisation,
-        error.rounding,
-        stray as f64 / n
-    );
     // Samples where the integrated pdf is exactly 0 are mass the quadrature missed (a
     // sliver of support between its points) or directions rounded across a hard edge:
     // their fraction is part of the error of the integral.
@@ -1357,7 +1358,7 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
     let bins = SphereBins::for_sample_count(SAMPLES as usize);
     let lobes = integration_lobes();
     let gpu = integrate_pdfs(&lobes, bins, FULL_ORDER);
-    let gpu_half = integrate_pdfs(&lobes, bins, COARSER_ORDERS[0]);
+    let gpu_coarser = COARSER_ORDERS.map(|scale| integrate_pdfs(&lobes, bins, scale));
     let dz = 2.0 / bins.theta_bins as f64;
     let dphi = std::f64::consts::TAU / bins.phi_bins as f64;
     // Below a quarter of an expected sample at the chi-square's sample count, a difference
@@ -1375,14 +1376,51 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
                 .collect();
             bins.integrate(k, &values)
         };
-        let (cpu, cpu_half) = (cpu_at(8), cpu_at(4));
-        // Each side's error is bounded as in `QuadratureError`, cell by cell: the change
-        // between its two orders plus f32 rounding.
+        const CPU_ORDER: u32 = 8;
+        let cpu = cpu_at(CPU_ORDER as usize);
+        let cpu_coarser =
+            COARSER_ORDERS.map(|scale| cpu_at(scaled_order(CPU_ORDER, scale) as usize));
+        // Each side's error is bounded as in `QuadratureError`, cell by cell: the largest
+        // change from its full order to its coarser ones, plus f32 rounding.
+        let change = |full: f64, coarser: &[Vec<f64>; 2], cell: usize| {
+            coarser
+                .iter()
+                .map(|c| (full - c[cell]).abs())
+                .fold(0.0, f64::max)
+        };
+        let gpu_coarser_c = [gpu_coarser[0][c].clone(), gpu_coarser[1][c].clone()];
+        // Cells where the CPU's midpoints, at every order, fall only where the pdf is 0 while
+        // the GPU's rule (which also evaluates the cells' corners and edges) finds mass: a
+        // sliver of support cut by the lobe's hard edge, which no midpoint rule of the CPU
+        // resolves, so it is no reference there. They must border cells where the CPU does
+        // find mass, and hold no more than the GPU's own error bound on the total.
+        let support = |cell: usize| cpu[cell] > 0.0;
+        let mut sliver_mass = 0.0;
+        let mut slivers = 0;
         let mut worst = (0.0f64, 0usize);
         for cell in 0..bins.cell_count() {
             let (g, p) = (gpu[c][cell], cpu[cell]);
-            let allowed = (g - gpu_half[c][cell]).abs()
-                + (p - cpu_half[cell]).abs()
+            let cpu_blind = p == 0.0 && cpu_coarser.iter().all(|c| c[cell] == 0.0);
+            if cpu_blind && g > 0.0 {
+                let (row, col) = (cell / bins.phi_bins, cell % bins.phi_bins);
+                let rows = row.saturating_sub(1)..=(row + 1).min(bins.theta_bins - 1);
+                let borders_support = rows.into_iter().any(|r| {
+                    [bins.phi_bins - 1, 0, 1]
+                        .iter()
+                        .any(|&dc| support(r * bins.phi_bins + (col + dc) % bins.phi_bins))
+                });
+                assert!(
+                    borders_support,
+                    "{}: the GPU finds {g:.3e} in cell {cell}, far from any cell where the CPU \
+                     finds mass",
+                    lobe.label
+                );
+                sliver_mass += g;
+                slivers += 1;
+                continue;
+            }
+            let allowed = change(g, &gpu_coarser_c, cell)
+                + change(p, &cpu_coarser, cell)
                 + CELL_ROUNDING * (g + p)
                 + slack;
             let ratio = (g - p).abs() / allowed;
@@ -1392,13 +1430,15 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
         }
         let cell = worst.1;
         let report = format!(
-            "{}: cell {cell}: GPU {:.6e} (half order {:.6e}), CPU {:.6e} (half order {:.6e}); \
-             totals GPU {:.6}, CPU {:.6}",
+            "{}: cell {cell}: GPU {:.6e} (coarser {:.6e}, {:.6e}), CPU {:.6e} (coarser {:.6e}, \
+             {:.6e}); totals GPU {:.6}, CPU {:.6}",
             lobe.label,
             gpu[c][cell],
-            gpu_half[c][cell],
+            gpu_coarser_c[0][cell],
+            gpu_coarser_c[1][cell],
             cpu[cell],
-            cpu_half[cell],
+            cpu_coarser[0][cell],
+            cpu_coarser[1][cell],
             gpu[c].iter().sum::<f64>(),
             cpu.iter().sum::<f64>()
         );
@@ -1407,10 +1447,24 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
             worst.0 <= 1.0,
             "integrals disagree beyond their error bounds: {report}"
         );
+        let coarser_c = [gpu_coarser_c[0].clone(), gpu_coarser_c[1].clone()];
+        let gpu_error = QuadratureError::per_config(&gpu[c..=c], &coarser_c.map(|v| vec![v]))[0];
+        eprintln!(
+            "{}: {slivers} sliver cells hold {sliver_mass:.3e}, the GPU's error bound is {:.3e}",
+            lobe.label,
+            gpu_error.bound()
+        );
+        assert!(
+            sliver_mass <= gpu_error.bound(),
+            "{}: {slivers} cells the CPU cannot integrate hold {sliver_mass:.3e}, more than the \
+             GPU's error bound {:.3e}",
+            lobe.label,
+            gpu_error.bound()
+        );
         if lobe.kind == 0 {
             // The diffuse pdf |cos θ| / π on wo's side integrates in closed form over a
             // cell: (z_top² - z_bottom²) / 2 · Δφ / π.
-            for cell in 0..bins.cell_count() {
+            for (cell, &g) in gpu[c].iter().enumerate() {
                 let z_top = 1.0 - (cell / bins.phi_bins) as f64 * dz;
                 let z_bottom = z_top - dz;
                 let same_side = (z_top + z_bottom) * f64::from(lobe.wo.z) > 0.0;
@@ -1419,8 +1473,7 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
                 } else {
                     0.0
                 };
-                let g = gpu[c][cell];
-                let allowed = (g - gpu_half[c][cell]).abs() + CELL_ROUNDING * exact;
+                let allowed = change(g, &gpu_coarser_c, cell) + CELL_ROUNDING * exact;
                 assert!(
                     (g - exact).abs() <= allowed,
                     "{}: cell {cell} integrates to {g:.6e} on the GPU, exactly {exact:.6e}",

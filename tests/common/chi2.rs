@@ -595,8 +595,8 @@ pub fn chi2_conditional(
         .map(|e| e / integral)
         .collect();
     let mut outcome = chi2_test(&kept, &probability, kept.iter().sum(), 5.0);
-    // NaN fails this comparison too (chi2_test has already flagged non-finite cells).
-    if !(integral <= 1.0 + integral_tolerance) {
+    // A NaN integral fails too (chi2_test has already flagged the non-finite cells).
+    if integral.is_nan() || integral > 1.0 + integral_tolerance {
         outcome.p_value = 0.0;
         outcome.report = format!(
             "FAILED: the pdf integrates to {integral:.6}, more than 1 + {integral_tolerance:.2e}\n{}",
