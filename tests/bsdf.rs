@@ -573,20 +573,22 @@ fn principled_run() -> &'static ChiSquareRun {
 }
 
 /// The bound on misplaced probability this file used to apply to every configuration, a
-/// number measured from the code (5e-3), kept only as a cap so that no configuration is
-/// checked more loosely than before: where the quadrature's own bound (`QuadratureError`)
-/// is larger — about 20 of the 212 configurations, mostly roughness 0.2 lobes seen at 0°
-/// or 89.9°, a few degrees wide at the pole or hugging the horizon, whose derived bounds
-/// reach 1e-2 and more — the cap decides. Elsewhere the derived bound is far tighter (a few
-/// 1e-5 for most). Integrating those few configurations densely (`refine_pdfs`, as
-/// `sharp_run` does) would let the derived bound replace the cap.
+/// number measured from the code (5e-3), kept only as a cap on the stray-sample check so
+/// that it is nowhere looser than before. The absorbed-fraction and integral checks use the
+/// derived bound (`QuadratureError`) alone: the old check hid pdfs integrating above 1 by
+/// clamping the expected absorbed fraction at 0, and with the clamp gone a capped bound
+/// would fail configurations whose integral the quadrature cannot pin down — about 20 of
+/// the 212, mostly roughness 0.2 lobes seen at 0° or 89.9° (a few degrees wide at the pole,
+/// or hugging the horizon), whose derived bounds reach 1e-2 and more; e.g. the IOR 1.33
+/// dielectric at 0° integrates to 1.005 with a bound of 1.7e-2. Elsewhere the derived bound
+/// is far tighter (a few 1e-5 for most). Integrating those configurations densely
+/// (`refine_pdfs`, as `sharp_run` does) would tighten their bounds.
 const MEASURED_CAP: f64 = 5e-3;
 
 /// Chi-square of the directions a lobe produced against its normalised pdf, and separate
 /// checks that the pdf integrates to at most 1 and that the fraction of samples absorbed
 /// (no direction) is what the pdf leaves, both to within the configuration's own
-/// quadrature error bound (`QuadratureError`, capped by `MEASURED_CAP`) and 5 sigma of
-/// sampling noise.
+/// quadrature error bound (`QuadratureError`) and 5 sigma of sampling noise.
 fn check_lobe(
     lobe: &Lobe,
     stats: &SampleStats,
@@ -598,13 +600,14 @@ fn check_lobe(
     let n = samples as f64;
     let in_cells: u64 = stats.histogram.iter().sum();
     let integral: f64 = expected.iter().sum();
-    let tolerance = error.bound().min(MEASURED_CAP);
+    let tolerance = error.bound();
     let (outcome, stray) = chi2_conditional(&stats.histogram, expected, tolerance);
     // Samples where the integrated pdf is exactly 0 are mass the quadrature missed (a
     // sliver of support between its points) or directions rounded across a hard edge:
     // their fraction is part of the error of the integral.
-    let stray_sigma = (tolerance.max(1.0 / n) / n).sqrt();
-    if stray as f64 / n > tolerance + 5.0 * stray_sigma {
+    let stray_tolerance = tolerance.min(MEASURED_CAP);
+    let stray_sigma = (stray_tolerance.max(1.0 / n) / n).sqrt();
+    if stray as f64 / n > stray_tolerance + 5.0 * stray_sigma {
         return Err(format!(
             "{}: {stray} samples where the pdf is 0 (quadrature error bound {tolerance:.2e})",
             lobe.label
@@ -1418,7 +1421,12 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
             if cpu_blind && g > 0.0 {
                 let (row, col) = (cell / bins.phi_bins, cell % bins.phi_bins);
                 let rows = row.saturating_sub(1)..=(row + 1).min(bins.theta_bins - 1);
+                let polar = row == 0 || row == bins.theta_bins - 1;
                 let borders_support = rows.into_iter().any(|r| {
+                    // Every sector of a polar band meets at the pole.
+                    if polar && r == row {
+                        return (0..bins.phi_bins).any(|k| support(r * bins.phi_bins + k));
+                    }
                     [bins.phi_bins - 1, 0, 1]
                         .iter()
                         .any(|&dc| support(r * bins.phi_bins + (col + dc) % bins.phi_bins))
