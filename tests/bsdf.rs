@@ -1476,10 +1476,13 @@ fn gpu_pdf_integration_matches_cpu_sphere_bins() {
             lobe.label,
             gpu_error.bound()
         );
+        // Each sliver cell is allowed what every other cell is allowed beyond the error
+        // bounds, the slack the chi-square cannot see (a quarter of an expected sample).
+        let sliver_bound = gpu_error.bound() + slivers as f64 * slack;
         assert!(
-            sliver_mass <= gpu_error.bound(),
+            sliver_mass <= sliver_bound,
             "{}: {slivers} cells the CPU cannot integrate hold {sliver_mass:.3e}, more than the \
-             GPU's error bound {:.3e}",
+             GPU's error bound {:.3e} and their slack, {sliver_bound:.3e}",
             lobe.label,
             gpu_error.bound()
         );

@@ -275,8 +275,15 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     var compensation = film_compensation[pixel];
     var non_finite = 0u;
     rays_traced = 0u;
+    // The AOV sums are carried from the stored ones and added to sample by sample, as the
+    // film is, so that they do not depend on how a render splits into dispatches (the
+    // batch size adapts to time).
     var aov_a = vec4<f32>(0.0);
     var aov_n = vec4<f32>(0.0);
+    if (FEATURE_AOVS) {
+        aov_a = film_aov[2u * pixel];
+        aov_n = film_aov[2u * pixel + 1u];
+    }
     for (var i = 0u; i < params.sample_count; i++) {
         rng_seed(pixel, params.sample_start + i, params.seed);
         aov_albedo = vec3<f32>(0.0);
@@ -301,8 +308,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     film_sum[pixel] = sum;
     film_compensation[pixel] = compensation;
     if (FEATURE_AOVS) {
-        film_aov[2u * pixel] += aov_a;
-        film_aov[2u * pixel + 1u] += aov_n;
+        film_aov[2u * pixel] = aov_a;
+        film_aov[2u * pixel + 1u] = aov_n;
     }
     atomicAdd(&stats.rays, rays_traced);
     if (non_finite > 0u) {
