@@ -9,8 +9,12 @@ mod camera;
 mod environment;
 pub mod file;
 mod light;
+mod load;
 mod material;
 mod mesh;
+mod obj;
+mod save;
+mod schema;
 pub mod shapes;
 
 pub use camera::Camera;

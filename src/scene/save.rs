@@ -1,0 +1,205 @@
+//! Saving a [`Scene`] as a `.kiln` file: the scene file itself, written atomically, and
+//! beside it a `<stem>.assets` folder with the meshes (OBJ) and the images the scene's
+//! material graphs read.
+//!
+//! Not here: the schema ([`schema`](super::schema)), reading scenes ([`load`](super::load))
+//! and the OBJ format itself ([`obj`](super::obj)).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::Mat4;
+
+use super::file::{SCENE_FORMAT_VERSION, SceneError};
+use super::obj::write_obj;
+use super::schema::*;
+use super::{Light, Scene};
+
+/// Writes `scene` as a `.kiln` file at `path` (atomically), its meshes as OBJ files and
+/// the encoded `images` (those material graphs name `image:N`) as image files in the
+/// folder `<stem>.assets` beside it.
+pub fn save_scene(
+    scene: &Scene,
+    path: &Path,
+    images: &[(String, std::sync::Arc<Vec<u8>>)],
+) -> Result<(), SceneError> {
+    let fail = |message: String| SceneError::Io {
+        path: path.to_owned(),
+        source: std::io::Error::other(message),
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    let assets = format!("{stem}.assets");
+    std::fs::create_dir_all(dir.join(&assets)).map_err(|e| fail(e.to_string()))?;
+
+    // Embedded images become files; graphs name them by their new relative path.
+    let mut image_files = Vec::new();
+    for (i, (name, bytes)) in images.iter().enumerate() {
+        let ext = image::guess_format(bytes)
+            .ok()
+            .and_then(|f| f.extensions_str().first().copied())
+            .unwrap_or("bin");
+        let clean: String = name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .take(40)
+            .collect();
+        let file = format!("{assets}/{i}_{clean}.{ext}");
+        std::fs::write(dir.join(&file), bytes.as_slice()).map_err(|e| fail(e.to_string()))?;
+        image_files.push(file);
+    }
+
+    let unique = |names: &mut std::collections::BTreeSet<String>, base: &str| {
+        let base = if base.is_empty() { "unnamed" } else { base };
+        let mut name = base.to_owned();
+        let mut n = 1;
+        while !names.insert(name.clone()) {
+            n += 1;
+            name = format!("{base} {n}");
+        }
+        name
+    };
+    let mut taken = std::collections::BTreeSet::new();
+    let mut material_names = Vec::new();
+    let mut materials = BTreeMap::new();
+    for m in &scene.materials {
+        let name = unique(&mut taken, &m.name);
+        let desc = match &m.graph {
+            Some(g) => {
+                let mut graph = g.graph.clone();
+                let rename = |nodes: &mut BTreeMap<String, crate::material::Node>| {
+                    for node in nodes.values_mut() {
+                        if let Some(crate::material::Param::Text(file)) =
+                            node.params.get_mut("file")
+                        {
+                            if let Some(i) = file
+                                .strip_prefix("image:")
+                                .and_then(|n| n.parse::<usize>().ok())
+                            {
+                                if let Some(f) = image_files.get(i) {
+                                    *file = f.clone();
+                                }
+                            }
+                        }
+                    }
+                };
+                rename(&mut graph.nodes);
+                for group in graph.groups.values_mut() {
+                    rename(&mut group.nodes);
+                }
+                MaterialDesc {
+                    graph: Some(graph),
+                    ..MaterialDesc::default()
+                }
+            }
+            None => MaterialDesc::from_params(m),
+        };
+        material_names.push(name.clone());
+        materials.insert(name, desc);
+    }
+
+    let mut taken = std::collections::BTreeSet::new();
+    let mut mesh_names = Vec::new();
+    let mut meshes = BTreeMap::new();
+    for (i, mesh) in scene.meshes.iter().enumerate() {
+        let name = unique(&mut taken, &mesh.name);
+        let file = format!("{assets}/mesh_{i}.obj");
+        write_obj(mesh, &dir.join(&file)).map_err(|e| fail(format!("{file}: {e}")))?;
+        mesh_names.push(name.clone());
+        meshes.insert(name, MeshDesc::Obj(file));
+    }
+
+    let instances = scene
+        .instances
+        .iter()
+        .map(|inst| InstanceDesc {
+            mesh: mesh_names[inst.mesh].clone(),
+            material: material_names[inst.material].clone(),
+            transform: TransformDesc {
+                matrix: Some(Mat4::from(inst.transform).transpose().to_cols_array_2d()),
+                ..TransformDesc::default()
+            },
+        })
+        .collect();
+    let c = &scene.camera;
+    let projection = if c.aperture_radius > 0.0 {
+        Projection::ThinLens {
+            fov_y: c.fov_y_degrees,
+            aperture_radius: c.aperture_radius,
+            focus_distance: c.focus_distance,
+        }
+    } else {
+        Projection::Perspective {
+            fov_y: c.fov_y_degrees,
+        }
+    };
+    let lights = scene
+        .lights
+        .iter()
+        .map(|l| match *l {
+            Light::Point {
+                position,
+                intensity,
+                radius,
+            } => LightDesc::Point {
+                position: position.into(),
+                intensity: intensity.into(),
+                radius,
+            },
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                blend,
+                radius,
+            } => LightDesc::Spot {
+                position: position.into(),
+                direction: direction.into(),
+                intensity: intensity.into(),
+                cone_angle,
+                blend,
+                radius,
+            },
+            Light::Distant {
+                direction,
+                irradiance,
+                angular_diameter,
+            } => LightDesc::Distant {
+                direction: direction.into(),
+                irradiance: irradiance.into(),
+                angular_diameter,
+            },
+        })
+        .collect();
+    let file = SceneFile {
+        version: SCENE_FORMAT_VERSION,
+        render: RenderDesc {
+            width: scene.settings.width,
+            height: scene.settings.height,
+            samples_per_pixel: scene.settings.samples_per_pixel,
+            max_bounces: scene.settings.max_bounces,
+        },
+        camera: CameraDesc {
+            position: c.position.into(),
+            look_at: c.look_at.into(),
+            up: c.up.into(),
+            projection,
+        },
+        environment: scene.environment.into(),
+        environment_map: None,
+        materials,
+        meshes,
+        instances,
+        lights,
+    };
+    let text = ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default())
+        .map_err(|e| fail(e.to_string()))?;
+    let mut temp = tempfile::NamedTempFile::new_in(dir).map_err(|e| fail(e.to_string()))?;
+    std::io::Write::write_all(&mut temp, text.as_bytes()).map_err(|e| fail(e.to_string()))?;
+    temp.persist(path).map_err(|e| fail(e.error.to_string()))?;
+    Ok(())
+}
