@@ -8,7 +8,7 @@
 use std::collections::BTreeMap;
 use std::path::Path;
 
-use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3};
+use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3, Vec4};
 use serde::Deserialize;
 
 use super::file::{SCENE_FORMAT_VERSION, SceneError};
@@ -237,7 +237,7 @@ fn build_scene(
     };
 
     let mut material_ids = BTreeMap::new();
-    for (name, m) in &file.materials {
+    for (name, m) in &file.materials.0 {
         let material = m
             .to_material(name, base_dir)
             .map_err(|e| invalid(format!("material \"{name}\": {e}")))?;
@@ -246,20 +246,23 @@ fn build_scene(
     }
 
     let mut mesh_ids = BTreeMap::new();
-    for (name, desc) in file.meshes {
+    for (name, desc) in file.meshes.0 {
         let mut mesh = match desc {
             MeshDesc::Inline {
                 positions,
                 normals,
                 uvs,
+                uvs1,
+                colors,
                 indices,
             } => Mesh {
                 name: String::new(),
                 positions: positions.into_iter().map(Vec3::from).collect(),
                 normals: normals.into_iter().map(Vec3::from).collect(),
                 uvs: uvs.into_iter().map(Vec2::from).collect(),
+                uvs1: uvs1.into_iter().map(Vec2::from).collect(),
+                colors: colors.into_iter().map(Vec4::from).collect(),
                 indices,
-                ..Mesh::default()
             },
             MeshDesc::Obj(file) => {
                 let file = base_dir.join(file);
@@ -406,6 +409,53 @@ mod tests {
         assert!(matches!(scene.lights[0], Light::Point { radius, .. } if radius == 0.0));
         let bad = text.replace("cone_angle: 30", "cone_angle: 300");
         assert!(parse(&bad).unwrap_err().to_string().contains("cone_angle"));
+    }
+
+    #[test]
+    fn a_name_given_twice_is_an_error() {
+        let text = MINIMAL.replace(
+            "meshes: { \"ball\": Sphere(segments: 8, rings: 4) }",
+            "meshes: { \"ball\": Quad, \"ball\": Cube }",
+        );
+        let err = parse(&text).unwrap_err().to_string();
+        assert!(err.contains("\"ball\" is defined twice"), "{err}");
+    }
+
+    #[test]
+    fn materials_and_meshes_keep_the_order_of_the_file() {
+        let text = MINIMAL
+            .replace(
+                "materials: { \"grey\": (base_color: (0.5, 0.5, 0.5)) }",
+                "materials: { \"zinc\": (metallic: 1), \"grey\": (), \"amber\": () }",
+            )
+            .replace(
+                "meshes: { \"ball\": Sphere(segments: 8, rings: 4) }",
+                "meshes: { \"ball\": Quad, \"a box\": Cube }",
+            );
+        let scene = parse(&text).unwrap();
+        let materials: Vec<&str> = scene.materials.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(materials, ["zinc", "grey", "amber"]);
+        let meshes: Vec<&str> = scene.meshes.iter().map(|m| m.name.as_str()).collect();
+        assert_eq!(meshes, ["ball", "a box"]);
+        assert_eq!(
+            scene.instances[0].material, 1,
+            "\"grey\" is the second material"
+        );
+    }
+
+    #[test]
+    fn inline_mesh_takes_a_second_uv_set_and_rgba_colours() {
+        let text = MINIMAL.replace(
+            "Sphere(segments: 8, rings: 4)",
+            "Inline(positions: [(0, 0, 0), (1, 0, 0), (0, 1, 0)], \
+             uvs1: [(0, 0), (1, 0), (0.5, 0.25)], \
+             colors: [(1, 0, 0, 1), (0, 1, 0, 0.5), (0, 0, 1, 0)], indices: [(0, 1, 2)])",
+        );
+        let scene = parse(&text).unwrap();
+        let mesh = &scene.meshes[0];
+        assert_eq!(mesh.uvs1[2], Vec2::new(0.5, 0.25));
+        assert_eq!(mesh.colors[1], Vec4::new(0.0, 1.0, 0.0, 0.5));
+        assert!(mesh.uvs.is_empty() && mesh.normals.is_empty());
     }
 
     #[test]

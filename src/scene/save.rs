@@ -15,9 +15,11 @@ use super::obj::write_obj;
 use super::schema::*;
 use super::{Light, Scene};
 
-/// Writes `scene` as a `.kiln` file at `path` (atomically), its meshes as OBJ files and
-/// the encoded `images` (those material graphs name `image:N`) as image files in the
-/// folder `<stem>.assets` beside it.
+/// Writes `scene` as a `.kiln` file at `path` (atomically), and in the folder
+/// `<stem>.assets` beside it its meshes as OBJ files, its environment map as an EXR and the
+/// encoded `images` (those material graphs name `image:N`) as image files. Loading the
+/// file gives `scene` back exactly (`tests/scene_round_trip.rs`), provided its materials
+/// and meshes have distinct, non-empty names: others are renamed (`"unnamed"`, `"ball 2"`).
 pub fn save_scene(
     scene: &Scene,
     path: &Path,
@@ -64,7 +66,7 @@ pub fn save_scene(
     };
     let mut taken = std::collections::BTreeSet::new();
     let mut material_names = Vec::new();
-    let mut materials = BTreeMap::new();
+    let mut materials = Vec::new();
     for m in &scene.materials {
         let name = unique(&mut taken, &m.name);
         let desc = match &m.graph {
@@ -82,6 +84,13 @@ pub fn save_scene(
                                 if let Some(f) = image_files.get(i) {
                                     *file = f.clone();
                                 }
+                            } else if Path::new(file.as_str()).is_relative() {
+                                // Loading resolved it against the old scene's folder, as
+                                // seen from the working directory; the saved scene may
+                                // live elsewhere.
+                                if let Ok(absolute) = std::path::absolute(file.as_str()) {
+                                    *file = absolute.to_string_lossy().into_owned();
+                                }
                             }
                         }
                     }
@@ -98,18 +107,18 @@ pub fn save_scene(
             None => MaterialDesc::from_params(m),
         };
         material_names.push(name.clone());
-        materials.insert(name, desc);
+        materials.push((name, desc));
     }
 
     let mut taken = std::collections::BTreeSet::new();
     let mut mesh_names = Vec::new();
-    let mut meshes = BTreeMap::new();
+    let mut meshes = Vec::new();
     for (i, mesh) in scene.meshes.iter().enumerate() {
         let name = unique(&mut taken, &mesh.name);
         let file = format!("{assets}/mesh_{i}.obj");
         write_obj(mesh, &dir.join(&file)).map_err(|e| fail(format!("{file}: {e}")))?;
         mesh_names.push(name.clone());
-        meshes.insert(name, MeshDesc::Obj(file));
+        meshes.push((name, MeshDesc::Obj(file)));
     }
 
     let instances = scene
@@ -125,7 +134,9 @@ pub fn save_scene(
         })
         .collect();
     let c = &scene.camera;
-    let projection = if c.aperture_radius > 0.0 {
+    // A pinhole keeps its focus distance too (`Camera::look_at` sets one, and the editor
+    // may open a lens later): a thin lens of radius 0 is a pinhole that records it.
+    let projection = if c.aperture_radius > 0.0 || c.focus_distance != 0.0 {
         Projection::ThinLens {
             fov_y: c.fov_y_degrees,
             aperture_radius: c.aperture_radius,
@@ -175,6 +186,24 @@ pub fn save_scene(
             },
         })
         .collect();
+    // The map is written as a 32-bit float EXR, which holds its texels exactly.
+    let environment_map = match &scene.environment_map {
+        Some(map) => {
+            let file = format!("{assets}/environment.exr");
+            let texels = map.texels.iter().flat_map(|t| t.to_array()).collect();
+            let image = image::Rgb32FImage::from_raw(map.width, map.height, texels)
+                .ok_or_else(|| fail(format!("{file}: the map's size and texels disagree")))?;
+            image
+                .save_with_format(dir.join(&file), image::ImageFormat::OpenExr)
+                .map_err(|e| fail(format!("{file}: {e}")))?;
+            Some(EnvironmentMapDesc {
+                file,
+                strength: map.strength,
+                rotation: map.rotation_degrees,
+            })
+        }
+        None => None,
+    };
     let file = SceneFile {
         version: SCENE_FORMAT_VERSION,
         render: RenderDesc {
@@ -190,9 +219,9 @@ pub fn save_scene(
             projection,
         },
         environment: scene.environment.into(),
-        environment_map: None,
-        materials,
-        meshes,
+        environment_map,
+        materials: Named(materials),
+        meshes: Named(meshes),
         instances,
         lights,
     };

@@ -5,9 +5,12 @@
 //! (and validating them) is [`load`](super::load)'s job, the reverse is [`save`](super::save)'s,
 //! and mesh files are [`obj`](super::obj)'s. `docs/SCENE_FORMAT.md` documents every field.
 
-use std::collections::BTreeMap;
+use std::collections::BTreeSet;
+use std::fmt;
+use std::marker::PhantomData;
 
-use serde::{Deserialize, Serialize};
+use serde::de::{Error as _, MapAccess, Visitor};
+use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{Material, SceneSettings};
 
@@ -23,9 +26,9 @@ pub(super) struct SceneFile {
     #[serde(default)]
     pub(super) environment_map: Option<EnvironmentMapDesc>,
     #[serde(default)]
-    pub(super) materials: BTreeMap<String, MaterialDesc>,
+    pub(super) materials: Named<MaterialDesc>,
     #[serde(default)]
-    pub(super) meshes: BTreeMap<String, MeshDesc>,
+    pub(super) meshes: Named<MeshDesc>,
     #[serde(default)]
     pub(super) instances: Vec<InstanceDesc>,
     #[serde(default)]
@@ -42,6 +45,48 @@ pub(super) struct EnvironmentMapDesc {
     /// Degrees about +Y.
     #[serde(default)]
     pub(super) rotation: f32,
+}
+
+/// A RON map from names to entries, kept in the order the file lists them: the scene's
+/// materials and meshes take that order, so a saved scene reloads with the same indices.
+/// A name given twice is an error (a map type would silently keep the last).
+#[derive(Debug)]
+pub(super) struct Named<T>(pub(super) Vec<(String, T)>);
+
+impl<T> Default for Named<T> {
+    fn default() -> Self {
+        Self(Vec::new())
+    }
+}
+
+impl<T: Serialize> Serialize for Named<T> {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        serializer.collect_map(self.0.iter().map(|(name, entry)| (name, entry)))
+    }
+}
+
+impl<'de, T: Deserialize<'de>> Deserialize<'de> for Named<T> {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct NamedVisitor<T>(PhantomData<T>);
+        impl<'de, T: Deserialize<'de>> Visitor<'de> for NamedVisitor<T> {
+            type Value = Named<T>;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a map from names to entries")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<Named<T>, A::Error> {
+                let mut seen = BTreeSet::new();
+                let mut entries = Vec::new();
+                while let Some((name, entry)) = map.next_entry::<String, T>()? {
+                    if !seen.insert(name.clone()) {
+                        return Err(A::Error::custom(format!("\"{name}\" is defined twice")));
+                    }
+                    entries.push((name, entry));
+                }
+                Ok(Named(entries))
+            }
+        }
+        deserializer.deserialize_map(NamedVisitor(PhantomData))
+    }
 }
 
 pub(super) fn unit_strength() -> f32 {
@@ -208,9 +253,16 @@ pub(super) enum MeshDesc {
         normals: Vec<[f32; 3]>,
         #[serde(default)]
         uvs: Vec<[f32; 2]>,
+        /// A second UV set.
+        #[serde(default)]
+        uvs1: Vec<[f32; 2]>,
+        /// Linear RGBA.
+        #[serde(default)]
+        colors: Vec<[f32; 4]>,
         indices: Vec<[u32; 3]>,
     },
-    /// A Wavefront OBJ file, relative to the scene file; all its shapes become one mesh.
+    /// A Wavefront OBJ file, relative to the scene file; all its shapes become one mesh
+    /// ([`obj`](super::obj) says how, and which extensions Kiln reads and writes).
     Obj(String),
     Quad,
     Cube,
