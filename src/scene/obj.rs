@@ -216,8 +216,9 @@ fn read_aligned(text: &str) -> Option<Mesh> {
     let count = mesh.positions.len();
     let (has_uvs, has_normals) = corner_form.unwrap_or((false, false));
     let matches = |n: usize| n == 0 || n == count;
-    if has_uvs != !mesh.uvs.is_empty()
-        || has_normals != !mesh.normals.is_empty()
+    let (uvs_listed, normals_listed) = (!mesh.uvs.is_empty(), !mesh.normals.is_empty());
+    if has_uvs != uvs_listed
+        || has_normals != normals_listed
         || !matches(mesh.uvs.len())
         || !matches(mesh.normals.len())
         || !matches(mesh.uvs1.len())

@@ -23,7 +23,7 @@ pub(super) struct SceneFile {
     pub(super) camera: CameraDesc,
     #[serde(default)]
     pub(super) environment: [f32; 3],
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) environment_map: Option<EnvironmentMapDesc>,
     #[serde(default)]
     pub(super) materials: Named<MaterialDesc>,
@@ -198,8 +198,10 @@ pub(super) struct MaterialDesc {
     pub(super) opacity: f32,
     pub(super) thin_walled: bool,
     /// A node graph (docs/NODES.md) computing the parameters instead of the fields above.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) graph: Option<crate::material::Graph>,
     /// A `.kmat` material file, relative to the scene file, instead of the fields above.
+    #[serde(skip_serializing_if = "Option::is_none")]
     pub(super) graph_file: Option<String>,
 }
 
@@ -302,18 +304,26 @@ pub(super) struct InstanceDesc {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct TransformDesc {
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub(super) translate: [f32; 3],
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "is_zero")]
     pub(super) rotate: [f32; 3],
-    #[serde(default = "unit_scale")]
+    #[serde(default = "unit_scale", skip_serializing_if = "is_unit_scale")]
     pub(super) scale: [f32; 3],
-    #[serde(default)]
+    #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) matrix: Option<[[f32; 4]; 4]>,
 }
 
 pub(super) fn unit_scale() -> [f32; 3] {
     [1.0; 3]
+}
+
+fn is_zero(v: &[f32; 3]) -> bool {
+    *v == [0.0; 3]
+}
+
+fn is_unit_scale(v: &[f32; 3]) -> bool {
+    *v == unit_scale()
 }
 
 impl Default for TransformDesc {
