@@ -56,6 +56,8 @@ pub enum SceneError {
     Version { path: PathBuf, found: u32 },
     #[error("{path}: {message}")]
     Invalid { path: PathBuf, message: String },
+    #[error("cannot save scene {path}: {message}")]
+    Save { path: PathBuf, message: String },
     #[error("{path}: mesh \"{mesh}\": cannot load {file}: {message}")]
     MeshFile {
         path: PathBuf,

@@ -93,10 +93,14 @@ fn load_with_tobj(path: &Path) -> Result<Mesh, String> {
     Ok(mesh)
 }
 
-/// Writes `mesh` as an aligned OBJ file (see the module's documentation).
-pub(super) fn write_obj(mesh: &Mesh, path: &Path) -> std::io::Result<()> {
-    use std::io::Write;
-    let mut out = std::io::BufWriter::new(std::fs::File::create(path)?);
+/// Writes `mesh` as an aligned OBJ file (see the module's documentation), atomically.
+pub(super) fn write_obj(mesh: &Mesh, path: &Path) -> Result<(), String> {
+    kiln_plugin_api::atomic::write_atomically(path, |out| {
+        write_aligned(mesh, out).map_err(|e| e.to_string())
+    })
+}
+
+fn write_aligned(mesh: &Mesh, out: &mut impl std::io::Write) -> std::io::Result<()> {
     writeln!(
         out,
         "# {} (written by Kiln; vertices are aligned)",
@@ -136,7 +140,7 @@ pub(super) fn write_obj(mesh: &Mesh, path: &Path) -> std::io::Result<()> {
         };
         writeln!(out, "f {} {} {}", v(t[0]), v(t[1]), v(t[2]))?;
     }
-    out.flush()
+    Ok(())
 }
 
 /// The mesh of an aligned OBJ text, or `None` where the text is anything else (polygons,

@@ -1,4 +1,4 @@
-//! Saving a [`Scene`] as a `.kiln` file: the scene file itself, written atomically, and
+//! Saving a [`Scene`] as a `.kiln` file: the scene file itself and
 //! beside it a `<stem>.assets` folder with the meshes (OBJ) and the images the scene's
 //! material graphs read.
 //!
@@ -9,25 +9,28 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::Mat4;
+use kiln_plugin_api::atomic::write_atomically;
+use std::io::Write;
 
 use super::file::{SCENE_FORMAT_VERSION, SceneError};
 use super::obj::write_obj;
 use super::schema::*;
 use super::{Light, Scene};
 
-/// Writes `scene` as a `.kiln` file at `path` (atomically), and in the folder
+/// Writes `scene` as a `.kiln` file at `path`, and in the folder
 /// `<stem>.assets` beside it its meshes as OBJ files, its environment map as an EXR and the
 /// encoded `images` (those material graphs name `image:N`) as image files. Loading the
 /// file gives `scene` back exactly (`tests/scene_round_trip.rs`), provided its materials
 /// and meshes have distinct, non-empty names: others are renamed (`"unnamed"`, `"ball 2"`).
+/// Every file is written atomically (complete or untouched).
 pub fn save_scene(
     scene: &Scene,
     path: &Path,
     images: &[(String, std::sync::Arc<Vec<u8>>)],
 ) -> Result<(), SceneError> {
-    let fail = |message: String| SceneError::Io {
+    let fail = |message: String| SceneError::Save {
         path: path.to_owned(),
-        source: std::io::Error::other(message),
+        message,
     };
     let dir = path
         .parent()
@@ -35,7 +38,9 @@ pub fn save_scene(
         .unwrap_or(Path::new("."));
     let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
     let assets = format!("{stem}.assets");
-    std::fs::create_dir_all(dir.join(&assets)).map_err(|e| fail(e.to_string()))?;
+    let assets_dir = dir.join(&assets);
+    std::fs::create_dir_all(&assets_dir)
+        .map_err(|e| fail(format!("cannot create {}: {e}", assets_dir.display())))?;
 
     // Embedded images become files; graphs name them by their new relative path.
     let mut image_files = Vec::new();
@@ -50,7 +55,10 @@ pub fn save_scene(
             .take(40)
             .collect();
         let file = format!("{assets}/{i}_{clean}.{ext}");
-        std::fs::write(dir.join(&file), bytes.as_slice()).map_err(|e| fail(e.to_string()))?;
+        write_atomically(&dir.join(&file), |w| {
+            w.write_all(bytes.as_slice()).map_err(|e| e.to_string())
+        })
+        .map_err(fail)?;
         image_files.push(file);
     }
 
@@ -116,7 +124,7 @@ pub fn save_scene(
     for (i, mesh) in scene.meshes.iter().enumerate() {
         let name = unique(&mut taken, &mesh.name);
         let file = format!("{assets}/mesh_{i}.obj");
-        write_obj(mesh, &dir.join(&file)).map_err(|e| fail(format!("{file}: {e}")))?;
+        write_obj(mesh, &dir.join(&file)).map_err(fail)?;
         mesh_names.push(name.clone());
         meshes.push((name, MeshDesc::Obj(file)));
     }
@@ -193,9 +201,12 @@ pub fn save_scene(
             let texels = map.texels.iter().flat_map(|t| t.to_array()).collect();
             let image = image::Rgb32FImage::from_raw(map.width, map.height, texels)
                 .ok_or_else(|| fail(format!("{file}: the map's size and texels disagree")))?;
-            image
-                .save_with_format(dir.join(&file), image::ImageFormat::OpenExr)
-                .map_err(|e| fail(format!("{file}: {e}")))?;
+            write_atomically(&dir.join(&file), |w| {
+                image
+                    .write_to(w, image::ImageFormat::OpenExr)
+                    .map_err(|e| e.to_string())
+            })
+            .map_err(fail)?;
             Some(EnvironmentMapDesc {
                 file,
                 strength: map.strength,
@@ -227,8 +238,29 @@ pub fn save_scene(
     };
     let text = ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default())
         .map_err(|e| fail(e.to_string()))?;
-    let mut temp = tempfile::NamedTempFile::new_in(dir).map_err(|e| fail(e.to_string()))?;
-    std::io::Write::write_all(&mut temp, text.as_bytes()).map_err(|e| fail(e.to_string()))?;
-    temp.persist(path).map_err(|e| fail(e.error.to_string()))?;
-    Ok(())
+    write_atomically(path, |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(fail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+
+    #[test]
+    fn a_folder_that_cannot_be_made_is_a_save_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let blocker = dir.path().join("a file");
+        std::fs::write(&blocker, "not a folder").unwrap();
+        let scene = Scene::empty(Camera::look_at(glam::Vec3::Z, glam::Vec3::ZERO, 40.0));
+        let err = save_scene(&scene, &blocker.join("scene.kiln"), &[]).unwrap_err();
+        let message = err.to_string();
+        assert!(matches!(err, SceneError::Save { .. }), "{message}");
+        assert!(
+            message.starts_with("cannot save scene") && message.contains("scene.assets"),
+            "{message}"
+        );
+    }
 }
