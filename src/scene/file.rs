@@ -1,4 +1,5 @@
-//! The `.kiln` scene file: a versioned, human-editable description of a [`Scene`].
+//! The `.kiln` scene file: a versioned, human-editable description of a
+//! [`Scene`](super::Scene).
 //!
 //! The format is [RON](https://github.com/ron-rs/ron): it has comments, trailing commas
 //! and named enum variants (`Sphere(segments: 64, rings: 32)`), which keeps hand-written
@@ -18,11 +19,10 @@
 //! )
 //! ```
 //!
-//! The format is split by job: [`schema`](super::schema) declares the serde types (what a
-//! file may say), [`load`](super::load) turns a file into a validated [`Scene`](super::Scene),
-//! [`save`](super::save) writes one back, and [`obj`](super::obj) reads and writes the
-//! OBJ mesh files a scene refers to. This module holds what they share: the format
-//! version and the error type.
+//! The format is split by job: `scene/schema.rs` declares the serde types (what a file may
+//! say), `scene/load.rs` turns a file into a validated scene, `scene/save.rs` writes one
+//! back, and `scene/obj.rs` reads and writes the OBJ mesh files a scene refers to. This
+//! module holds what they share: the format version and the error type.
 
 use std::path::PathBuf;
 
