@@ -78,7 +78,8 @@ fn aovs_do_not_depend_on_how_a_render_is_cut_into_dispatches() {
     let aovs = |cuts: &[u32]| {
         let mut r = Renderer::new(Arc::clone(&ctx), &cornell(), s).unwrap();
         for pair in cuts.windows(2) {
-            r.render(pair[0]..pair[1], RenderControl::default()).unwrap();
+            r.render(pair[0]..pair[1], RenderControl::default())
+                .unwrap();
         }
         r.read_aovs().unwrap().expect("AOVs asked for")
     };
