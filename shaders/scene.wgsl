@@ -1,5 +1,7 @@
-// Scene data as the kernel sees it: the types and bindings of group 0.
-// The Rust mirror of every struct here is in src/render/gpu_types.rs; keep the two in step.
+// Scene data as the kernel sees it: the types of group 0's bindings. The Rust mirror of
+// every struct and constant here is in src/render/gpu_types.rs (a test compares them with
+// naga's layout); the bindings themselves are declared by kernel assembly from the table
+// in src/render/bindings.rs.
 
 const PI: f32 = 3.14159265358979323846;
 const INV_PI: f32 = 0.31830988618379067154;
@@ -36,9 +38,12 @@ struct Params {
     cam_lens: vec4<f32>,
     // rgb: uniform environment radiance; w: probability of picking the environment in NEE
     environment: vec4<f32>,
-    // x: total power of emissive triangles (sum of luminance * area); y: probability of
-    // picking an emissive triangle in NEE; z: number of analytic lights.
-    light_totals: vec4<f32>,
+    // Total power of the emissive triangles (sum of luminance * area).
+    light_power: f32,
+    // Probability of picking an emissive triangle in NEE.
+    triangle_pick: f32,
+    analytic_light_count: u32,
+    _pad: u32,
 };
 
 // A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;
@@ -73,12 +78,17 @@ const INSTANCE_HAS_UVS: u32 = 2u;
 const INSTANCE_HAS_UV1: u32 = 4u;
 
 // A principled material: the seven vec4s of `principled_unpack`, emission (+ opacity in
-// w), and flags (x: thin-walled, y: transmissive, z: diffuse roughness and w: anisotropy
-// rotation in turns, as f32 bits).
+// w), and the parameters outside those vec4s.
 struct Material {
     principled: array<vec4<f32>, 7>,
     emission: vec4<f32>,
-    flags: vec4<u32>,
+    // 1 if thin-walled.
+    thin_walled: u32,
+    // 1 if light passes through: the surface keeps its geometric orientation.
+    transmissive: u32,
+    diffuse_roughness: f32,
+    // The anisotropic tangent's rotation, in turns.
+    anisotropy_rotation: f32,
 };
 
 // An emissive triangle in world space, for next-event estimation.
@@ -90,11 +100,17 @@ struct LightTriangle {
     emission: vec4<f32>,
 };
 
+// AnalyticLight.kind
+const LIGHT_POINT: u32 = 0u;
+const LIGHT_SPOT: u32 = 1u;
+const LIGHT_DISTANT: u32 = 2u;
+
 // A point, spot or distant light (src/scene/light.rs).
 struct AnalyticLight {
-    // xyz: position (point, spot) or the direction light travels (distant); w: kind
-    // (0 point, 1 spot, 2 distant).
-    position: vec4<f32>,
+    // Position (point, spot) or the direction light travels (distant).
+    position: vec3<f32>,
+    // LIGHT_POINT, LIGHT_SPOT or LIGHT_DISTANT.
+    kind: u32,
     // xyz: spot axis (unit); w: sphere radius, or for distant lights 1 - cos of the disk's
     // angular radius.
     axis: vec4<f32>,
@@ -109,33 +125,3 @@ struct Stats {
     rays: atomic<u32>,
     non_finite: atomic<u32>,
 };
-
-@group(0) @binding(0) var<uniform> params: Params;
-@group(0) @binding(1) var<storage, read_write> film_sum: array<vec4<f32>>;
-@group(0) @binding(2) var<storage, read_write> film_compensation: array<vec4<f32>>;
-@group(0) @binding(3) var<storage, read_write> stats: Stats;
-@group(0) @binding(4) var<storage, read> tlas_nodes: array<BvhNode>;
-@group(0) @binding(5) var<storage, read> instances: array<Instance>;
-// The two largest arrays are split into up to four pages, each its own binding, so a
-// scene is not limited by the per-binding size (128 MiB on lavapipe). Read them through
-// fetch_blas_node and fetch_triangle, which kernel assembly generates together with the
-// bindings of pages 1 to 3 (13-15 and 16-18) for the pages the scene uses
-// (src/render/kernel.rs, `paging_wgsl`): unused pages take no binding slot, which keeps
-// ordinary scenes within GL's 16 storage buffers per stage.
-@group(0) @binding(6) var<storage, read> blas_nodes_0: array<BvhNode>;
-@group(0) @binding(7) var<storage, read> triangles_0: array<Triangle>;
-// Three global vertex indices per triangle, in the same order as `triangles`.
-@group(0) @binding(8) var<storage, read> triangle_vertices: array<u32>;
-// Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w = colour
-// (pack4x8unorm).
-@group(0) @binding(9) var<storage, read> vertices: array<vec4<u32>>;
-@group(0) @binding(10) var<storage, read> materials: array<Material>;
-@group(0) @binding(11) var<storage, read> light_triangles: array<LightTriangle>;
-// Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).
-@group(0) @binding(12) var<storage, read> light_cdf: array<f32>;
-@group(0) @binding(19) var<storage, read> analytic_lights: array<AnalyticLight>;
-// The environment map and its sampling CDFs (shaders/lights/environment.wgsl).
-@group(0) @binding(20) var<storage, read> env_data: array<vec4<f32>>;
-// The rough dielectric's energy table, 2 × 16³ f32 four to a vec4 (shaders/bsdf/
-// dielectric_energy.wgsl).
-@group(0) @binding(21) var<uniform> dielectric_energy_table: array<vec4<f32>, 2048>;

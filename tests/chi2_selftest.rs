@@ -13,7 +13,12 @@ const QUADRATURE_ORDER: usize = 4;
 const MIN_EXPECTED: f64 = 5.0;
 /// Chi-square tests in this file that are expected to pass; the Šidák correction spreads the
 /// suite's 1% false-positive budget over them.
-const PASSING_TESTS: usize = 3;
+const PASSING_TESTS: usize = 6;
+/// The integral tolerance given to `chi2_conditional` here: the pdfs below are linear in
+/// cos(theta) (or constant) over each cell, which the midpoint rule integrates exactly, so the
+/// only error is rounding the quadrature directions to f32 (relative 2^-24 per value) and the
+/// f64 sums; 1e-6 bounds both with a wide margin.
+const EXACT_QUADRATURE_TOLERANCE: f64 = 1e-6;
 
 /// SplitMix64: tiny, deterministic and good enough to drive samplers in a test.
 struct SplitMix64(u64);
@@ -91,6 +96,20 @@ fn run_chi2(dirs: &[Option<Vec3>], pdf: impl Fn(Vec3) -> f64) -> Chi2Outcome {
     chi2_test(&observed, &expected, dirs.len() as u64, MIN_EXPECTED)
 }
 
+/// The same, through `chi2_conditional`: the shape of the directions that landed where the
+/// pdf is positive, and the samples that landed where it is 0.
+fn run_chi2_conditional(dirs: &[Option<Vec3>], pdf: impl Fn(Vec3) -> f64) -> (Chi2Outcome, u64) {
+    let bins = SphereBins::for_sample_count(dirs.len());
+    let observed = histogram(&bins, dirs);
+    let pdf_values: Vec<f64> = bins
+        .all_quadrature(QUADRATURE_ORDER)
+        .into_iter()
+        .map(|(dir, _)| pdf(dir))
+        .collect();
+    let expected = bins.integrate(QUADRATURE_ORDER, &pdf_values);
+    chi2_conditional(&observed, &expected, EXACT_QUADRATURE_TOLERANCE)
+}
+
 fn assert_passes(outcome: &Chi2Outcome) {
     let alpha = sidak_alpha(0.01, PASSING_TESTS);
     assert!(
@@ -150,6 +169,106 @@ fn uniform_sphere_sampler_passes_against_constant_pdf() {
         "{}",
         outcome.report
     );
+}
+
+#[test]
+fn conditional_chi2_passes_correct_samplers_and_reports_the_raw_integral() {
+    let (outcome, stray) = run_chi2_conditional(&cosine_samples(5), cosine_pdf);
+    assert_passes(&outcome);
+    assert_eq!(stray, 0, "{}", outcome.report);
+    assert!(
+        (outcome.pdf_integral - 1.0).abs() < EXACT_QUADRATURE_TOLERANCE,
+        "{}",
+        outcome.report
+    );
+    assert!(outcome.degrees_of_freedom > 1000, "{}", outcome.report);
+    // Absorption is the caller's to check: the shape alone passes, and the integral (0.7, not
+    // the normalised 1) is there for the caller to compare with the absorbed fraction.
+    let (outcome, stray) =
+        run_chi2_conditional(&absorbing_cosine_samples(6), |d| 0.7 * cosine_pdf(d));
+    assert_passes(&outcome);
+    assert_eq!(stray, 0, "{}", outcome.report);
+    assert!(
+        (outcome.pdf_integral - 0.7).abs() < EXACT_QUADRATURE_TOLERANCE,
+        "{}",
+        outcome.report
+    );
+}
+
+#[test]
+fn conditional_chi2_rejects_a_pdf_that_integrates_above_one() {
+    // Normalised, these pdfs have exactly the samples' shape; only the integral check can
+    // tell that they claim more than every sample there is.
+    let dirs = cosine_samples(7);
+    for scale in [1.03, 2.0] {
+        let (outcome, _) = run_chi2_conditional(&dirs, |d| scale * cosine_pdf(d));
+        assert_eq!(outcome.p_value, 0.0, "scale {scale}: {}", outcome.report);
+        assert!(
+            outcome.report.contains("integrates to"),
+            "scale {scale}: {}",
+            outcome.report
+        );
+        assert!(
+            (outcome.pdf_integral - scale).abs() < EXACT_QUADRATURE_TOLERANCE * scale,
+            "scale {scale}: {}",
+            outcome.report
+        );
+    }
+    // Just inside the tolerance it is the shape that decides, and the shape is right.
+    let scale = 1.0 + EXACT_QUADRATURE_TOLERANCE / 2.0;
+    let (outcome, _) = run_chi2_conditional(&dirs, |d| scale * cosine_pdf(d));
+    assert_passes(&outcome);
+}
+
+#[test]
+fn conditional_chi2_rejects_a_sampler_three_percent_off() {
+    // 3% of the samples come from the uniform hemisphere instead of the cosine lobe the pdf
+    // claims. The expected excess of the statistic over its degrees of freedom is n times the
+    // chi-square divergence of the binned distributions, 0.03^2 * (sum_cells u^2 / c - 1): per
+    // band of width dz = 1/36 that sum is dz / (2 z_mid), 2.77 over the 36 bands (it grows
+    // like ln(bands) / 2 from the horizon), so the excess is ~1600 on ~5200 degrees of freedom
+    // whose standard deviation is ~100: 16 sigma (this seed gives 7094, 19 sigma, p 4e-64).
+    // The seed is fixed, so the outcome is deterministic; the margin makes it no accident.
+    let mut rng = SplitMix64(8);
+    let dirs: Vec<Option<Vec3>> = (0..SAMPLE_COUNT)
+        .map(|_| {
+            let (u1, u2) = (rng.next_f64(), rng.next_f64());
+            Some(if rng.next_f64() < 0.03 {
+                // Uniform over the upper hemisphere: z = 1 - u1 in (0, 1].
+                sample_uniform_sphere(u1 / 2.0, u2)
+            } else {
+                sample_cosine(u1, u2)
+            })
+        })
+        .collect();
+    let (outcome, stray) = run_chi2_conditional(&dirs, cosine_pdf);
+    assert_eq!(stray, 0, "{}", outcome.report);
+    let dof = outcome.degrees_of_freedom as f64;
+    let sigmas = (outcome.statistic - dof) / (2.0 * dof).sqrt();
+    assert!(
+        outcome.p_value < 1e-12 && sigmas > 5.0,
+        "{sigmas:.1} sigma: {}",
+        outcome.report
+    );
+}
+
+#[test]
+fn conditional_chi2_counts_samples_where_the_pdf_is_zero() {
+    // One sample in a thousand leaks into the lower hemisphere, where the pdf is 0: the
+    // conditional test leaves them out of the shape and returns their count.
+    let mut rng = SplitMix64(4);
+    let mut leaked = 0;
+    let dirs: Vec<Option<Vec3>> = (0..SAMPLE_COUNT)
+        .map(|_| {
+            let d = sample_cosine(rng.next_f64(), rng.next_f64());
+            let leak = rng.next_f64() < 1e-3;
+            leaked += leak as u64;
+            Some(if leak { -d } else { d })
+        })
+        .collect();
+    assert!(leaked > 0);
+    let (_, stray) = run_chi2_conditional(&dirs, cosine_pdf);
+    assert_eq!(stray, leaked);
 }
 
 #[test]
@@ -271,23 +390,61 @@ fn exact_counts_give_zero_statistic_and_pool_small_cells() {
 }
 
 #[test]
-fn leftover_pool_below_threshold_is_merged_not_dropped() {
-    // 1 + 2 pooled reach only 3 < 5: the leftover joins the smallest regular category, so the
-    // samples in those cells still count against the fit.
+fn leftover_pool_without_a_group_stands_alone_and_shows_its_excess() {
+    // 1 + 2 pooled reach only 3 < 5 and no group forms: the leftover is a category of its
+    // own. With exact counts the statistic is 0 and there are three categories.
     let probabilities = [1.0, 2.0, 509.0, 512.0].map(|c| c / 1024.0);
+    let outcome = chi2_test(&[1, 2, 509, 512], &probabilities, 1024, MIN_EXPECTED);
+    assert_eq!(outcome.pooled_cells, 2, "{}", outcome.report);
+    assert_eq!(outcome.degrees_of_freedom, 2, "{}", outcome.report);
+    assert!(outcome.statistic.abs() < 1e-9, "{}", outcome.report);
+    // 40 samples where 3 are expected, offset by a 1.6 sigma deficit in the 509 cell: merged
+    // into that large cell (512 vs 512) the excess would vanish. Alone it contributes
+    // (40 - 3)^2 / 3 = 456.3, and the 509 cell (472 - 509)^2 / 509 = 2.7.
     let observed = [20, 20, 472, 512];
     let outcome = chi2_test(&observed, &probabilities, 1024, MIN_EXPECTED);
-    assert_eq!(outcome.pooled_cells, 2, "{}", outcome.report);
-    assert_eq!(outcome.degrees_of_freedom, 1, "{}", outcome.report);
-    // Categories (20 + 20 + 472 vs 1 + 2 + 509) and (512 vs 512): statistic 0.
+    let want = 37.0f64.powi(2) / 3.0 + 37.0f64.powi(2) / 509.0;
+    assert!(
+        (outcome.statistic - want).abs() < 1e-9,
+        "statistic {} instead of {want}:\n{}",
+        outcome.statistic,
+        outcome.report
+    );
+    assert!(outcome.p_value < 1e-6, "{}", outcome.report);
+}
+
+#[test]
+fn leftover_pool_joins_the_smallest_group_and_shows_its_excess() {
+    // Sorted expectations 1, 2, 3 | 4, 4 | 4 | 1006: 1 + 2 + 3 = 6 closes group A, 4 + 4 = 8
+    // group B, and the last 4 (below the threshold) is left over. It joins the smallest group,
+    // A (6 + 4 = 10), not B nor the large category.
+    let probabilities = [1.0, 2.0, 3.0, 4.0, 4.0, 4.0, 1006.0].map(|c| c / 1024.0);
+    let exact = [1, 2, 3, 4, 4, 4, 1006];
+    let outcome = chi2_test(&exact, &probabilities, 1024, MIN_EXPECTED);
+    assert_eq!(outcome.pooled_cells, 6, "{}", outcome.report);
+    // Categories: A with the leftover, B, and the large cell.
+    assert_eq!(outcome.degrees_of_freedom, 2, "{}", outcome.report);
     assert!(outcome.statistic.abs() < 1e-9, "{}", outcome.report);
-    // 60 samples where 3 are expected: dropping the leftover (as Mitsuba does) would ignore
-    // them and leave weak evidence (statistic ~10 on 1 dof from the other cells); merged into
-    // the absorbed category (4 observed, 12 expected) they dominate the statistic.
-    let probabilities = [1.0, 2.0, 509.0, 500.0].map(|c| c / 1024.0);
-    let observed = [30, 30, 460, 500];
+    assert!(
+        outcome.report.contains("merged into the smallest group"),
+        "{}",
+        outcome.report
+    );
+    // 40 samples where 4 are expected (the leftover is the last cell of expectation 4, sorting
+    // being stable), the surplus taken from the large cell: A holds 46 against 10, so the
+    // statistic is 36^2 / 10 + 36^2 / 1006 = 130.9 (merged into B it would be 36^2 / 12 + ...,
+    // into the large cell 0).
+    let mut observed = exact;
+    observed[5] = 40;
+    observed[6] = 1006 - 36;
     let outcome = chi2_test(&observed, &probabilities, 1024, MIN_EXPECTED);
-    assert!(outcome.statistic > 150.0, "{}", outcome.report);
+    let want = 36.0f64.powi(2) / 10.0 + 36.0f64.powi(2) / 1006.0;
+    assert!(
+        (outcome.statistic - want).abs() < 1e-9,
+        "statistic {} instead of {want}:\n{}",
+        outcome.statistic,
+        outcome.report
+    );
     assert!(outcome.p_value < 1e-6, "{}", outcome.report);
 }
 

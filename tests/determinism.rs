@@ -68,6 +68,32 @@ fn split_sample_ranges_merge_into_the_whole() {
 }
 
 #[test]
+fn aovs_do_not_depend_on_how_a_render_is_cut_into_dispatches() {
+    // The AOV layers, like the film, add sample by sample in index order: one call, or
+    // two cut anywhere, give the same bits (the batch size adapts to time, so a render
+    // cuts where the clock says).
+    let ctx = gpu();
+    let mut s = settings(32, 32, 24);
+    s.aovs = true;
+    let aovs = |cuts: &[u32]| {
+        let mut r = Renderer::new(Arc::clone(&ctx), &cornell(), s).unwrap();
+        for pair in cuts.windows(2) {
+            r.render(pair[0]..pair[1], RenderControl::default())
+                .unwrap();
+        }
+        r.read_aovs().unwrap().expect("AOVs asked for")
+    };
+    let whole = aovs(&[0, 24]);
+    for cuts in [&[0, 7, 24][..], &[0, 1, 2, 3, 24], &[0, 23, 24]] {
+        let cut = aovs(cuts);
+        assert!(
+            (&cut.albedo, &cut.normal, &cut.depth) == (&whole.albedo, &whole.normal, &whole.depth),
+            "AOVs rendered in dispatches {cuts:?} differ from one dispatch"
+        );
+    }
+}
+
+#[test]
 fn film_does_not_drift_over_100000_samples() {
     let ctx = gpu();
     // Nothing but an environment whose radiance is not a binary fraction: every sample is

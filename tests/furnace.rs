@@ -171,7 +171,7 @@ fn white() -> Material {
 }
 
 #[test]
-fn furnace_smooth_layers_of_white_conserve_energy_exactly() {
+fn furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors() {
     // Smooth glass, smooth white metal, a smooth coat over white diffuse, a thin wall:
     // no energy is lost or created, so the sphere reads exactly 1 up to Monte Carlo noise.
     let cases = [
@@ -279,7 +279,7 @@ fn furnace_white_glass_stays_white_at_every_roughness() {
 #[test]
 fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
     // Each case's expectation, bounded per configuration: within four standard errors of
-    // the mean (see `furnace_smooth_layers_of_white_conserve_energy_exactly`) plus 0.005
+    // the mean (see `furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors`) plus 0.005
     // for what the tabulated albedos (16² and 8² entries, interpolated) leave, with
     // BSDF sampling and with next-event estimation alike.
     //

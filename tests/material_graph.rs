@@ -2,6 +2,7 @@
 //! errors name the material, node and socket; dead branches emit no code; constants fold.
 
 use kiln::material::compile::link;
+use kiln::material::graph::{GROUP, GROUP_INPUT};
 use kiln::material::nodes::{Default as SocketDefault, ParamKind, library};
 use kiln::material::{Graph, Node, Param, SocketType, compile, materials_wgsl, parse_material};
 use kiln::render::kernel::{KernelFeatures, path_tracing_kernel};
@@ -230,6 +231,45 @@ fn nodes_md_is_generated_from_the_declarations() {
         committed == kiln::material::docs::nodes_markdown(),
         "docs/NODES.md is stale: run `cargo run -- material nodes > docs/NODES.md`"
     );
+}
+
+/// What the compiler knows of a node comes from its declaration (folding, generated code:
+/// `src/material/nodes.rs`); it names no node type of the library, and the structural
+/// group kinds only through their constants.
+#[test]
+fn the_compiler_names_no_node_type() {
+    let source = include_str!("../src/material/compile.rs");
+    assert!(library().len() > 30, "library of {} nodes", library().len());
+    let named: Vec<&str> = library()
+        .iter()
+        .map(|d| d.kind)
+        .chain([GROUP, GROUP_INPUT])
+        .filter(|kind| source.contains(&format!("\"{kind}\"")))
+        .collect();
+    assert!(
+        named.is_empty(),
+        "src/material/compile.rs names node types {named:?}: declare their behaviour on the node"
+    );
+}
+
+/// The compiler learns what a surface does (transmission, emission, lobes) from the
+/// declaration of the node feeding the output: every node with a BSDF output declares it,
+/// and no other node does.
+#[test]
+fn every_surface_node_declares_its_traits() {
+    let mut surfaces = 0;
+    for def in library() {
+        let surface = def.outputs.iter().any(|o| o.ty == SocketType::Bsdf);
+        assert_eq!(
+            def.traits.is_some(),
+            surface,
+            "{}: traits declared {}, BSDF output {surface}",
+            def.kind,
+            def.traits.is_some()
+        );
+        surfaces += usize::from(surface);
+    }
+    assert!(surfaces >= 1, "no surface node in the library");
 }
 
 #[test]

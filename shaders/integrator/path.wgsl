@@ -32,15 +32,15 @@ fn material_principled(m: Material) -> Principled {
     return principled_unpack(
         m.principled[0], m.principled[1], m.principled[2], m.principled[3],
         m.principled[4], m.principled[5], m.principled[6],
-        m.flags.x != 0u,
-        bitcast<f32>(m.flags.z),
+        m.thin_walled != 0u,
+        m.diffuse_roughness,
     );
 }
 
 // The fixed-parameter material of the material buffer (materials without a graph).
 fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
     let m = materials[id];
-    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, bitcast<f32>(m.flags.w));
+    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, m.anisotropy_rotation);
 }
 
 // A small hash of the instance index in [0, 1), for the Object Info node.
@@ -86,7 +86,7 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     // One light: the environment, an emissive triangle or an analytic light, each family
     // picked with the probability the host estimated from its power.
     let p_env = params.environment.w;
-    let p_tri = params.light_totals.y;
+    let p_tri = params.triangle_pick;
     let u_pick = rand();
     let u = rand2();
     var ls: LightSample;
@@ -97,7 +97,7 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
         ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / p_tri, u);
         ls.pdf *= p_tri;
     } else {
-        if (!FEATURE_ANALYTIC_LIGHTS || params.light_totals.z < 1.0) {
+        if (!FEATURE_ANALYTIC_LIGHTS || params.analytic_light_count == 0u) {
             return vec3<f32>(0.0);
         }
         ls = sample_analytic_light(pick_analytic_light(u_pick), s.pe.p, u);
@@ -144,7 +144,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let t_scene = select(3.0e38, hit.t, hit.hit);
         // Sphere lights and sun disks in front of the surface (or the sky).
         var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
-        if (FEATURE_ANALYTIC_LIGHTS && params.light_totals.z >= 1.0) {
+        if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
             light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
         }
         if (any(extinction > vec3<f32>(0.0))) {
@@ -197,14 +197,14 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             if (nee && !prev_delta) {
                 // Light sampling knows the surface by its buffer emission (0 for emission
                 // that varies over it, which only BSDF sampling finds).
-                let light_pdf = params.light_totals.y * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
+                let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
             radiance += throughput * emission * w;
         }
         // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
         // Surfaces light passes through keep their front, so inside and outside differ.
-        let transmissive = material.flags.y != 0u;
+        let transmissive = material.transmissive != 0u;
         let flip = !transmissive && !front;
         let ng = select(s.ng, -s.ng, flip);
         let ns = select(s.ns, -s.ns, flip);
@@ -275,8 +275,15 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     var compensation = film_compensation[pixel];
     var non_finite = 0u;
     rays_traced = 0u;
+    // The AOV sums are carried from the stored ones and added to sample by sample, as the
+    // film is, so that they do not depend on how a render splits into dispatches (the
+    // batch size adapts to time).
     var aov_a = vec4<f32>(0.0);
     var aov_n = vec4<f32>(0.0);
+    if (FEATURE_AOVS) {
+        aov_a = film_aov[2u * pixel];
+        aov_n = film_aov[2u * pixel + 1u];
+    }
     for (var i = 0u; i < params.sample_count; i++) {
         rng_seed(pixel, params.sample_start + i, params.seed);
         aov_albedo = vec3<f32>(0.0);
@@ -301,8 +308,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     film_sum[pixel] = sum;
     film_compensation[pixel] = compensation;
     if (FEATURE_AOVS) {
-        film_aov[2u * pixel] += aov_a;
-        film_aov[2u * pixel + 1u] += aov_n;
+        film_aov[2u * pixel] = aov_a;
+        film_aov[2u * pixel + 1u] = aov_n;
     }
     atomicAdd(&stats.rays, rays_traced);
     if (non_finite > 0u) {

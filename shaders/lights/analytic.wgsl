@@ -24,7 +24,7 @@ fn spot_falloff(cos_axis: f32, cos_outer: f32, cos_inner: f32) -> f32 {
 // The light picked by u in [0, 1) among the analytic lights (u counts from where the
 // environment's and the triangles' pick probabilities end).
 fn pick_analytic_light(u: f32) -> u32 {
-    let count = u32(params.light_totals.z);
+    let count = params.analytic_light_count;
     for (var i = 0u; i < count; i++) {
         if (u < analytic_lights[i].shape.w) {
             return i;
@@ -35,11 +35,10 @@ fn pick_analytic_light(u: f32) -> u32 {
 
 fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample {
     let l = analytic_lights[index];
-    let kind = u32(l.position.w);
     let pick = l.intensity.w;
     let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, false);
-    if (kind == 2u) {
-        let to_light = -normalize(l.position.xyz);
+    if (l.kind == LIGHT_DISTANT) {
+        let to_light = -normalize(l.position);
         let one_minus_cos = l.axis.w;
         if (one_minus_cos <= 0.0) {
             return LightSample(to_light, 3.0e38, l.intensity.rgb, pick, false);
@@ -50,14 +49,14 @@ fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample 
         let radiance = l.intensity.rgb / (PI * (1.0 - cos_max * cos_max));
         return LightSample(wi, 3.0e38, radiance, pick / (2.0 * PI * one_minus_cos), true);
     }
-    let to = l.position.xyz - p;
+    let to = l.position - p;
     let d2 = dot(to, to);
     if (d2 == 0.0) {
         return none;
     }
     let d = sqrt(d2);
     var falloff = 1.0;
-    if (kind == 1u) {
+    if (l.kind == LIGHT_SPOT) {
         falloff = spot_falloff(dot(-to / d, l.axis.xyz), l.shape.x, l.shape.y);
         if (falloff <= 0.0) {
             return none;
@@ -92,17 +91,16 @@ struct AnalyticHit {
 
 fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
     var result = AnalyticHit(false, t_max, vec3<f32>(0.0), 0.0);
-    let count = u32(params.light_totals.z);
+    let count = params.analytic_light_count;
     for (var i = 0u; i < count; i++) {
         let l = analytic_lights[i];
-        let kind = u32(l.position.w);
         let pick = l.intensity.w;
-        if (kind == 2u) {
+        if (l.kind == LIGHT_DISTANT) {
             let one_minus_cos = l.axis.w;
             if (one_minus_cos <= 0.0 || result.t < 3.0e38) {
                 continue;
             }
-            if (1.0 - dot(d, -normalize(l.position.xyz)) <= one_minus_cos) {
+            if (1.0 - dot(d, -normalize(l.position)) <= one_minus_cos) {
                 let cos_max = 1.0 - one_minus_cos;
                 result.hit = true;
                 result.radiance += l.intensity.rgb / (PI * (1.0 - cos_max * cos_max));
@@ -117,7 +115,7 @@ fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
         // Ray–sphere intersection in the form of Haines et al. 2019 ("Precision
         // Improvements for Ray/Sphere Intersection"): the discriminant from the distance
         // of the centre to the ray, not from b² - c, which cancels catastrophically.
-        let f = o - l.position.xyz;
+        let f = o - l.position;
         let d2 = dot(f, f);
         if (d2 <= r * r) {
             // Inside the sphere: next-event estimation treats it as a point light too.
@@ -134,7 +132,7 @@ fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
             continue;
         }
         var falloff = 1.0;
-        if (kind == 1u) {
+        if (l.kind == LIGHT_SPOT) {
             falloff = spot_falloff(dot(normalize(f), l.axis.xyz), l.shape.x, l.shape.y);
         }
         let sin2_max = r * r / d2;

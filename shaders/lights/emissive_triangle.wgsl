@@ -56,8 +56,8 @@ fn sample_light_triangle(p: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample
 // an emitter of radiance `emission` at distance `dist` with cosine `cos_light` there.
 // Because the pick probability is proportional to luminance times area, the area cancels.
 fn light_triangle_pdf(emission: vec3<f32>, dist: f32, cos_light: f32) -> f32 {
-    if (cos_light <= 0.0 || params.light_totals.x <= 0.0) {
+    if (cos_light <= 0.0 || params.light_power <= 0.0) {
         return 0.0;
     }
-    return luminance(emission) / params.light_totals.x * dist * dist / cos_light;
+    return luminance(emission) / params.light_power * dist * dist / cos_light;
 }

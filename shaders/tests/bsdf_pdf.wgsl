@@ -8,8 +8,14 @@
 // are integrated again with a FINE × FINE midpoint rule in (θ, φ) weighted by sin θ:
 // near the poles uniform steps in θ resolve narrow lobes that steps in cos θ cannot.
 //
+// The fine rule's band edges in θ come from the host (computed in f64): lavapipe's acos errs
+// by up to 1.6e-4 rad, which would shift every band by up to half a percent of its width
+// and bias the integrals by as much, at every quadrature order alike.
+//
 // probe_in: [0] = (configs, 0, theta bins, phi bins), [1] = (0, 0, k, fine), then CONFIG_STRIDE
-// vec4s per configuration, whose first vec4's z and w, when not 0, set `fine` and `k` for it. probe_out: configs × cells probabilities (f32).
+// vec4s per configuration, whose first vec4's z and w, when not 0, set `fine` and `k` for it,
+// then the bands' θ edges (theta bins + 1, f32 bits in x). probe_out: configs × cells
+// probabilities (f32).
 
 @group(1) @binding(0) var<storage, read> probe_in: array<vec4<u32>>;
 @group(1) @binding(1) var<storage, read_write> probe_out: array<f32>;
@@ -49,9 +55,7 @@ fn integrate_coarse(p: LobeParams, z_top: f32, dz: f32, f0: f32, dphi: f32, k: u
     return vec2<f32>(sum * dz * dphi / f32(k * k), spread);
 }
 
-fn integrate_fine(p: LobeParams, z_top: f32, dz: f32, f0: f32, dphi: f32, k: u32) -> f32 {
-    let t0 = acos(clamp(z_top, -1.0, 1.0));
-    let t1 = acos(clamp(z_top - dz, -1.0, 1.0));
+fn integrate_fine(p: LobeParams, t0: f32, t1: f32, dz: f32, f0: f32, dphi: f32, k: u32) -> f32 {
     let dt = (t1 - t0) / f32(k);
     var sum = 0.0;
     var weights = 0.0;
@@ -94,7 +98,11 @@ fn bsdf_pdf(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workgrou
     let coarse = integrate_coarse(p, z_top, dz, f0, dphi, k);
     var total = coarse.x;
     if (coarse.y > 2.0) {
-        total = integrate_fine(p, z_top, dz, f0, dphi, fine);
+        let edges = 2u + CONFIG_STRIDE * header.x;
+        let band = cell / header.w;
+        let t0 = bitcast<f32>(probe_in[edges + band].x);
+        let t1 = bitcast<f32>(probe_in[edges + band + 1u].x);
+        total = integrate_fine(p, t0, t1, dz, f0, dphi, fine);
     }
     probe_out[index] = total;
 }

@@ -14,8 +14,10 @@ use std::fmt::Write as _;
 
 use thiserror::Error;
 
-use super::graph::{Conversion, Graph, Input, Link, Node, Param, RampStop, SocketType, Value};
-use super::nodes::{self, Code, Default, NodeDef, ParamKind};
+use super::graph::{
+    Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, SocketType, Value,
+};
+use super::nodes::{self, Code, Default, Emit, MATERIAL_OUTPUT, NodeDef, ParamKind, Params};
 
 /// A graph error, with where it is.
 #[derive(Clone, Debug, Error, PartialEq)]
@@ -271,13 +273,13 @@ impl<'a> Flattener<'a> {
         id: &str,
         node: &Node,
     ) -> Result<(&'a str, &'a super::graph::Group), GraphError> {
-        let name = match node.params.get("group") {
+        let name = match node.params.get(GROUP_PARAM) {
             Some(Param::Text(name)) => name.as_str(),
             _ => {
                 return Err(self.ctx.err(
                     Some(id),
                     None,
-                    "a group node needs params: { \"group\": \"name\" }".into(),
+                    format!("a {GROUP} node needs params: {{ \"{GROUP_PARAM}\": \"name\" }}"),
                 ));
             }
         };
@@ -294,7 +296,7 @@ impl<'a> Flattener<'a> {
         for (id, node) in scope.nodes {
             let full = format!("{}{id}", scope.prefix);
             match node.kind.as_str() {
-                "group" => {
+                GROUP => {
                     if scope.depth >= MAX_GROUP_DEPTH {
                         return Err(self.ctx.err(
                             Some(&full),
@@ -310,12 +312,12 @@ impl<'a> Flattener<'a> {
                         depth: scope.depth + 1,
                     })?;
                 }
-                "group_input" => {
+                GROUP_INPUT => {
                     if scope.instance.is_none() {
                         return Err(self.ctx.err(
                             Some(&full),
                             None,
-                            "group_input is only meaningful inside a group".into(),
+                            format!("{GROUP_INPUT} is only meaningful inside a group"),
                         ));
                     }
                 }
@@ -371,7 +373,7 @@ impl<'a> Flattener<'a> {
     fn resolve(&mut self, scope: &Scope<'a>) -> Result<(), GraphError> {
         for (id, node) in scope.nodes {
             let full = format!("{}{id}", scope.prefix);
-            if node.kind == "group" {
+            if node.kind == GROUP {
                 let (_, group) = self.group(&full, node)?;
                 for name in node.inputs.keys() {
                     if !group.inputs.iter().any(|s| &s.name == name) {
@@ -431,7 +433,7 @@ impl<'a> Flattener<'a> {
         };
         let full = format!("{}{}", scope.prefix, link.node);
         match target.kind.as_str() {
-            "group" => {
+            GROUP => {
                 let (_, group) = self.group(&full, target)?;
                 let Some(inner) = group.links.get(&link.socket) else {
                     return Err(self.ctx.err(
@@ -457,12 +459,12 @@ impl<'a> Flattener<'a> {
                     hops + 1,
                 )
             }
-            "group_input" => {
+            GROUP_INPUT => {
                 let Some((instance, outer, group)) = &scope.instance else {
                     return Err(self.ctx.err(
                         Some(&full),
                         None,
-                        "group_input outside a group".into(),
+                        format!("{GROUP_INPUT} outside a group"),
                     ));
                 };
                 let Some(declared) = group.inputs.iter().find(|s| s.name == link.socket) else {
@@ -627,25 +629,29 @@ fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
 fn find_output(ctx: &Ctx, graph: &Graph, flat: &[FlatNode]) -> Result<usize, GraphError> {
     if let Some(id) = &graph.output {
         return match flat.iter().position(|n| &n.id == id) {
-            Some(i) if flat[i].def.kind == "material_output" => Ok(i),
+            Some(i) if flat[i].def.kind == MATERIAL_OUTPUT => Ok(i),
             Some(_) => Err(ctx.err(
                 Some(id),
                 None,
-                "the output must be a material_output node".into(),
+                format!("the output must be a {MATERIAL_OUTPUT} node"),
             )),
             None => Err(ctx.err(None, None, format!("output node \"{id}\" does not exist"))),
         };
     }
     let outputs: Vec<usize> = (0..flat.len())
-        .filter(|&i| flat[i].def.kind == "material_output" && !flat[i].id.contains('/'))
+        .filter(|&i| flat[i].def.kind == MATERIAL_OUTPUT && !flat[i].id.contains('/'))
         .collect();
     match outputs.as_slice() {
         [one] => Ok(*one),
-        [] => Err(ctx.err(None, None, "the graph has no material_output node".into())),
+        [] => Err(ctx.err(
+            None,
+            None,
+            format!("the graph has no {MATERIAL_OUTPUT} node"),
+        )),
         _ => Err(ctx.err(
             None,
             None,
-            "several material_output nodes: say which with `output: \"id\"`".into(),
+            format!("several {MATERIAL_OUTPUT} nodes: say which with `output: \"id\"`"),
         )),
     }
 }
@@ -733,103 +739,9 @@ fn constant(node: &FlatNode, input: usize) -> Option<Value> {
     }
 }
 
-fn as_f32(v: &Value) -> f32 {
-    match v {
-        Value::Float(x) => *x,
-        Value::Vec2(a) => (a[0] + a[1]) / 2.0,
-        Value::Vec3(a) => (a[0] + a[1] + a[2]) / 3.0,
-    }
-}
-
-fn as_vec3(v: &Value) -> [f32; 3] {
-    match v {
-        Value::Float(x) => [*x; 3],
-        Value::Vec2(a) => [a[0], a[1], 0.0],
-        Value::Vec3(a) => *a,
-    }
-}
-
-fn enum_index(node: &FlatNode, name: &str) -> usize {
-    match (node.def.param(name).map(|p| &p.kind), node.params.get(name)) {
-        (Some(ParamKind::Enum(options)), Some(Param::Text(t))) => {
-            options.iter().position(|o| o == t).unwrap_or(0)
-        }
-        _ => 0,
-    }
-}
-
-fn bool_param(node: &FlatNode, name: &str) -> bool {
-    match (node.def.param(name).map(|p| &p.kind), node.params.get(name)) {
-        (_, Some(Param::Bool(b))) => *b,
-        (Some(ParamKind::Bool(default)), _) => *default,
-        _ => false,
-    }
-}
-
-/// The outputs of nodes whose every input is constant and whose result the CPU computes
-/// exactly as the WGSL does (constants, component shuffles and the elementary math
-/// operations); other nodes stay as code.
-fn fold(node: &FlatNode, inputs: &[Value]) -> Option<Vec<Value>> {
-    let f = |i: usize| as_f32(&inputs[i]);
-    let v = |i: usize| as_vec3(&inputs[i]);
-    Some(match node.def.kind {
-        "value" => vec![Value::Float(f(0))],
-        "rgb" | "vector" => vec![Value::Vec3(v(0))],
-        "combine_xyz" => vec![Value::Vec3([f(0), f(1), f(2)])],
-        "separate_xyz" => {
-            let a = v(0);
-            vec![Value::Float(a[0]), Value::Float(a[1]), Value::Float(a[2])]
-        }
-        "mix_float" => {
-            let t = if bool_param(node, "clamp_factor") {
-                f(0).clamp(0.0, 1.0)
-            } else {
-                f(0)
-            };
-            vec![Value::Float(f(1) + (f(2) - f(1)) * t)]
-        }
-        "math" => {
-            let (a, b) = (f(0), f(1));
-            let r = match nodes::MATH_OPERATIONS[enum_index(node, "operation")] {
-                "add" => a + b,
-                "subtract" => a - b,
-                "multiply" => a * b,
-                "divide" => {
-                    if b == 0.0 {
-                        0.0
-                    } else {
-                        a / b
-                    }
-                }
-                "minimum" => a.min(b),
-                "maximum" => a.max(b),
-                "absolute" => a.abs(),
-                "floor" => a.floor(),
-                "ceil" => a.ceil(),
-                _ => return None,
-            };
-            let r = if bool_param(node, "clamp") {
-                r.clamp(0.0, 1.0)
-            } else {
-                r
-            };
-            vec![Value::Float(r)]
-        }
-        "clamp" => {
-            let (x, lo, hi) = (f(0), f(1), f(2));
-            let (lo, hi) = if enum_index(node, "clamp_type") == 1 && lo > hi {
-                (hi, lo)
-            } else {
-                (lo, hi)
-            };
-            vec![Value::Float(x.max(lo).min(hi))]
-        }
-        "invert" => {
-            let (t, c) = (f(0), v(1));
-            vec![Value::Vec3(c.map(|x| x + (1.0 - 2.0 * x) * t))]
-        }
-        _ => return None,
-    })
+/// The node's parameters with the declaration's defaults.
+fn params(node: &FlatNode) -> Params<'_> {
+    Params::new(node.def, &node.params)
 }
 
 /// Replaces links from foldable nodes with their constant outputs, in topological order
@@ -856,7 +768,7 @@ fn fold_constants(flat: &mut [FlatNode], output: usize) {
             .map(|i| constant(&flat[n], i))
             .collect();
         if let Some(inputs) = inputs {
-            if let Some(values) = fold(&flat[n], &inputs) {
+            if let Some(values) = flat[n].def.fold.and_then(|f| f(&inputs, params(&flat[n]))) {
                 folded.insert(n, values);
             }
         }
@@ -865,12 +777,12 @@ fn fold_constants(flat: &mut [FlatNode], output: usize) {
 
 fn convert_const(v: &Value, from: SocketType, to: SocketType) -> Value {
     match from.converts_to(to) {
-        Some(Conversion::Splat) => Value::Vec3([as_f32(v); 3]),
+        Some(Conversion::Splat) => Value::Vec3([v.as_f32(); 3]),
         Some(Conversion::Luminance) => {
-            let c = as_vec3(v);
+            let c = v.as_vec3();
             Value::Float(0.2126 * c[0] + 0.7152 * c[1] + 0.0722 * c[2])
         }
-        Some(Conversion::Average) => Value::Float(as_f32(v)),
+        Some(Conversion::Average) => Value::Float(v.as_f32()),
         _ => v.clone(),
     }
 }
@@ -889,7 +801,7 @@ fn merge_identical(flat: &mut [FlatNode], root: usize) {
                 }
             }
         }
-        if flat[n].def.kind == "material_output" {
+        if flat[n].def.kind == MATERIAL_OUTPUT {
             continue;
         }
         let key = format!(
@@ -927,40 +839,20 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         }
     };
     let node = &flat[surface];
-    let input = |name: &str| {
-        node.def
+    // Only nodes with a BSDF output feed the material output, and each declares its
+    // traits (a test checks the library).
+    let traits = node.def.traits.expect("a surface node declares its traits");
+    let known = |name: &str| {
+        // The traits read the inputs of their own declaration.
+        let i = node
+            .def
             .inputs
             .iter()
             .position(|s| s.name == name)
-            .expect("principled input")
+            .unwrap_or_else(|| panic!("{} has no input {name}", node.def.kind));
+        constant(node, i)
     };
-    let known = |name: &str| constant(node, input(name));
-    let transmission = known("transmission_weight").map(|v| as_f32(&v));
-    let transmissive = bool_param(node, "thin_walled") || transmission != Some(0.0);
-    let (strength, color) = (known("emission_strength"), known("emission_color"));
-    let (constant_emission, varying_emission) = match (strength, color) {
-        (Some(s), Some(c)) => {
-            let e = as_vec3(&c).map(|x| x.max(0.0) * as_f32(&s).max(0.0));
-            (e.iter().any(|&x| x > 0.0).then_some(e), false)
-        }
-        (Some(s), None) if as_f32(&s) == 0.0 => (None, false),
-        (None, Some(c)) if as_vec3(&c) == [0.0; 3] => (None, false),
-        _ => (None, true),
-    };
-    let weight = |name: &str| known(name).map(|v| as_f32(&v));
-    let lobes = super::principled_lobes(
-        weight("coat_weight"),
-        weight("sheen_weight"),
-        weight("metallic"),
-        transmission,
-        weight("specular_weight"),
-    );
-    MaterialTraits {
-        transmissive,
-        constant_emission,
-        varying_emission,
-        lobes,
-    }
+    traits(&known, params(node))
 }
 
 // -------------------------------------------------------------------- emission
@@ -1050,7 +942,7 @@ impl Emitter<'_> {
     }
 
     fn output_expr(&self, n: usize, o: usize) -> String {
-        if self.flat[n].def.kind == "material_output" {
+        if self.flat[n].def.kind == MATERIAL_OUTPUT {
             return format!("n{n}");
         }
         format!("n{n}{}", self.flat[n].def.outputs[o].field)
@@ -1081,8 +973,8 @@ impl Emitter<'_> {
         let node = &self.flat[n];
         let def = node.def.param(name)?;
         Some(match &def.kind {
-            ParamKind::Enum(_) => format!("{}u", enum_index(node, name)),
-            ParamKind::Bool(_) => bool_param(node, name).to_string(),
+            ParamKind::Enum(_) => format!("{}u", params(node).choice(name)),
+            ParamKind::Bool(_) => params(node).flag(name).to_string(),
             ParamKind::Ramp => return None,
             ParamKind::File => {
                 let file = match node.params.get(name) {
@@ -1098,10 +990,10 @@ impl Emitter<'_> {
 
     fn node_code(&mut self, n: usize) -> Result<String, GraphError> {
         let node = &self.flat[n];
-        match (&node.def.code, node.def.kind) {
-            (Code::Template(t), _) => {
+        match node.def.code {
+            Code::Template(t) => {
                 let mut code = String::new();
-                let mut rest = *t;
+                let mut rest = t;
                 while let Some(start) = rest.find('{') {
                     code.push_str(&rest[..start]);
                     let end = rest[start..]
@@ -1122,179 +1014,80 @@ impl Emitter<'_> {
                 self.calls.extend(called_functions(t));
                 Ok(code)
             }
-            (_, "color_ramp") => Ok(self.color_ramp(n)),
-            (_, "bump") => self.bump(n),
-            (_, "principled_bsdf") => Ok(self.principled(n)),
-            (_, "material_output") => Ok(match &node.inputs[0] {
-                Src::Out(m, o) => self.output_expr(*m, *o),
-                _ => default_surface(),
-            }),
-            _ => unreachable!("special node {}", node.def.kind),
+            Code::Generated(generate) => generate(&mut NodeEmitter { emitter: self, n }),
         }
     }
 
-    fn color_ramp(&mut self, n: usize) -> String {
-        let node = &self.flat[n];
-        let mut stops: Vec<RampStop> = match node.params.get("stops") {
-            Some(Param::Ramp(s)) => s.clone(),
-            _ => vec![
-                RampStop {
-                    position: 0.0,
-                    color: [0.0, 0.0, 0.0, 1.0],
-                },
-                RampStop {
-                    position: 1.0,
-                    color: [1.0; 4],
-                },
-            ],
-        };
-        stops.sort_by(|a, b| a.position.total_cmp(&b.position));
-        let mode = enum_index(node, "interpolation");
-        let name = format!("{}_ramp{n}", self.prefix);
-        let c = |s: &RampStop| {
-            format!(
-                "vec4<f32>({:?}, {:?}, {:?}, {:?})",
-                s.color[0], s.color[1], s.color[2], s.color[3]
-            )
-        };
-        let mut f = format!("fn {name}(t: f32) -> vec4<f32> {{\n");
-        let _ = writeln!(
-            f,
-            "    if (!(t > {:?})) {{ return {}; }}",
-            stops[0].position,
-            c(&stops[0])
-        );
-        for w in stops.windows(2) {
-            let _ = writeln!(
-                f,
-                "    if (t <= {:?}) {{ return nd_ramp_mix({}, {}, {:?}, {:?}, t, {mode}u); }}",
-                w[1].position,
-                c(&w[0]),
-                c(&w[1]),
-                w[0].position,
-                w[1].position
-            );
-        }
-        let _ = writeln!(f, "    return {};\n}}\n", c(stops.last().expect("stops")));
-        if self.helper_names.insert(name.clone()) {
-            self.helpers.push_str(&f);
-        }
-        self.calls.insert("nd_ramp_mix".into());
-        let fac = self.input_expr(n, 0);
-        format!("{name}({fac})")
-    }
-
-    fn bump(&mut self, n: usize) -> Result<String, GraphError> {
-        let node = &self.flat[n];
-        let height = node
-            .def
-            .inputs
+    /// The index of input `name` of node `n`.
+    fn input_index(&self, n: usize, name: &str) -> usize {
+        let def = self.flat[n].def;
+        // Generated code names the inputs of its own declaration; a name it lacks is a bug
+        // in the library, caught by the test that compiles every node.
+        def.inputs
             .iter()
-            .position(|s| s.name == "height")
-            .expect("height");
-        let normal = self.input_expr(n, 3);
-        let Src::Out(m, o) = node.inputs[height] else {
-            // A constant height has no slope.
-            return Ok(normal);
-        };
-        // The height's subgraph becomes a function of the shading point, evaluated at the
-        // point and one step along each tangent direction.
-        let name = format!("{}_height{n}", self.prefix);
-        if !self.helper_names.contains(&name) {
-            let body = self.function_body(&[(m, o)])?;
-            let h = convert(
-                body.roots[0].clone(),
-                output_type(self.flat, m, o),
-                SocketType::Float,
-            );
-            let _ = write!(
-                self.helpers,
-                "fn {name}(sp: ShadingPoint) -> f32 {{\n{}    return {h};\n}}\n\n",
-                body.statements
-            );
-            self.helper_names.insert(name.clone());
-        }
-        let strength = self.input_expr(n, 0);
-        let distance = self.input_expr(n, 1);
-        let invert = bool_param(&self.flat[n], "invert");
-        self.calls.extend(
-            [
-                "frame_from_normal_tangent",
-                "nd_bump",
-                "nd_bump_step",
-                "nd_displaced",
-            ]
-            .map(String::from),
-        );
-        Ok(format!(
-            "nd_bump({strength}, {distance}, {name}(sp), {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).t, nd_bump_step(sp))), \
-             {name}(nd_displaced(sp, frame_from_normal_tangent({normal}, sp.dpdu, 0.0).b, nd_bump_step(sp))), nd_bump_step(sp), {normal}, \
-             frame_from_normal_tangent({normal}, sp.dpdu, 0.0), {invert})"
-        ))
-    }
-
-    fn principled(&mut self, n: usize) -> String {
-        let thin = bool_param(&self.flat[n], "thin_walled");
-        let mut e = |name: &str| {
-            let i = self.flat[n]
-                .def
-                .inputs
-                .iter()
-                .position(|s| s.name == name)
-                .expect("principled input");
-            self.input_expr(n, i)
-        };
-        let code = format!(
-            "MaterialEval(Principled(nd_unit3({base_color}), nd_unit({base_weight}), nd_unit({metallic}), nd_unit({roughness}), \
-             nd_unit({anisotropy}), max(nd_finite({specular_weight}, 1.0), 0.0), nd_unit3({specular_color}), \
-             clamp(nd_finite({ior}, 1.5), 1.0, 100.0), nd_unit({transmission_weight}), nd_unit3({transmission_color}), \
-             max(nd_finite({transmission_depth}, 0.0), 0.0), nd_unit({coat_weight}), nd_unit({coat_roughness}), \
-             clamp(nd_finite({coat_ior}, 1.5), 1.0, 100.0), nd_unit3({coat_color}), nd_unit({sheen_weight}), \
-             nd_unit3({sheen_color}), nd_unit({sheen_roughness}), {thin}, nd_unit({diffuse_roughness})), \
-             max(nd_finite3({emission_color}), vec3<f32>(0.0)) * max(nd_finite({emission_strength}, 0.0), 0.0), \
-             nd_unit({alpha}), nd_safe_normal({normal}, sp.n), nd_finite({anisotropy_rotation}, 0.0))",
-            base_color = e("base_color"),
-            base_weight = e("base_weight"),
-            metallic = e("metallic"),
-            roughness = e("roughness"),
-            anisotropy = e("anisotropy"),
-            specular_weight = e("specular_weight"),
-            specular_color = e("specular_color"),
-            ior = e("ior"),
-            transmission_weight = e("transmission_weight"),
-            transmission_color = e("transmission_color"),
-            transmission_depth = e("transmission_depth"),
-            coat_weight = e("coat_weight"),
-            coat_roughness = e("coat_roughness"),
-            coat_ior = e("coat_ior"),
-            coat_color = e("coat_color"),
-            sheen_weight = e("sheen_weight"),
-            sheen_color = e("sheen_color"),
-            sheen_roughness = e("sheen_roughness"),
-            diffuse_roughness = e("diffuse_roughness"),
-            emission_color = e("emission_color"),
-            emission_strength = e("emission_strength"),
-            alpha = e("alpha"),
-            normal = e("normal"),
-            anisotropy_rotation = e("anisotropy_rotation"),
-        );
-        self.calls.extend(
-            [
-                "nd_unit",
-                "nd_unit3",
-                "nd_finite",
-                "nd_finite3",
-                "nd_safe_normal",
-            ]
-            .map(String::from),
-        );
-        code
+            .position(|s| s.name == name)
+            .unwrap_or_else(|| panic!("{} has no input {name}", def.kind))
     }
 }
 
-/// An unconnected material output: Blender's default grey principled surface.
-fn default_surface() -> String {
-    "nd_default_surface(sp)".into()
+/// What a [`Code::Generated`] node sees of the emitter: its own inputs, parameters and
+/// helper functions.
+struct NodeEmitter<'e, 'a> {
+    emitter: &'e mut Emitter<'a>,
+    n: usize,
+}
+
+impl Emit for NodeEmitter<'_, '_> {
+    fn input(&mut self, name: &str) -> String {
+        let i = self.emitter.input_index(self.n, name);
+        self.emitter.input_expr(self.n, i)
+    }
+
+    fn params(&self) -> Params<'_> {
+        params(&self.emitter.flat[self.n])
+    }
+
+    fn helper_name(&self, what: &str) -> String {
+        format!("{}_{what}{}", self.emitter.prefix, self.n)
+    }
+
+    fn add_helper(&mut self, name: &str, code: String) {
+        if self.emitter.helper_names.insert(name.to_owned()) {
+            self.emitter.helpers.push_str(&code);
+        }
+    }
+
+    fn call(&mut self, functions: &[&str]) {
+        self.emitter
+            .calls
+            .extend(functions.iter().map(|f| (*f).to_owned()));
+    }
+
+    fn input_function(&mut self, name: &str) -> Result<Option<String>, GraphError> {
+        let (n, i) = (self.n, self.emitter.input_index(self.n, name));
+        let Src::Out(m, o) = self.emitter.flat[n].inputs[i] else {
+            return Ok(None);
+        };
+        let function = self.helper_name(name);
+        if !self.emitter.helper_names.contains(&function) {
+            // The subgraph's own helpers (a ramp inside a bump's height) come first.
+            let body = self.emitter.function_body(&[(m, o)])?;
+            let ty = self.emitter.flat[n].def.inputs[i].ty;
+            let value = convert(
+                body.roots[0].clone(),
+                output_type(self.emitter.flat, m, o),
+                ty,
+            );
+            let _ = write!(
+                self.emitter.helpers,
+                "fn {function}(sp: ShadingPoint) -> {} {{\n{}    return {value};\n}}\n\n",
+                ty.wgsl(),
+                body.statements
+            );
+            self.emitter.helper_names.insert(function.clone());
+        }
+        Ok(Some(function))
+    }
 }
 
 /// Links used for tests and tools: a node's output as `node.socket`.

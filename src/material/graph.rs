@@ -77,6 +77,26 @@ pub enum Value {
     Vec3([f32; 3]),
 }
 
+impl Value {
+    /// As a float: a vector's mean.
+    pub fn as_f32(&self) -> f32 {
+        match self {
+            Value::Float(x) => *x,
+            Value::Vec2(a) => (a[0] + a[1]) / 2.0,
+            Value::Vec3(a) => (a[0] + a[1] + a[2]) / 3.0,
+        }
+    }
+
+    /// As three floats: a float in every component, a vec2 with z = 0.
+    pub fn as_vec3(&self) -> [f32; 3] {
+        match self {
+            Value::Float(x) => [*x; 3],
+            Value::Vec2(a) => [a[0], a[1], 0.0],
+            Value::Vec3(a) => *a,
+        }
+    }
+}
+
 /// What feeds an input: a constant, or a link written `"node.output"`.
 #[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
 #[serde(untagged)]
@@ -210,6 +230,13 @@ pub struct GroupSocket {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub default: Option<Value>,
 }
+
+/// The node type that instantiates a [`Group`], named by its parameter [`GROUP_PARAM`].
+pub const GROUP: &str = "group";
+/// The parameter of a [`GROUP`] node naming the group.
+pub const GROUP_PARAM: &str = "group";
+/// The node type that, inside a group, has one output per exposed input.
+pub const GROUP_INPUT: &str = "group_input";
 
 /// A graph used as a node (`type: "group", params: { "group": "name" }`). Inside, node
 /// type `group_input` has one output per exposed input; `outputs` says which inner

@@ -5,12 +5,14 @@ use glam::{Vec2, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
+use super::bindings::{PAGES, Resource, bound, scene_layout_entries};
 use super::context::GpuContext;
 use super::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, LIGHT_DISTANT, LIGHT_POINT,
+    LIGHT_SPOT,
 };
-use super::kernel::{KernelFeatures, NODE_PAGE_BINDING, TRIANGLE_PAGE_BINDING};
+use super::kernel::KernelFeatures;
 use crate::accel::{BvhNode, SceneAccel};
 use crate::scene::{Scene, shapes};
 
@@ -25,9 +27,6 @@ pub enum UploadError {
         limit: u64,
     },
 }
-
-/// Pages of the paged arrays (`blas_nodes_*`, `triangles_*` in `shaders/scene.wgsl`).
-pub const PAGES: usize = 4;
 
 /// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
 pub struct GpuScene {
@@ -208,12 +207,10 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
             ],
         ],
         emission: v(m.emission, m.opacity),
-        flags: [
-            m.thin_walled as u32,
-            m.is_transmissive() as u32,
-            m.diffuse_roughness.to_bits(),
-            m.anisotropy_rotation.to_bits(),
-        ],
+        thin_walled: m.thin_walled as u32,
+        transmissive: m.is_transmissive() as u32,
+        diffuse_roughness: m.diffuse_roughness,
+        anisotropy_rotation: m.anisotropy_rotation,
     }
 }
 
@@ -343,7 +340,8 @@ impl SceneArrays {
                 } => (
                     4.0 * pi * luminance(intensity) as f64,
                     GpuAnalyticLight {
-                        position: position.extend(0.0).into(),
+                        position: position.into(),
+                        kind: LIGHT_POINT,
                         axis: [0.0, 0.0, 1.0, radius],
                         intensity: intensity.extend(0.0).into(),
                         shape: [0.0; 4],
@@ -362,7 +360,8 @@ impl SceneArrays {
                     (
                         2.0 * pi * (1.0 - outer.cos() as f64) * luminance(intensity) as f64,
                         GpuAnalyticLight {
-                            position: position.extend(1.0).into(),
+                            position: position.into(),
+                            kind: LIGHT_SPOT,
                             axis: direction.normalize().extend(radius).into(),
                             intensity: intensity.extend(0.0).into(),
                             shape: [outer.cos(), inner.cos(), 0.0, 0.0],
@@ -379,7 +378,8 @@ impl SceneArrays {
                     (
                         luminance(irradiance) as f64 * pi * radius * radius,
                         GpuAnalyticLight {
-                            position: direction.normalize().extend(2.0).into(),
+                            position: direction.normalize().into(),
+                            kind: LIGHT_DISTANT,
                             // 1 - cos(half) without cancellation.
                             axis: [0.0, 0.0, 1.0, 2.0 * s * s],
                             intensity: irradiance.extend(0.0).into(),
@@ -607,9 +607,6 @@ impl GpuScene {
     }
 }
 
-/// The binding of the BSDF energy tables (`shaders/bsdf/dielectric_energy.wgsl`).
-pub const BSDF_TABLES_BINDING: u32 = 21;
-
 /// The BSDF tables as a uniform buffer: uniform, not storage, so they take none of GL's
 /// 16 storage-buffer slots, and 32 KiB fit well within every adapter's 64 KiB.
 fn bsdf_tables_buffer(ctx: &GpuContext) -> wgpu::Buffer {
@@ -621,55 +618,15 @@ fn bsdf_tables_buffer(ctx: &GpuContext) -> wgpu::Buffer {
         })
 }
 
-/// Layout of group 0 (`shaders/scene.wgsl`): params, film, stats, then the scene, with
-/// only the pages of the paged arrays that `features` uses.
+/// Layout of group 0 (`bindings::SCENE_BINDINGS`): params, film, stats, then the scene,
+/// with only the pages of the paged arrays that `features` uses.
 pub fn scene_bind_group_layout(
     device: &wgpu::Device,
     features: &KernelFeatures,
 ) -> wgpu::BindGroupLayout {
-    let entry = |binding: u32, ty: wgpu::BufferBindingType| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty,
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
-    let read_only = wgpu::BufferBindingType::Storage { read_only: true };
-    let mut entries = vec![entry(0, wgpu::BufferBindingType::Uniform)];
-    for b in 1..=3 {
-        entries.push(entry(
-            b,
-            wgpu::BufferBindingType::Storage { read_only: false },
-        ));
-    }
-    for b in (4..=12).chain([19, 20]) {
-        entries.push(entry(b, read_only));
-    }
-    entries.push(entry(BSDF_TABLES_BINDING, wgpu::BufferBindingType::Uniform));
-    if features.textures {
-        entries.push(entry(super::kernel::TEXTURE_BINDING, read_only));
-    }
-    if features.uv1 {
-        entries.push(entry(super::kernel::UV1_BINDING, read_only));
-    }
-    if features.aovs {
-        entries.push(entry(
-            super::kernel::AOV_BINDING,
-            wgpu::BufferBindingType::Storage { read_only: false },
-        ));
-    }
-    for p in 1..features.node_pages {
-        entries.push(entry(NODE_PAGE_BINDING + p - 1, read_only));
-    }
-    for p in 1..features.triangle_pages {
-        entries.push(entry(TRIANGLE_PAGE_BINDING + p - 1, read_only));
-    }
     device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("scene"),
-        entries: &entries,
+        entries: &scene_layout_entries(features),
     })
 }
 
@@ -705,41 +662,39 @@ impl GpuScene {
         layout: &wgpu::BindGroupLayout,
         frame: &FrameBuffers,
     ) -> wgpu::BindGroup {
-        let mut buffers: Vec<(u32, &wgpu::Buffer)> = vec![
-            (0, frame.params),
-            (1, frame.film_sum),
-            (2, frame.film_compensation),
-            (3, frame.stats),
-            (4, &self.tlas_nodes),
-            (5, &self.instances),
-            (8, &self.triangle_vertices),
-            (9, &self.vertices),
-            (10, &self.materials),
-            (11, &self.light_triangles),
-            (12, &self.light_cdf),
-            (19, &self.analytic_lights),
-            (20, &self.environment_data),
-            (BSDF_TABLES_BINDING, &self.bsdf_tables),
-        ];
-        if self.texture_count > 0 {
-            buffers.push((super::kernel::TEXTURE_BINDING, &self.textures));
-        }
-        if self.has_uv1 {
-            buffers.push((super::kernel::UV1_BINDING, &self.uv1));
-        }
-        if let Some(aov) = frame.film_aov {
-            buffers.push((super::kernel::AOV_BINDING, aov));
-        }
-        // Page 0 of each paged array has its own binding; further pages exist only when
-        // used (see `scene_bind_group_layout`).
-        buffers.push((6, &self.blas_nodes[0]));
-        buffers.push((7, &self.triangles[0]));
-        for p in 1..self.node_pages {
-            buffers.push((NODE_PAGE_BINDING + p - 1, &self.blas_nodes[p as usize]));
-        }
-        for p in 1..self.triangle_pages {
-            buffers.push((TRIANGLE_PAGE_BINDING + p - 1, &self.triangles[p as usize]));
-        }
+        let features = KernelFeatures {
+            aovs: frame.film_aov.is_some(),
+            ..self.features()
+        };
+        // Every binding the layout for these features has (`bindings::bound`), and only
+        // those: optional buffers exist exactly when their feature is on.
+        let buffers: Vec<(u32, &wgpu::Buffer)> = bound(&features)
+            .map(|b| {
+                let buffer = match b.resource {
+                    Resource::Params => frame.params,
+                    Resource::FilmSum => frame.film_sum,
+                    Resource::FilmCompensation => frame.film_compensation,
+                    Resource::Stats => frame.stats,
+                    Resource::TlasNodes => &self.tlas_nodes,
+                    Resource::Instances => &self.instances,
+                    Resource::BlasNodes { page } => &self.blas_nodes[page as usize],
+                    Resource::Triangles { page } => &self.triangles[page as usize],
+                    Resource::TriangleVertices => &self.triangle_vertices,
+                    Resource::Vertices => &self.vertices,
+                    Resource::Materials => &self.materials,
+                    Resource::LightTriangles => &self.light_triangles,
+                    Resource::LightCdf => &self.light_cdf,
+                    Resource::AnalyticLights => &self.analytic_lights,
+                    Resource::EnvironmentData => &self.environment_data,
+                    Resource::DielectricEnergyTable => &self.bsdf_tables,
+                    Resource::Textures => &self.textures,
+                    Resource::Uv1 => &self.uv1,
+                    // Bound only when `features.aovs`, which is `film_aov.is_some()`.
+                    Resource::FilmAov => frame.film_aov.expect("AOVs are bound with a film"),
+                };
+                (b.binding, buffer)
+            })
+            .collect();
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
             .map(|(binding, b)| wgpu::BindGroupEntry {

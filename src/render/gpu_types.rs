@@ -10,6 +10,23 @@ pub const FLAG_ENVIRONMENT_MAP: u32 = 2;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const INSTANCE_HAS_UV1: u32 = 4;
+/// `AnalyticLight.kind`
+pub const LIGHT_POINT: u32 = 0;
+pub const LIGHT_SPOT: u32 = 1;
+pub const LIGHT_DISTANT: u32 = 2;
+
+/// Every constant above with its WGSL name, for the test that compares them with
+/// `shaders/scene.wgsl`.
+pub const MIRRORED_CONSTANTS: [(&str, u32); 8] = [
+    ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
+    ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
+    ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
+    ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
+    ("INSTANCE_HAS_UV1", INSTANCE_HAS_UV1),
+    ("LIGHT_POINT", LIGHT_POINT),
+    ("LIGHT_SPOT", LIGHT_SPOT),
+    ("LIGHT_DISTANT", LIGHT_DISTANT),
+];
 
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
@@ -34,7 +51,12 @@ pub struct GpuParams {
     pub cam_forward: [f32; 4],
     pub cam_lens: [f32; 4],
     pub environment: [f32; 4],
-    pub light_totals: [f32; 4],
+    /// Total power of the emissive triangles (sum of luminance × area).
+    pub light_power: f32,
+    /// Probability that next-event estimation picks an emissive triangle.
+    pub triangle_pick: f32,
+    pub analytic_light_count: u32,
+    pub _pad: u32,
 }
 
 #[repr(C)]
@@ -63,9 +85,13 @@ pub struct GpuMaterial {
     pub principled: [[f32; 4]; 7],
     /// rgb: emitted radiance; w: opacity.
     pub emission: [f32; 4],
-    /// x: 1 if thin-walled; y: 1 if light passes through (keeps geometric orientation);
-    /// z: diffuse roughness (f32 bits).
-    pub flags: [u32; 4],
+    /// 1 if thin-walled.
+    pub thin_walled: u32,
+    /// 1 if light passes through (the surface keeps its geometric orientation).
+    pub transmissive: u32,
+    pub diffuse_roughness: f32,
+    /// The anisotropic tangent's rotation, in turns.
+    pub anisotropy_rotation: f32,
 }
 
 #[repr(C)]
@@ -80,7 +106,10 @@ pub struct GpuLightTriangle {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuAnalyticLight {
-    pub position: [f32; 4],
+    /// Position (point, spot) or the direction light travels (distant).
+    pub position: [f32; 3],
+    /// [`LIGHT_POINT`], [`LIGHT_SPOT`] or [`LIGHT_DISTANT`].
+    pub kind: u32,
     pub axis: [f32; 4],
     pub intensity: [f32; 4],
     pub shape: [f32; 4],
@@ -184,7 +213,10 @@ mod tests {
                 cam_forward,
                 cam_lens,
                 environment,
-                light_totals,
+                light_power,
+                triangle_pick,
+                analytic_light_count,
+                _pad,
             ]
         );
         assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);
@@ -199,7 +231,14 @@ mod tests {
             &module,
             GpuMaterial,
             "Material",
-            [principled, emission, flags]
+            [
+                principled,
+                emission,
+                thin_walled,
+                transmissive,
+                diffuse_roughness,
+                anisotropy_rotation
+            ]
         );
         assert_same_layout!(
             &module,
@@ -211,8 +250,39 @@ mod tests {
             &module,
             GpuAnalyticLight,
             "AnalyticLight",
-            [position, axis, intensity, shape]
+            [position, kind, axis, intensity, shape]
         );
         assert_same_layout!(&module, GpuStats, "Stats", [rays, non_finite]);
+    }
+
+    #[test]
+    fn every_mirrored_constant_has_its_wgsl_value() {
+        let module = naga::front::wgsl::parse_str(include_str!("../../shaders/scene.wgsl"))
+            .expect("scene.wgsl parses");
+        let wgsl: Vec<(String, naga::Literal)> = module
+            .constants
+            .iter()
+            .filter_map(|(_, c)| match module.global_expressions[c.init] {
+                naga::Expression::Literal(l) => Some((c.name.clone()?, l)),
+                _ => None,
+            })
+            .collect();
+        for (name, value) in MIRRORED_CONSTANTS {
+            let found = wgsl.iter().find(|(n, _)| n == name);
+            assert_eq!(
+                found.map(|(_, l)| *l),
+                Some(naga::Literal::U32(value)),
+                "{name} in shaders/scene.wgsl vs Rust"
+            );
+        }
+        // Every u32 constant of scene.wgsl is mirrored.
+        for (name, literal) in &wgsl {
+            if matches!(literal, naga::Literal::U32(_)) {
+                assert!(
+                    MIRRORED_CONSTANTS.iter().any(|(n, _)| n == name),
+                    "{name} of shaders/scene.wgsl has no Rust mirror in MIRRORED_CONSTANTS"
+                );
+            }
+        }
     }
 }

@@ -7,6 +7,7 @@
 
 use thiserror::Error;
 
+use super::bindings::bindings_wgsl;
 use super::context::GpuContext;
 
 /// One WGSL file of `shaders/`, embedded in the binary.
@@ -93,7 +94,8 @@ impl KernelSource {
         for (i, file) in LIBRARY.iter().enumerate() {
             source.push(file.path, file.source);
             if i == 0 {
-                // Right after scene.wgsl, which declares what the accessors read.
+                // Right after scene.wgsl, whose structs the bindings hold.
+                source.push("generated: scene bindings", &bindings_wgsl(features));
                 source.push("generated: paged array accessors", &paging_wgsl(features));
                 source.push("generated: kernel features", &features_wgsl(features));
             }
@@ -241,7 +243,7 @@ pub mod lobes {
 /// the code behind the false ones.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
 pub struct KernelFeatures {
-    /// Pages in use of the paged arrays (1 to `gpu_scene::PAGES`).
+    /// Pages in use of the paged arrays (1 to `bindings::PAGES`).
     pub node_pages: u32,
     pub triangle_pages: u32,
     /// Principled lobes any material can reach ([`lobes`]).
@@ -290,13 +292,6 @@ impl KernelFeatures {
     }
 }
 
-/// The binding of the image textures (`src/material/texture.rs`), when a scene has any.
-pub const TEXTURE_BINDING: u32 = 22;
-/// The binding of the AOV film, when AOVs are rendered.
-pub const AOV_BINDING: u32 = 23;
-/// The binding of the second UV set, when a mesh has one.
-pub const UV1_BINDING: u32 = 24;
-
 /// The `FEATURE_*` constants the shaders test.
 pub fn features_wgsl(features: &KernelFeatures) -> String {
     let mut text = String::new();
@@ -313,29 +308,8 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }
-    text.push_str(&format!("const FEATURE_AOVS: bool = {};\n", features.aovs));
-    if features.aovs {
-        text.push_str(&format!(
-            "// Per pixel: (albedo sum, depth sum), (normal sum, samples).\n\
-             @group(0) @binding({AOV_BINDING}) var<storage, read_write> film_aov: array<vec4<f32>>;\n"
-        ));
-    } else {
-        // The integrator's AOV writes are behind FEATURE_AOVS; this stands in for the
-        // binding so the code still names a variable.
-        text.push_str("var<private> film_aov: array<vec4<f32>, 2>;\n");
-    }
-    text.push_str(&format!("const FEATURE_UV1: bool = {};\n", features.uv1));
-    if features.uv1 {
-        text.push_str(&format!(
-            "@group(0) @binding({UV1_BINDING}) var<storage, read> uv1_data: array<vec2<f32>>;\n"
-        ));
-    } else {
-        text.push_str("var<private> uv1_data: array<vec2<f32>, 1>;\n");
-    }
-    if features.textures {
-        text.push_str(&format!(
-            "@group(0) @binding({TEXTURE_BINDING}) var<storage, read> texture_data: array<u32>;\n"
-        ));
+    for (name, on) in [("AOVS", features.aovs), ("UV1", features.uv1)] {
+        text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }
     text
 }
@@ -344,21 +318,8 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
 /// accessor is a plain load: on lavapipe even an untaken branch to the other pages slows
 /// traversal by 40%.
 pub fn paging_wgsl(features: &KernelFeatures) -> String {
-    fn accessor(
-        name: &str,
-        ty: &str,
-        array: &str,
-        shift: &str,
-        first_binding: u32,
-        pages: u32,
-    ) -> String {
-        let mut text = String::new();
-        for p in 1..pages {
-            text.push_str(&format!(
-                "@group(0) @binding({}) var<storage, read> {array}_{p}: array<{ty}>;\n",
-                first_binding + p - 1
-            ));
-        }
+    // The pages' bindings are declared by `bindings_wgsl`.
+    fn accessor(name: &str, ty: &str, array: &str, shift: &str, pages: u32) -> String {
         let mut body = String::new();
         if pages <= 1 {
             body.push_str(&format!("    return {array}_0[i];\n"));
@@ -372,8 +333,7 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             }
             body.push_str(&format!("    return {array}_{}[j];\n", pages - 1));
         }
-        text.push_str(&format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n"));
-        text
+        format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n")
     }
     format!(
         "// Generated for {} node page(s) and {} triangle page(s).\n{}\n{}",
@@ -384,7 +344,6 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             "BvhNode",
             "blas_nodes",
             "node_page_shift",
-            NODE_PAGE_BINDING,
             features.node_pages
         ),
         accessor(
@@ -392,15 +351,10 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
             "Triangle",
             "triangles",
             "triangle_page_shift",
-            TRIANGLE_PAGE_BINDING,
             features.triangle_pages
         ),
     )
 }
-
-/// Bindings of pages 1.. of the paged arrays (page 0 is at 6 and 7).
-pub const NODE_PAGE_BINDING: u32 = 13;
-pub const TRIANGLE_PAGE_BINDING: u32 = 16;
 
 /// The path-tracing kernel's source, with a scene's materials
 /// (`crate::material::scene_materials_wgsl`) spliced in before the integrator.

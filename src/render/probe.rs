@@ -2,13 +2,14 @@
 //! library and an uploaded scene, over an input buffer, and read its output back.
 //!
 //! This is how tests check the WGSL itself (BVH traversal, sampling routines) instead of
-//! a CPU copy of it. A probe kernel declares
+//! a CPU copy of it. A probe kernel declares [`PROBE_BINDINGS`] in [`PROBE_GROUP`]:
 //! `@group(1) @binding(0) var<storage, read> probe_in: array<T>;` and
 //! `@group(1) @binding(1) var<storage, read_write> probe_out: array<U>;`
 //! and runs with `@workgroup_size(64)`, one invocation per index.
 
 use wgpu::util::DeviceExt;
 
+use super::bindings::{PROBE_BINDINGS, PROBE_GROUP, SCENE_GROUP, probe_layout_entries};
 use super::context::GpuContext;
 use super::gpu_scene::{FrameBuffers, GpuScene, scene_bind_group_layout};
 use super::kernel::KernelSource;
@@ -60,24 +61,15 @@ pub fn run_probe(
     let scene_layout = scene_bind_group_layout(device, &gpu_scene.features());
     let probe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("probe"),
-        entries: &[0, 1].map(|binding| wgpu::BindGroupLayoutEntry {
-            binding,
-            visibility: wgpu::ShaderStages::COMPUTE,
-            ty: wgpu::BindingType::Buffer {
-                ty: wgpu::BufferBindingType::Storage {
-                    read_only: binding == 0,
-                },
-                has_dynamic_offset: false,
-                min_binding_size: None,
-            },
-            count: None,
-        }),
+        entries: &probe_layout_entries(),
     });
     // Test kernels call every lobe and light type, whatever the scene holds.
     let mut source = KernelSource::with_library(name, &gpu_scene.features().everything());
     for (path, wgsl) in parts {
         source.push(path, wgsl);
     }
+    // A pipeline layout lists the groups' layouts by group number.
+    const _: () = assert!(SCENE_GROUP == 0 && PROBE_GROUP == 1);
     let pipeline = source.create_pipeline(ctx, &[&scene_layout, &probe_layout], entry)?;
 
     let params = base_params(scene, &gpu_scene, settings);
@@ -123,23 +115,21 @@ pub fn run_probe(
     let probe_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
         label: Some("probe"),
         layout: &probe_layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: input_buffer.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: output_buffer.as_entire_binding(),
-            },
-        ],
+        entries: &[&input_buffer, &output_buffer]
+            .iter()
+            .zip(PROBE_BINDINGS)
+            .map(|(buffer, b)| wgpu::BindGroupEntry {
+                binding: b.binding,
+                resource: buffer.as_entire_binding(),
+            })
+            .collect::<Vec<_>>(),
     });
     let mut encoder = device.create_command_encoder(&Default::default());
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(0, &scene_group, &[]);
-        pass.set_bind_group(1, &probe_group, &[]);
+        pass.set_bind_group(SCENE_GROUP, &scene_group, &[]);
+        pass.set_bind_group(PROBE_GROUP, &probe_group, &[]);
         // Large probes are cut along y so no dimension exceeds the dispatch limit.
         let groups = invocations.div_ceil(PROBE_WORKGROUP_SIZE);
         let max = ctx.limits().max_compute_workgroups_per_dimension;

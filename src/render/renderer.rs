@@ -185,12 +185,9 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
             cam.focus_distance,
         ],
         environment: scene.environment.extend(gpu.environment_pick).into(),
-        light_totals: [
-            gpu.light_power,
-            gpu.triangle_pick,
-            gpu.analytic_light_count as f32,
-            0.0,
-        ],
+        light_power: gpu.light_power,
+        triangle_pick: gpu.triangle_pick,
+        analytic_light_count: gpu.analytic_light_count,
         ..GpuParams::default()
     }
 }
@@ -359,7 +356,7 @@ impl Renderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(0, &self.bind_group, &[]);
+            pass.set_bind_group(super::bindings::SCENE_GROUP, &self.bind_group, &[]);
             pass.dispatch_workgroups(
                 size[0].div_ceil(WORKGROUP_SIZE).max(1),
                 size[1].div_ceil(WORKGROUP_SIZE).max(1),

@@ -1,8 +1,12 @@
 //! Lights that are not geometry: point (optionally a sphere), spot and distant (sun)
 //! lights. Emissive meshes are lights too, through their material's emission.
 //!
-//! These are sampled by next-event estimation only; BSDF-sampled rays do not hit them,
-//! which keeps the estimator unbiased (their contribution comes from one strategy alone).
+//! Lights of zero size (a point or spot of radius 0, a distant light of angular diameter
+//! 0) are reached by next-event estimation only. Sphere lights (point and spot lights with
+//! a radius) and sun disks (distant lights with an angular diameter) are also hit by
+//! camera and BSDF rays, and the two strategies are weighted by multiple importance
+//! sampling (`shaders/lights/analytic.wgsl`). A sphere light is opaque to the rays that
+//! hit it but, as in Cycles, casts no shadow.
 
 use glam::Vec3;
 

@@ -2,15 +2,20 @@
 //! validated, independent of any file format or GPU layout.
 //!
 //! A [`Scene`] is what every importer produces and what the renderer consumes. It is
-//! deliberately plain data: the `.kiln` file format lives in [`file`], generated shapes in
-//! [`shapes`], and nothing here knows about BVHs or buffers.
+//! deliberately plain data: the `.kiln` file format lives in [`file`](mod@file) (its
+//! schema, loading, saving and OBJ mesh files in modules of their own), generated shapes
+//! in [`shapes`], and nothing here knows about BVHs or buffers.
 
 mod camera;
 mod environment;
 pub mod file;
 mod light;
+mod load;
 mod material;
 mod mesh;
+mod obj;
+mod save;
+mod schema;
 pub mod shapes;
 
 pub use camera::Camera;

@@ -225,6 +225,14 @@ struct Term {
 }
 
 impl Term {
+    fn empty() -> Self {
+        Self {
+            sources: Vec::new(),
+            observed: 0.0,
+            expected: 0.0,
+        }
+    }
+
     fn contribution(&self) -> f64 {
         let diff = self.observed - self.expected;
         diff * diff / self.expected
@@ -249,12 +257,19 @@ impl Term {
 /// one extra "absorbed" category whose observed count is `sample_count - sum(observed)` and whose
 /// expected probability is `1 - sum(expected_probability)`, clamped at 0.
 ///
-/// Categories whose expected count is below `min_expected` (5 is customary) are pooled as in
-/// Mitsuba: sorted by expected count, consecutive ones are merged until the merged expectation
-/// exceeds the threshold, and each such group becomes one category. Mitsuba drops the last group
-/// if it never reaches the threshold; here it is merged into the previous group (or the smallest
-/// unpooled category) instead, because dropping it would ignore its observed counts, however
-/// large. Degrees of freedom = categories kept - 1.
+/// Categories whose expected count is below `min_expected` (5 is customary) are pooled among
+/// themselves: sorted by expected count, consecutive ones are merged until the merged expectation
+/// reaches the threshold, and each such group becomes one category. Mitsuba drops the last group
+/// if it never reaches the threshold, which ignores its observed counts however large; merging
+/// it into a large category would hide them as surely (an excess there is offset by a
+/// fluctuation of the large category). Here the leftover joins the *smallest* pooled group, or,
+/// when no group formed, stays a category of its own. That keeps an excess visible, provably: a
+/// group closes as soon as it reaches the threshold and each member is below it, so a group
+/// expects less than 2 * `min_expected`, and a leftover merged into one less than
+/// 3 * `min_expected`; observed counts are never negative, so an excess of D samples over the
+/// leftover's expectation adds at least (D - 2 * min_expected)^2 / (3 * min_expected) to the
+/// statistic (at least D^2 / min_expected when it stands alone). Degrees of freedom =
+/// categories kept - 1.
 ///
 /// The test fails loudly (p_value = 0, reason in the report) when a category has observed > 0
 /// where expected is exactly 0, when an expected probability is negative or non-finite, when the
@@ -334,15 +349,9 @@ pub fn chi2_test(
     // Ascending expectation, so pooling merges the smallest categories first (as Mitsuba does).
     categories.sort_by(|a, b| a.2.total_cmp(&b.2));
     let mut terms: Vec<Term> = Vec::new();
+    let mut groups: Vec<Term> = Vec::new();
     let mut pooled_cells = 0;
-    let mut pooled_groups = 0;
-    let mut pool = Term {
-        sources: Vec::new(),
-        observed: 0.0,
-        expected: 0.0,
-    };
-    // Index into `terms` of the last pooled group, where a leftover pool goes.
-    let mut last_group: Option<usize> = None;
+    let mut pool = Term::empty();
     for (source, o, e) in categories {
         if e == 0.0 && o == 0.0 {
             // An empty category where none is expected carries no information (e.g. the lower
@@ -355,16 +364,7 @@ pub fn chi2_test(
             pool.expected += e;
             pooled_cells += 1;
             if pool.expected >= min_expected {
-                last_group = Some(terms.len());
-                pooled_groups += 1;
-                terms.push(std::mem::replace(
-                    &mut pool,
-                    Term {
-                        sources: Vec::new(),
-                        observed: 0.0,
-                        expected: 0.0,
-                    },
-                ));
+                groups.push(std::mem::replace(&mut pool, Term::empty()));
             }
         } else {
             terms.push(Term {
@@ -374,21 +374,35 @@ pub fn chi2_test(
             });
         }
     }
-    let mut dropped = 0;
+    let pooled_groups = groups.len();
+    // Where the leftover pool (below the threshold) went, for the report.
+    let mut leftover = String::new();
     if !pool.sources.is_empty() {
-        // Sorting put every unpooled category after the pooled ones, so if there is no earlier
-        // group the smallest unpooled category is the first term.
-        let target = last_group.or(if terms.is_empty() { None } else { Some(0) });
-        match target {
-            Some(t) => {
-                let term = &mut terms[t];
-                term.sources.extend(pool.sources);
-                term.observed += pool.observed;
-                term.expected += pool.expected;
+        match groups
+            .iter_mut()
+            .min_by(|a, b| a.expected.total_cmp(&b.expected))
+        {
+            Some(smallest) => {
+                leftover = format!(
+                    ", the last {} (expected {:.2}) merged into the smallest group",
+                    pool.sources.len(),
+                    pool.expected
+                );
+                smallest.sources.extend(pool.sources);
+                smallest.observed += pool.observed;
+                smallest.expected += pool.expected;
             }
-            None => dropped = pool.sources.len(),
+            None => {
+                leftover = format!(
+                    ", the last {} (expected {:.2}) kept as a category of its own",
+                    pool.sources.len(),
+                    pool.expected
+                );
+                groups.push(pool);
+            }
         }
     }
+    terms.extend(groups);
 
     let statistic: f64 = terms.iter().map(Term::contribution).sum();
     let degrees_of_freedom = terms.len().saturating_sub(1);
@@ -429,12 +443,7 @@ pub fn chi2_test(
         let _ = writeln!(
             report,
             "pooled {pooled_cells} categories with expected count < {min_expected} into \
-             {pooled_groups} groups{}",
-            if dropped > 0 {
-                format!(", dropped {dropped} that could not be pooled")
-            } else {
-                String::new()
-            }
+             {pooled_groups} groups{leftover}"
         );
     }
     let mut worst: Vec<&Term> = terms.iter().collect();
@@ -552,7 +561,21 @@ fn ln_gamma(x: f64) -> f64 {
 /// probability is absorbed (which callers check on their own). Also returns the samples
 /// that landed where the integrated pdf is exactly 0 — on the GPU, a few can, from f32
 /// rounding at hard edges of the support — for the caller to bound.
-pub fn chi2_conditional(observed: &[u64], expected_probability: &[f64]) -> (Chi2Outcome, u64) {
+///
+/// Normalising would make a pdf that integrates to 2 look as good as one that integrates to
+/// 1, so the test fails (p_value = 0, reason in the report) when the integrated pdf exceeds
+/// `1 + integral_tolerance`: a pdf of a sampler can never exceed 1 in total. The tolerance is
+/// the caller's bound on the error of its quadrature (and of its f32 arithmetic); the
+/// outcome's `pdf_integral` is the integral before normalising.
+pub fn chi2_conditional(
+    observed: &[u64],
+    expected_probability: &[f64],
+    integral_tolerance: f64,
+) -> (Chi2Outcome, u64) {
+    assert!(
+        integral_tolerance >= 0.0,
+        "the integral tolerance is a bound on an error, not {integral_tolerance}"
+    );
     let stray: u64 = observed
         .iter()
         .zip(expected_probability)
@@ -571,8 +594,15 @@ pub fn chi2_conditional(observed: &[u64], expected_probability: &[f64]) -> (Chi2
         .filter(|e| **e > 0.0)
         .map(|e| e / integral)
         .collect();
-    (
-        chi2_test(&kept, &probability, kept.iter().sum(), 5.0),
-        stray,
-    )
+    let mut outcome = chi2_test(&kept, &probability, kept.iter().sum(), 5.0);
+    // A NaN integral fails too (chi2_test has already flagged the non-finite cells).
+    if integral.is_nan() || integral > 1.0 + integral_tolerance {
+        outcome.p_value = 0.0;
+        outcome.report = format!(
+            "FAILED: the pdf integrates to {integral:.6}, more than 1 + {integral_tolerance:.2e}\n{}",
+            outcome.report
+        );
+    }
+    outcome.pdf_integral = integral;
+    (outcome, stray)
 }

@@ -1,0 +1,625 @@
+//! The kernel's bindings, declared once. [`SCENE_BINDINGS`] (group 0) is the one list
+//! from which kernel assembly writes the `@group(0) @binding(N) var…` declarations
+//! ([`bindings_wgsl`]), and from which the renderer builds the bind group layout
+//! ([`scene_layout_entries`]) and the bind group (`GpuScene::bind_group`). The structs the
+//! bindings hold stay in `shaders/scene.wgsl`, mirrored in [`super::gpu_types`].
+//!
+//! It is not a general shader-interface description: every binding here is a buffer, and
+//! a probe's group 1 ([`PROBE_BINDINGS`]) keeps its element types in its own test kernel.
+
+use std::num::NonZeroU64;
+
+use super::gpu_types::{
+    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats, GpuTriangle,
+};
+use super::kernel::KernelFeatures;
+use crate::accel::BvhNode;
+
+/// How the kernel sees a buffer.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Space {
+    /// `var<uniform>`: takes none of GL's 16 storage-buffer slots.
+    Uniform,
+    /// `var<storage, read>`
+    ReadOnly,
+    /// `var<storage, read_write>`
+    ReadWrite,
+}
+
+impl Space {
+    /// The address space and access as written between `var<` and `>`.
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            Space::Uniform => "uniform",
+            Space::ReadOnly => "storage, read",
+            Space::ReadWrite => "storage, read_write",
+        }
+    }
+
+    pub fn buffer_binding_type(self) -> wgpu::BufferBindingType {
+        match self {
+            Space::Uniform => wgpu::BufferBindingType::Uniform,
+            Space::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
+            Space::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+        }
+    }
+}
+
+/// The buffer a binding holds; `GpuScene::bind_group` names one buffer for each.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Resource {
+    Params,
+    FilmSum,
+    FilmCompensation,
+    Stats,
+    TlasNodes,
+    Instances,
+    /// Page `page` of the BLAS nodes (see [`PAGES`]).
+    BlasNodes {
+        page: u32,
+    },
+    /// Page `page` of the triangles.
+    Triangles {
+        page: u32,
+    },
+    TriangleVertices,
+    Vertices,
+    Materials,
+    LightTriangles,
+    LightCdf,
+    AnalyticLights,
+    EnvironmentData,
+    DielectricEnergyTable,
+    Textures,
+    FilmAov,
+    Uv1,
+}
+
+/// One buffer binding of group 0.
+#[derive(Clone, Copy, Debug)]
+pub struct Binding {
+    pub resource: Resource,
+    /// The WGSL variable.
+    pub name: &'static str,
+    pub binding: u32,
+    pub space: Space,
+    pub wgsl_type: &'static str,
+    /// Bytes of one element of the Rust data uploaded to it (of the whole buffer when the
+    /// type is not a runtime-sized array): the layout's minimum binding size, and what the
+    /// contract test compares with naga's stride of `wgsl_type`.
+    pub element_bytes: u64,
+    /// The type of a `var<private>` that stands in for the binding in kernels built
+    /// without it, so code behind a false `FEATURE_*` constant still names a variable.
+    pub stand_in: Option<&'static str>,
+    /// A comment written above the declaration.
+    pub doc: &'static str,
+}
+
+impl Binding {
+    /// Whether a kernel with `features` binds this buffer.
+    pub fn is_bound(&self, features: &KernelFeatures) -> bool {
+        match self.resource {
+            Resource::BlasNodes { page } => page < features.node_pages,
+            Resource::Triangles { page } => page < features.triangle_pages,
+            Resource::Textures => features.textures,
+            Resource::FilmAov => features.aovs,
+            Resource::Uv1 => features.uv1,
+            _ => true,
+        }
+    }
+}
+
+/// Pages of the paged arrays (`blas_nodes_*`, `triangles_*`): the two largest arrays are
+/// split into up to four bindings, so a scene is not limited by the per-binding size
+/// (128 MiB on lavapipe). Pages a scene does not use take no binding slot, which keeps
+/// ordinary scenes within GL's 16 storage buffers per stage.
+pub const PAGES: usize = 4;
+
+const fn bytes<T>() -> u64 {
+    std::mem::size_of::<T>() as u64
+}
+
+/// Binding `binding` holding page `page` of the BLAS nodes.
+const fn blas_page(name: &'static str, binding: u32, page: u32) -> Binding {
+    Binding {
+        resource: Resource::BlasNodes { page },
+        name,
+        binding,
+        space: Space::ReadOnly,
+        wgsl_type: "array<BvhNode>",
+        element_bytes: bytes::<BvhNode>(),
+        stand_in: None,
+        doc: "",
+    }
+}
+
+/// Binding `binding` holding page `page` of the triangles.
+const fn triangle_page(name: &'static str, binding: u32, page: u32) -> Binding {
+    Binding {
+        resource: Resource::Triangles { page },
+        name,
+        binding,
+        space: Space::ReadOnly,
+        wgsl_type: "array<Triangle>",
+        element_bytes: bytes::<GpuTriangle>(),
+        stand_in: None,
+        doc: "",
+    }
+}
+
+/// A read-only storage array that every kernel binds.
+const fn read_only(
+    resource: Resource,
+    name: &'static str,
+    binding: u32,
+    wgsl_type: &'static str,
+    element_bytes: u64,
+    doc: &'static str,
+) -> Binding {
+    Binding {
+        resource,
+        name,
+        binding,
+        space: Space::ReadOnly,
+        wgsl_type,
+        element_bytes,
+        stand_in: None,
+        doc,
+    }
+}
+
+/// The group of the scene's bindings.
+pub const SCENE_GROUP: u32 = 0;
+
+/// Group 0: params, film, stats, then the scene, in binding order.
+pub const SCENE_BINDINGS: &[Binding] = &[
+    Binding {
+        resource: Resource::Params,
+        name: "params",
+        binding: 0,
+        space: Space::Uniform,
+        wgsl_type: "Params",
+        element_bytes: bytes::<GpuParams>(),
+        stand_in: None,
+        doc: "",
+    },
+    Binding {
+        resource: Resource::FilmSum,
+        name: "film_sum",
+        binding: 1,
+        space: Space::ReadWrite,
+        wgsl_type: "array<vec4<f32>>",
+        element_bytes: bytes::<[f32; 4]>(),
+        stand_in: None,
+        doc: "",
+    },
+    Binding {
+        resource: Resource::FilmCompensation,
+        name: "film_compensation",
+        binding: 2,
+        space: Space::ReadWrite,
+        wgsl_type: "array<vec4<f32>>",
+        element_bytes: bytes::<[f32; 4]>(),
+        stand_in: None,
+        doc: "",
+    },
+    Binding {
+        resource: Resource::Stats,
+        name: "stats",
+        binding: 3,
+        space: Space::ReadWrite,
+        wgsl_type: "Stats",
+        element_bytes: bytes::<GpuStats>(),
+        stand_in: None,
+        doc: "",
+    },
+    read_only(
+        Resource::TlasNodes,
+        "tlas_nodes",
+        4,
+        "array<BvhNode>",
+        bytes::<BvhNode>(),
+        "",
+    ),
+    read_only(
+        Resource::Instances,
+        "instances",
+        5,
+        "array<Instance>",
+        bytes::<GpuInstance>(),
+        "",
+    ),
+    Binding {
+        doc: "Page 0 of the paged arrays. Read them through fetch_blas_node and fetch_triangle,\n\
+              which kernel assembly generates for the pages a scene uses (src/render/kernel.rs,\n\
+              `paging_wgsl`).",
+        ..blas_page("blas_nodes_0", 6, 0)
+    },
+    triangle_page("triangles_0", 7, 0),
+    read_only(
+        Resource::TriangleVertices,
+        "triangle_vertices",
+        8,
+        "array<u32>",
+        bytes::<u32>(),
+        "Three global vertex indices per triangle, in the same order as `triangles`.",
+    ),
+    read_only(
+        Resource::Vertices,
+        "vertices",
+        9,
+        "array<vec4<u32>>",
+        bytes::<[u32; 4]>(),
+        "Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w = colour\n\
+         (pack4x8unorm).",
+    ),
+    read_only(
+        Resource::Materials,
+        "materials",
+        10,
+        "array<Material>",
+        bytes::<GpuMaterial>(),
+        "",
+    ),
+    read_only(
+        Resource::LightTriangles,
+        "light_triangles",
+        11,
+        "array<LightTriangle>",
+        bytes::<GpuLightTriangle>(),
+        "",
+    ),
+    read_only(
+        Resource::LightCdf,
+        "light_cdf",
+        12,
+        "array<f32>",
+        bytes::<f32>(),
+        "Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).",
+    ),
+    blas_page("blas_nodes_1", 13, 1),
+    blas_page("blas_nodes_2", 14, 2),
+    blas_page("blas_nodes_3", 15, 3),
+    triangle_page("triangles_1", 16, 1),
+    triangle_page("triangles_2", 17, 2),
+    triangle_page("triangles_3", 18, 3),
+    read_only(
+        Resource::AnalyticLights,
+        "analytic_lights",
+        19,
+        "array<AnalyticLight>",
+        bytes::<GpuAnalyticLight>(),
+        "",
+    ),
+    read_only(
+        Resource::EnvironmentData,
+        "env_data",
+        20,
+        "array<vec4<f32>>",
+        bytes::<[f32; 4]>(),
+        "The environment map and its sampling CDFs (shaders/lights/environment.wgsl).",
+    ),
+    Binding {
+        resource: Resource::DielectricEnergyTable,
+        name: "dielectric_energy_table",
+        binding: 21,
+        space: Space::Uniform,
+        wgsl_type: "array<vec4<f32>, 2048>",
+        element_bytes: bytes::<[f32; 8192]>(),
+        stand_in: None,
+        doc: "The rough dielectric's energy table, 2 × 16³ f32 four to a vec4 (shaders/bsdf/\n\
+              dielectric_energy.wgsl).",
+    },
+    read_only(
+        Resource::Textures,
+        "texture_data",
+        22,
+        "array<u32>",
+        bytes::<u32>(),
+        "The image textures (src/material/texture.rs), when a scene has any.",
+    ),
+    Binding {
+        resource: Resource::FilmAov,
+        name: "film_aov",
+        binding: 23,
+        space: Space::ReadWrite,
+        wgsl_type: "array<vec4<f32>>",
+        element_bytes: bytes::<[f32; 4]>(),
+        stand_in: Some("array<vec4<f32>, 2>"),
+        doc: "Per pixel: (albedo sum, depth sum), (normal sum, samples); when AOVs are rendered.",
+    },
+    Binding {
+        resource: Resource::Uv1,
+        name: "uv1_data",
+        binding: 24,
+        space: Space::ReadOnly,
+        wgsl_type: "array<vec2<f32>>",
+        element_bytes: bytes::<[f32; 2]>(),
+        stand_in: Some("array<vec2<f32>, 1>"),
+        doc: "The second UV set per vertex, when a mesh has one.",
+    },
+];
+
+/// The group 0 declarations of a kernel built for `features`.
+pub fn bindings_wgsl(features: &KernelFeatures) -> String {
+    let mut text = String::new();
+    for b in SCENE_BINDINGS {
+        for line in b.doc.lines() {
+            text.push_str(&format!("// {line}\n"));
+        }
+        if b.is_bound(features) {
+            text.push_str(&format!(
+                "@group({SCENE_GROUP}) @binding({}) var<{}> {}: {};\n",
+                b.binding,
+                b.space.wgsl(),
+                b.name,
+                b.wgsl_type
+            ));
+        } else if let Some(ty) = b.stand_in {
+            text.push_str(&format!("var<private> {}: {ty};\n", b.name));
+        }
+    }
+    text
+}
+
+/// The bindings a kernel built for `features` declares.
+pub fn bound(features: &KernelFeatures) -> impl Iterator<Item = &'static Binding> + '_ {
+    SCENE_BINDINGS.iter().filter(|b| b.is_bound(features))
+}
+
+fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGroupLayoutEntry {
+    wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: space.buffer_binding_type(),
+            has_dynamic_offset: false,
+            min_binding_size: NonZeroU64::new(min_bytes),
+        },
+        count: None,
+    }
+}
+
+/// The entries of group 0's layout for a kernel built for `features`.
+pub fn scene_layout_entries(features: &KernelFeatures) -> Vec<wgpu::BindGroupLayoutEntry> {
+    bound(features)
+        .map(|b| layout_entry(b.binding, b.space, b.element_bytes))
+        .collect()
+}
+
+/// One binding of a probe kernel's group 1 (`src/render/probe.rs`); the element types
+/// are the probe's own, declared in its WGSL.
+#[derive(Clone, Copy, Debug)]
+pub struct ProbeBinding {
+    pub name: &'static str,
+    pub binding: u32,
+    pub space: Space,
+}
+
+/// The group of a probe's own bindings.
+pub const PROBE_GROUP: u32 = 1;
+
+/// A probe's input and output arrays.
+pub const PROBE_BINDINGS: [ProbeBinding; 2] = [
+    ProbeBinding {
+        name: "probe_in",
+        binding: 0,
+        space: Space::ReadOnly,
+    },
+    ProbeBinding {
+        name: "probe_out",
+        binding: 1,
+        space: Space::ReadWrite,
+    },
+];
+
+/// The entries of a probe's group 1 layout.
+pub fn probe_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
+    PROBE_BINDINGS
+        .iter()
+        .map(|b| layout_entry(b.binding, b.space, 0))
+        .collect()
+}
+
+#[cfg(test)]
+mod tests {
+    use std::collections::BTreeMap;
+
+    use naga::proc::Layouter;
+
+    use super::*;
+    use crate::render::kernel::{KernelFeatures, path_tracing_kernel};
+
+    fn feature_sets() -> Vec<KernelFeatures> {
+        let everything = KernelFeatures {
+            node_pages: PAGES as u32,
+            triangle_pages: PAGES as u32,
+            ..KernelFeatures::default()
+        };
+        let nothing_optional = KernelFeatures {
+            node_pages: 1,
+            triangle_pages: 1,
+            lobes: crate::render::kernel::lobes::DIFFUSE,
+            environment_map: false,
+            analytic_lights: false,
+            emissive_triangles: false,
+            textures: false,
+            aovs: false,
+            uv1: false,
+        };
+        let mixed = KernelFeatures {
+            node_pages: 2,
+            triangle_pages: 3,
+            textures: true,
+            aovs: false,
+            uv1: true,
+            ..nothing_optional
+        };
+        vec![everything, nothing_optional, mixed]
+    }
+
+    /// naga's address space for a table entry.
+    fn address_space(space: Space) -> naga::AddressSpace {
+        match space {
+            Space::Uniform => naga::AddressSpace::Uniform,
+            Space::ReadOnly => naga::AddressSpace::Storage {
+                access: naga::StorageAccess::LOAD,
+            },
+            Space::ReadWrite => naga::AddressSpace::Storage {
+                access: naga::StorageAccess::LOAD | naga::StorageAccess::STORE,
+            },
+        }
+    }
+
+    #[test]
+    fn the_assembled_kernel_declares_exactly_the_layout_s_bindings() {
+        for features in feature_sets() {
+            let materials = crate::material::materials_wgsl(&[]);
+            let module = path_tracing_kernel(&features, &materials)
+                .validate()
+                .unwrap_or_else(|e| panic!("{features:?}: {e}"));
+            let mut layouter = Layouter::default();
+            layouter
+                .update(module.to_ctx())
+                .expect("the kernel lays out");
+            // What naga read from the assembled WGSL: binding → (name, space, stride).
+            let mut declared = BTreeMap::new();
+            for (_, var) in module.global_variables.iter() {
+                let Some(rb) = &var.binding else { continue };
+                assert_eq!(
+                    rb.group, SCENE_GROUP,
+                    "{:?} outside the scene's group",
+                    var.name
+                );
+                let stride = match module.types[var.ty].inner {
+                    naga::TypeInner::Array {
+                        size: naga::ArraySize::Dynamic,
+                        stride,
+                        ..
+                    } => stride,
+                    _ => layouter[var.ty].size,
+                };
+                let previous = declared.insert(
+                    rb.binding,
+                    (var.name.clone().unwrap_or_default(), var.space, stride),
+                );
+                assert!(previous.is_none(), "binding {} declared twice", rb.binding);
+            }
+            // What the bind group layout is built from.
+            let layout: BTreeMap<u32, wgpu::BindGroupLayoutEntry> = scene_layout_entries(&features)
+                .into_iter()
+                .map(|e| (e.binding, e))
+                .collect();
+            assert_eq!(
+                declared.keys().collect::<Vec<_>>(),
+                layout.keys().collect::<Vec<_>>(),
+                "{features:?}: bindings declared in WGSL vs the layout's"
+            );
+            for b in bound(&features) {
+                let (name, space, stride) = &declared[&b.binding];
+                assert_eq!(name, b.name, "name of binding {}", b.binding);
+                assert_eq!(*space, address_space(b.space), "address space of {name}");
+                assert_eq!(
+                    *stride as u64, b.element_bytes,
+                    "bytes per element of {name}: WGSL vs the Rust data uploaded"
+                );
+                let wgpu::BindingType::Buffer {
+                    ty,
+                    min_binding_size,
+                    ..
+                } = layout[&b.binding].ty
+                else {
+                    panic!("{name} is not a buffer in the layout");
+                };
+                let expected = match space {
+                    naga::AddressSpace::Uniform => wgpu::BufferBindingType::Uniform,
+                    naga::AddressSpace::Storage { access } => wgpu::BufferBindingType::Storage {
+                        read_only: !access.contains(naga::StorageAccess::STORE),
+                    },
+                    other => panic!("{name} in {other:?}"),
+                };
+                assert_eq!(ty, expected, "layout type of {name}");
+                assert_eq!(min_binding_size.map(|s| s.get()), Some(*stride as u64));
+            }
+            // Unbound bindings with a stand-in are still variables the code can name.
+            for b in SCENE_BINDINGS.iter().filter(|b| !b.is_bound(&features)) {
+                let var = module
+                    .global_variables
+                    .iter()
+                    .find(|(_, v)| v.name.as_deref() == Some(b.name));
+                match (b.stand_in, var) {
+                    (Some(_), Some((_, v))) => {
+                        assert_eq!(v.space, naga::AddressSpace::Private, "{}", b.name)
+                    }
+                    (None, None) => {}
+                    (stand_in, var) => panic!(
+                        "{}: stand-in {stand_in:?}, variable {:?}",
+                        b.name,
+                        var.map(|(_, v)| v.space)
+                    ),
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn the_table_has_unique_bindings_and_names_and_every_page() {
+        let mut numbers: Vec<u32> = SCENE_BINDINGS.iter().map(|b| b.binding).collect();
+        numbers.sort();
+        numbers.dedup();
+        assert_eq!(
+            numbers.len(),
+            SCENE_BINDINGS.len(),
+            "a binding number is used twice"
+        );
+        let mut names: Vec<&str> = SCENE_BINDINGS.iter().map(|b| b.name).collect();
+        names.sort();
+        names.dedup();
+        assert_eq!(names.len(), SCENE_BINDINGS.len(), "a name is used twice");
+        for page in 0..PAGES as u32 {
+            for (resource, prefix) in [
+                (Resource::BlasNodes { page }, "blas_nodes"),
+                (Resource::Triangles { page }, "triangles"),
+            ] {
+                let b = SCENE_BINDINGS
+                    .iter()
+                    .find(|b| b.resource == resource)
+                    .unwrap_or_else(|| panic!("no binding for {resource:?}"));
+                assert_eq!(b.name, format!("{prefix}_{page}"));
+            }
+        }
+    }
+
+    /// Every probe kernel under `shaders/tests/` declares its group 1 as `PROBE_BINDINGS`
+    /// says, which is what `run_probe` builds the layout from.
+    #[test]
+    fn probe_kernels_declare_the_probe_bindings() {
+        let dir = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("shaders/tests");
+        let expected: Vec<String> = PROBE_BINDINGS
+            .iter()
+            .map(|b| {
+                format!(
+                    "@group({PROBE_GROUP}) @binding({}) var<{}> {}:",
+                    b.binding,
+                    b.space.wgsl(),
+                    b.name
+                )
+            })
+            .collect();
+        let mut probes = 0;
+        for entry in std::fs::read_dir(&dir).expect("shaders/tests is readable") {
+            let path = entry.expect("a directory entry").path();
+            let text = std::fs::read_to_string(&path).expect("a probe kernel is readable");
+            let declared: Vec<&str> = text.lines().filter(|l| l.starts_with("@group(")).collect();
+            if declared.is_empty() {
+                continue; // a library part of other probes (lobe_dispatch.wgsl)
+            }
+            probes += 1;
+            assert_eq!(declared.len(), expected.len(), "{}", path.display());
+            for (line, prefix) in declared.iter().zip(&expected) {
+                assert!(line.starts_with(prefix), "{}: {line}", path.display());
+            }
+        }
+        assert!(probes >= 8, "found {probes} probe kernels");
+    }
+}

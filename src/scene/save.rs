@@ -1,0 +1,266 @@
+//! Saving a [`Scene`] as a `.kiln` file: the scene file itself and
+//! beside it a `<stem>.assets` folder with the meshes (OBJ) and the images the scene's
+//! material graphs read.
+//!
+//! Not here: the schema ([`schema`](super::schema)), reading scenes ([`load`](super::load))
+//! and the OBJ format itself ([`obj`](super::obj)).
+
+use std::collections::BTreeMap;
+use std::path::Path;
+
+use glam::Mat4;
+use kiln_plugin_api::atomic::write_atomically;
+use std::io::Write;
+
+use super::file::{SCENE_FORMAT_VERSION, SceneError};
+use super::obj::write_obj;
+use super::schema::*;
+use super::{Light, Scene};
+
+/// Writes `scene` as a `.kiln` file at `path`, and in the folder
+/// `<stem>.assets` beside it its meshes as OBJ files, its environment map as an EXR and the
+/// encoded `images` (those material graphs name `image:N`) as image files. Loading the
+/// file gives `scene` back exactly (`tests/scene_round_trip.rs`), provided its materials
+/// and meshes have distinct, non-empty names: others are renamed (`"unnamed"`, `"ball 2"`).
+/// Every file is written atomically (complete or untouched).
+pub fn save_scene(
+    scene: &Scene,
+    path: &Path,
+    images: &[(String, std::sync::Arc<Vec<u8>>)],
+) -> Result<(), SceneError> {
+    let fail = |message: String| SceneError::Save {
+        path: path.to_owned(),
+        message,
+    };
+    let dir = path
+        .parent()
+        .filter(|d| !d.as_os_str().is_empty())
+        .unwrap_or(Path::new("."));
+    let stem = path.file_stem().and_then(|s| s.to_str()).unwrap_or("scene");
+    let assets = format!("{stem}.assets");
+    let assets_dir = dir.join(&assets);
+    std::fs::create_dir_all(&assets_dir)
+        .map_err(|e| fail(format!("cannot create {}: {e}", assets_dir.display())))?;
+
+    // Embedded images become files; graphs name them by their new relative path.
+    let mut image_files = Vec::new();
+    for (i, (name, bytes)) in images.iter().enumerate() {
+        let ext = image::guess_format(bytes)
+            .ok()
+            .and_then(|f| f.extensions_str().first().copied())
+            .unwrap_or("bin");
+        let clean: String = name
+            .chars()
+            .map(|c| if c.is_ascii_alphanumeric() { c } else { '_' })
+            .take(40)
+            .collect();
+        let file = format!("{assets}/{i}_{clean}.{ext}");
+        write_atomically(&dir.join(&file), |w| {
+            w.write_all(bytes.as_slice()).map_err(|e| e.to_string())
+        })
+        .map_err(fail)?;
+        image_files.push(file);
+    }
+
+    let unique = |names: &mut std::collections::BTreeSet<String>, base: &str| {
+        let base = if base.is_empty() { "unnamed" } else { base };
+        let mut name = base.to_owned();
+        let mut n = 1;
+        while !names.insert(name.clone()) {
+            n += 1;
+            name = format!("{base} {n}");
+        }
+        name
+    };
+    let mut taken = std::collections::BTreeSet::new();
+    let mut material_names = Vec::new();
+    let mut materials = Vec::new();
+    for m in &scene.materials {
+        let name = unique(&mut taken, &m.name);
+        let desc = match &m.graph {
+            Some(g) => {
+                let mut graph = g.graph.clone();
+                let rename = |nodes: &mut BTreeMap<String, crate::material::Node>| {
+                    for node in nodes.values_mut() {
+                        if let Some(crate::material::Param::Text(file)) =
+                            node.params.get_mut("file")
+                        {
+                            if let Some(i) = file
+                                .strip_prefix("image:")
+                                .and_then(|n| n.parse::<usize>().ok())
+                            {
+                                if let Some(f) = image_files.get(i) {
+                                    *file = f.clone();
+                                }
+                            } else if Path::new(file.as_str()).is_relative() {
+                                // Loading resolved it against the old scene's folder, as
+                                // seen from the working directory; the saved scene may
+                                // live elsewhere.
+                                if let Ok(absolute) = std::path::absolute(file.as_str()) {
+                                    *file = absolute.to_string_lossy().into_owned();
+                                }
+                            }
+                        }
+                    }
+                };
+                rename(&mut graph.nodes);
+                for group in graph.groups.values_mut() {
+                    rename(&mut group.nodes);
+                }
+                MaterialDesc {
+                    graph: Some(graph),
+                    ..MaterialDesc::default()
+                }
+            }
+            None => MaterialDesc::from_params(m),
+        };
+        material_names.push(name.clone());
+        materials.push((name, desc));
+    }
+
+    let mut taken = std::collections::BTreeSet::new();
+    let mut mesh_names = Vec::new();
+    let mut meshes = Vec::new();
+    for (i, mesh) in scene.meshes.iter().enumerate() {
+        let name = unique(&mut taken, &mesh.name);
+        let file = format!("{assets}/mesh_{i}.obj");
+        write_obj(mesh, &dir.join(&file)).map_err(fail)?;
+        mesh_names.push(name.clone());
+        meshes.push((name, MeshDesc::Obj(file)));
+    }
+
+    let instances = scene
+        .instances
+        .iter()
+        .map(|inst| InstanceDesc {
+            mesh: mesh_names[inst.mesh].clone(),
+            material: material_names[inst.material].clone(),
+            transform: TransformDesc {
+                matrix: Some(Mat4::from(inst.transform).transpose().to_cols_array_2d()),
+                ..TransformDesc::default()
+            },
+        })
+        .collect();
+    let c = &scene.camera;
+    // A pinhole keeps its focus distance too (`Camera::look_at` sets one, and the editor
+    // may open a lens later): a thin lens of radius 0 is a pinhole that records it.
+    let projection = if c.aperture_radius > 0.0 || c.focus_distance != 0.0 {
+        Projection::ThinLens {
+            fov_y: c.fov_y_degrees,
+            aperture_radius: c.aperture_radius,
+            focus_distance: c.focus_distance,
+        }
+    } else {
+        Projection::Perspective {
+            fov_y: c.fov_y_degrees,
+        }
+    };
+    let lights = scene
+        .lights
+        .iter()
+        .map(|l| match *l {
+            Light::Point {
+                position,
+                intensity,
+                radius,
+            } => LightDesc::Point {
+                position: position.into(),
+                intensity: intensity.into(),
+                radius,
+            },
+            Light::Spot {
+                position,
+                direction,
+                intensity,
+                cone_angle,
+                blend,
+                radius,
+            } => LightDesc::Spot {
+                position: position.into(),
+                direction: direction.into(),
+                intensity: intensity.into(),
+                cone_angle,
+                blend,
+                radius,
+            },
+            Light::Distant {
+                direction,
+                irradiance,
+                angular_diameter,
+            } => LightDesc::Distant {
+                direction: direction.into(),
+                irradiance: irradiance.into(),
+                angular_diameter,
+            },
+        })
+        .collect();
+    // The map is written as a 32-bit float EXR, which holds its texels exactly.
+    let environment_map = match &scene.environment_map {
+        Some(map) => {
+            let file = format!("{assets}/environment.exr");
+            let texels = map.texels.iter().flat_map(|t| t.to_array()).collect();
+            let image = image::Rgb32FImage::from_raw(map.width, map.height, texels)
+                .ok_or_else(|| fail(format!("{file}: the map's size and texels disagree")))?;
+            write_atomically(&dir.join(&file), |w| {
+                image
+                    .write_to(w, image::ImageFormat::OpenExr)
+                    .map_err(|e| e.to_string())
+            })
+            .map_err(fail)?;
+            Some(EnvironmentMapDesc {
+                file,
+                strength: map.strength,
+                rotation: map.rotation_degrees,
+            })
+        }
+        None => None,
+    };
+    let file = SceneFile {
+        version: SCENE_FORMAT_VERSION,
+        render: RenderDesc {
+            width: scene.settings.width,
+            height: scene.settings.height,
+            samples_per_pixel: scene.settings.samples_per_pixel,
+            max_bounces: scene.settings.max_bounces,
+        },
+        camera: CameraDesc {
+            position: c.position.into(),
+            look_at: c.look_at.into(),
+            up: c.up.into(),
+            projection,
+        },
+        environment: scene.environment.into(),
+        environment_map,
+        materials: Named(materials),
+        meshes: Named(meshes),
+        instances,
+        lights,
+    };
+    let text = ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default())
+        .map_err(|e| fail(e.to_string()))?;
+    write_atomically(path, |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(fail)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::scene::Camera;
+
+    #[test]
+    fn a_folder_that_cannot_be_made_is_a_save_error_naming_it() {
+        let dir = tempfile::tempdir().unwrap();
+        let blocker = dir.path().join("a file");
+        std::fs::write(&blocker, "not a folder").unwrap();
+        let scene = Scene::empty(Camera::look_at(glam::Vec3::Z, glam::Vec3::ZERO, 40.0));
+        let err = save_scene(&scene, &blocker.join("scene.kiln"), &[]).unwrap_err();
+        let message = err.to_string();
+        assert!(matches!(err, SceneError::Save { .. }), "{message}");
+        assert!(
+            message.starts_with("cannot save scene") && message.contains("scene.assets"),
+            "{message}"
+        );
+    }
+}
