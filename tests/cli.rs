@@ -1,6 +1,8 @@
 //! The `kiln` command line: bad input gives one clear message and a non-zero exit code,
 //! good input writes the image.
 
+mod common;
+
 use std::process::Command;
 
 use assert_cmd::cargo::CommandCargoExt;
@@ -156,17 +158,7 @@ fn time_limit_stops_early_and_still_writes() {
     );
     // What accumulated was written: a complete image of the cornell box, not a black
     // or uniform one.
-    let img = image::open(&out).unwrap().into_rgb32f();
-    assert_eq!((img.width(), img.height()), (64, 64));
-    let luminance: Vec<f32> = img.pixels().map(|p| p.0.iter().sum::<f32>()).collect();
-    assert!(luminance.iter().all(|v| v.is_finite()));
-    let (lo, hi) = luminance
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    assert!(
-        hi > 1.0 && hi > 10.0 * lo.max(1e-3),
-        "a flat image: luminance from {lo} to {hi}"
-    );
+    common::assert_lit_image(&out, 64, 64);
 }
 
 #[test]

@@ -3,6 +3,8 @@
 //! real `kiln` process gets real SIGINTs, sent with `kill -INT`.
 #![cfg(unix)]
 
+mod common;
+
 use std::io::{BufRead, BufReader};
 use std::path::Path;
 use std::process::{Child, Command, ExitStatus, Stdio};
@@ -112,17 +114,7 @@ fn ctrl_c_stops_the_render_and_writes_what_accumulated() {
         "{average} spp average: {summary}"
     );
     // A complete image of what accumulated, not a black or uniform one.
-    let img = image::open(&out).unwrap().into_rgb32f();
-    assert_eq!((img.width(), img.height()), (32, 32));
-    let luminance: Vec<f32> = img.pixels().map(|p| p.0.iter().sum::<f32>()).collect();
-    assert!(luminance.iter().all(|v| v.is_finite()));
-    let (lo, hi) = luminance
-        .iter()
-        .fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
-    assert!(
-        hi > 1.0 && hi > 10.0 * lo.max(1e-3),
-        "a flat image: luminance from {lo} to {hi}"
-    );
+    common::assert_lit_image(&out, 32, 32);
     let names: Vec<_> = std::fs::read_dir(dir.path())
         .unwrap()
         .map(|e| e.unwrap().file_name())

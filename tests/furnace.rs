@@ -162,6 +162,19 @@ fn standard_error_of_mean(pixels: &[Vec3]) -> f32 {
     (variance / n).sqrt()
 }
 
+/// The mean over the sphere of `material`'s furnace at 256 spp and its standard error,
+/// which must be small enough (< 0.0025) for four of them to bound a percent.
+fn sphere_mean_and_error(name: &str, material: &Material, light_sampling: bool) -> (f32, f32) {
+    let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, 256);
+    let (m, se) = (mean(&pixels).x, standard_error_of_mean(&pixels));
+    eprintln!("{name}, light sampling {light_sampling}: mean {m}, standard error {se}");
+    assert!(
+        se < 0.0025,
+        "{name} (light sampling {light_sampling}): standard error {se} too large to test"
+    );
+    (m, se)
+}
+
 fn white() -> Material {
     Material {
         base_color: Vec3::ONE,
@@ -220,13 +233,7 @@ fn furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors() {
             // spread is noise alone: the sphere's mean must be 1 within four standard
             // errors of the mean (a false alarm once in ~16000 runs), and those errors
             // must be small enough for that to mean something (4 SE < 0.01).
-            let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, 256);
-            let (m, se) = (mean(&pixels).x, standard_error_of_mean(&pixels));
-            eprintln!("{name}, light sampling {light_sampling}: mean {m}, standard error {se}");
-            assert!(
-                se < 0.0025,
-                "{name} (light sampling {light_sampling}): standard error {se} too large to test"
-            );
+            let (m, se) = sphere_mean_and_error(name, &material, light_sampling);
             assert!(
                 (m - 1.0).abs() < 4.0 * se + 1e-5,
                 "{name} (light sampling {light_sampling}): mean {m}, standard error {se}"
@@ -340,13 +347,7 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
     ];
     for (name, material, expected) in cases {
         for light_sampling in [false, true] {
-            let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, 256);
-            let (m, se) = (mean(&pixels).x, standard_error_of_mean(&pixels));
-            eprintln!("{name}, light sampling {light_sampling}: mean {m}, standard error {se}");
-            assert!(
-                se < 0.0025,
-                "{name} (light sampling {light_sampling}): standard error {se} too large to test"
-            );
+            let (m, se) = sphere_mean_and_error(name, &material, light_sampling);
             let bound = 4.0 * se + 0.005;
             assert!(
                 m <= 1.0 + 4.0 * se,

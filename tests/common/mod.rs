@@ -93,3 +93,21 @@ pub fn png_header(width: u32, height: u32) -> Vec<u8> {
     out.extend(crc.to_be_bytes());
     out
 }
+
+/// Asserts that the image at `path` is complete (`width` × `height`, every value finite)
+/// and lit, not black or uniform: its brightest pixel is above 1 and ten times its darkest.
+pub fn assert_lit_image(path: &std::path::Path, width: u32, height: u32) {
+    let img = image::open(path)
+        .unwrap_or_else(|e| panic!("{}: {e}", path.display()))
+        .into_rgb32f();
+    assert_eq!((img.width(), img.height()), (width, height));
+    let luminance: Vec<f32> = img.pixels().map(|p| p.0.iter().sum::<f32>()).collect();
+    assert!(luminance.iter().all(|v| v.is_finite()), "non-finite pixels");
+    let (lo, hi) = luminance
+        .iter()
+        .fold((f32::MAX, f32::MIN), |(lo, hi), &v| (lo.min(v), hi.max(v)));
+    assert!(
+        hi > 1.0 && hi > 10.0 * lo.max(1e-3),
+        "a flat image: luminance from {lo} to {hi}"
+    );
+}
