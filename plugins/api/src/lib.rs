@@ -130,6 +130,7 @@ pub const LIGHT_DISTANT: u32 = 2;
 
 /// A punctual light (KHR_lights_punctual): position and direction in world space.
 #[repr(C)]
+#[derive(Clone, Copy, Debug, PartialEq)]
 pub struct LightData {
     pub kind: u32,
     pub position: [f32; 3],

@@ -31,18 +31,6 @@ pub struct RecordedMesh {
     pub indices: Vec<u32>,
 }
 
-/// A light as the importer handed it over.
-#[derive(Clone, Debug, PartialEq)]
-pub struct RecordedLight {
-    pub kind: u32,
-    pub position: [f32; 3],
-    pub direction: [f32; 3],
-    pub intensity: [f32; 3],
-    pub cone_angle_degrees: f32,
-    pub blend: f32,
-    pub radius: f32,
-}
-
 /// Everything an import added, in the order of the calls (ids are indices).
 #[derive(Clone, Debug, Default)]
 pub struct Recorded {
@@ -55,7 +43,7 @@ pub struct Recorded {
     pub instances: Vec<(u32, u32, [f32; 16])>,
     /// (to_world, fov_y_degrees) of every `set_camera` call.
     pub cameras: Vec<([f32; 16], f32)>,
-    pub lights: Vec<RecordedLight>,
+    pub lights: Vec<LightData>,
     pub warnings: Vec<String>,
     /// Data the host would have refused: an importer should never send it.
     pub violations: Vec<String>,
@@ -293,15 +281,7 @@ unsafe extern "C" fn add_light(ctx: *mut c_void, l: *const LightData) -> u32 {
         s.violations.push("light with non-finite data".into());
         return u32::MAX;
     }
-    s.lights.push(RecordedLight {
-        kind: l.kind,
-        position: l.position,
-        direction: l.direction,
-        intensity: l.intensity,
-        cone_angle_degrees: l.cone_angle_degrees,
-        blend: l.blend,
-        radius: l.radius,
-    });
+    s.lights.push(*l);
     (s.lights.len() - 1) as u32
 }
 
