@@ -433,7 +433,15 @@ fn kiln_plugin_path_adds_folders_searched_before_the_executables() {
     // A bundled plugin too: the copy in $KILN_PLUGIN_PATH wins over the build folder's.
     let exe_dir = Path::new(env!("CARGO_BIN_EXE_kiln")).parent().unwrap();
     let exr = extra.path().join("libkiln_exr.so");
-    std::fs::copy(exe_dir.join("libkiln_exr.so"), &exr).unwrap();
+    // `cargo build` leaves it next to the executable; `cargo test` only in deps/.
+    let bundled_exr = [
+        exe_dir.join("libkiln_exr.so"),
+        exe_dir.join("deps/libkiln_exr.so"),
+    ]
+    .into_iter()
+    .find(|p| p.exists())
+    .expect("libkiln_exr.so was not built");
+    std::fs::copy(bundled_exr, &exr).unwrap();
 
     let without = list_plugins(None, None);
     assert!(!without.contains("panicking test importer"), "{without}");
