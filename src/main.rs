@@ -264,7 +264,8 @@ fn compile_material_file(
     file: &std::path::Path,
 ) -> Result<(String, kiln::material::CompiledMaterial, String)> {
     use kiln::material::{compile, load_material, materials_wgsl};
-    use kiln::render::kernel::{KernelFeatures, path_tracing_kernel};
+    use kiln::render::kernel::path_tracing_kernel;
+    use kiln::shader::KernelFeatures;
     let (name, graph) = load_material(file)?;
     let compiled = compile(&name, &graph, "material_0")?;
     let kernel = path_tracing_kernel(

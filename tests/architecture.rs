@@ -41,3 +41,104 @@ fn the_library_never_prints() {
         offences.join("\n")
     );
 }
+
+/// The library's layers, bottom to top: a module may use the ones before it and none
+/// after (docs/ARCHITECTURE.md explains each). `bench` drives everything, like the binary.
+const LAYERS: [&str; 8] = [
+    "shader", "material", "scene", "accel", "film", "render", "plugin", "bench",
+];
+
+/// The top-level modules `text` names through `crate::`, outside comments:
+/// `crate::scene::Scene` and `crate::{scene::Scene, film}` alike.
+fn crate_modules_used(text: &str) -> Vec<String> {
+    let ident = |s: &str| -> String {
+        s.chars()
+            .take_while(|c| c.is_ascii_alphanumeric() || *c == '_')
+            .collect()
+    };
+    let mut used = Vec::new();
+    for line in text.lines() {
+        let code = line.split("//").next().unwrap_or("");
+        for (at, _) in code.match_indices("crate::") {
+            let rest = &code[at + "crate::".len()..];
+            if let Some(group) = rest.strip_prefix('{') {
+                // Only the group's top-level names are modules of the crate.
+                let mut depth = 0;
+                let mut start = true;
+                for (i, c) in group.char_indices() {
+                    match c {
+                        '{' => depth += 1,
+                        '}' if depth == 0 => break,
+                        '}' => depth -= 1,
+                        ',' if depth == 0 => start = true,
+                        c if start && !c.is_whitespace() => {
+                            start = false;
+                            used.push(ident(&group[i..]));
+                        }
+                        _ => {}
+                    }
+                }
+            } else {
+                used.push(ident(rest));
+            }
+        }
+    }
+    used
+}
+
+#[test]
+fn the_dependency_reader_sees_paths_groups_and_ignores_comments() {
+    let text = "use crate::scene::Scene;\n\
+                use crate::{film::Film, render::{self, Renderer}};\n\
+                let x = crate::accel::build(); // crate::plugin in a comment\n\
+                /// [`crate::bench`] in a doc comment\n";
+    assert_eq!(
+        crate_modules_used(text),
+        ["scene", "film", "render", "accel"]
+    );
+}
+
+#[test]
+fn layers_point_one_way() {
+    let src = Path::new(env!("CARGO_MANIFEST_DIR")).join("src");
+    let lib = std::fs::read_to_string(src.join("lib.rs")).unwrap();
+    let modules: Vec<&str> = lib
+        .lines()
+        .filter_map(|l| l.strip_prefix("pub mod ")?.strip_suffix(';'))
+        .collect();
+    let mut sorted_layers = LAYERS.to_vec();
+    sorted_layers.sort();
+    let mut sorted_modules = modules.clone();
+    sorted_modules.sort();
+    assert_eq!(
+        sorted_modules, sorted_layers,
+        "every module of lib.rs has a place in LAYERS (and docs/ARCHITECTURE.md)"
+    );
+
+    let mut offences = Vec::new();
+    for (level, module) in LAYERS.iter().enumerate() {
+        let mut files = Vec::new();
+        let dir = src.join(module);
+        if dir.is_dir() {
+            rust_files(&dir, &mut files);
+        } else {
+            files.push(src.join(format!("{module}.rs")));
+        }
+        for file in files {
+            let text = std::fs::read_to_string(&file).unwrap();
+            for used in crate_modules_used(&text) {
+                let Some(used_level) = LAYERS.iter().position(|l| *l == used) else {
+                    offences.push(format!("{}: crate::{used} is no layer", file.display()));
+                    continue;
+                };
+                if used_level > level {
+                    offences.push(format!(
+                        "{}: the {module} layer uses crate::{used}, a layer above it",
+                        file.display()
+                    ));
+                }
+            }
+        }
+    }
+    assert!(offences.is_empty(), "{}", offences.join("\n"));
+}

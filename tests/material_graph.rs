@@ -5,7 +5,8 @@ use kiln::material::compile::link;
 use kiln::material::graph::{GROUP, GROUP_INPUT};
 use kiln::material::nodes::{Default as SocketDefault, ParamKind, library};
 use kiln::material::{Graph, Node, Param, SocketType, compile, materials_wgsl, parse_material};
-use kiln::render::kernel::{KernelFeatures, path_tracing_kernel};
+use kiln::render::kernel::path_tracing_kernel;
+use kiln::shader::KernelFeatures;
 
 /// A graph whose principled base colour is fed by `node`'s output `output`.
 fn feeding_base_color(node: Node, output: &str) -> Graph {

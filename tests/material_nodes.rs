@@ -39,7 +39,7 @@ fn evaluate(cases: &[Case]) -> Vec<[f32; 4]> {
 fn evaluate_with_textures(materials: Vec<kiln::scene::Material>, cases: &[Case]) -> Vec<[f32; 4]> {
     let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
     scene.materials = materials;
-    let mut textures = kiln::material::scene_textures(&scene).index;
+    let mut textures = kiln::render::materials::scene_textures(&scene).index;
     // Cases sharing a graph and socket share a function.
     let mut functions: Vec<(String, usize)> = Vec::new();
     let mut code = String::new();

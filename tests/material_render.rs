@@ -6,7 +6,8 @@ mod common;
 use common::{gpu, mean, render, rmse, settings};
 use glam::{Affine3A, Vec3};
 use kiln::material::compile::link;
-use kiln::material::{Graph, Node, graph_from_principled};
+use kiln::material::{Graph, Node};
+use kiln::scene::graph_from_principled;
 use kiln::scene::{Camera, Light, Material, Scene, shapes};
 
 /// Spheres of the given materials on a floor, under an area light, a sphere light and a sky.

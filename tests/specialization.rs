@@ -6,8 +6,9 @@ mod common;
 use common::{gpu, mean, render, rmse, settings};
 use kiln::accel::build_scene_accel;
 use kiln::render::gpu_scene::GpuScene;
-use kiln::render::kernel::{KernelFeatures, features_wgsl, lobes};
 use kiln::scene::{Material, Scene, default_scene};
+use kiln::shader::features::features_wgsl;
+use kiln::shader::{KernelFeatures, lobes};
 
 fn features(scene: &Scene) -> KernelFeatures {
     let accel = build_scene_accel(scene).unwrap();

@@ -8,25 +8,9 @@
 //! builder falls back to a median split wherever SAH cannot separate primitives, so its
 //! depth stays logarithmic for any input, and it never recurses.
 
-use bytemuck::{Pod, Zeroable};
 use glam::Vec3;
 
-/// One node as `BvhNode` in `shaders/scene.wgsl`: inner nodes (`count == 0`) have their
-/// children at `first` and `first + 1`; leaves hold primitives `first .. first + count`.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub min: [f32; 3],
-    pub first: u32,
-    pub max: [f32; 3],
-    pub count: u32,
-}
-
-impl BvhNode {
-    pub fn bounds(&self) -> (Vec3, Vec3) {
-        (self.min.into(), self.max.into())
-    }
-}
+use crate::shader::gpu_types::BvhNode;
 
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {

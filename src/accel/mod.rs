@@ -7,7 +7,7 @@
 mod bvh;
 mod two_level;
 
-pub use bvh::{Bvh, BvhNode, build_bvh};
+pub use bvh::{Bvh, build_bvh};
 pub use two_level::{AccelError, SceneAccel, build_scene_accel};
 
 /// Traversal stack sizes of `shaders/traverse.wgsl`; a deeper tree cannot be traversed.

@@ -46,7 +46,7 @@ pub struct MaterialTraits {
     pub constant_emission: Option<[f32; 3]>,
     /// Emission that varies over the surface (not sampled as a light).
     pub varying_emission: bool,
-    /// Principled lobes the material can reach (`render::kernel::lobes`).
+    /// Principled lobes the material can reach ([`crate::shader::lobes`]).
     pub lobes: u32,
 }
 

@@ -4,7 +4,7 @@
 use std::collections::{BTreeSet, HashMap};
 use std::sync::OnceLock;
 
-use crate::render::kernel::ShaderFile;
+use crate::shader::ShaderFile;
 
 macro_rules! node_file {
     ($path:literal) => {

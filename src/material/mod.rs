@@ -172,79 +172,7 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, St
     parts
 }
 
-/// [`materials_wgsl`] for a scene: its graph materials compiled, numbered by their index.
-pub fn scene_materials_wgsl(
-    scene: &crate::scene::Scene,
-) -> Result<Vec<(String, String)>, GraphError> {
-    let mut textures = scene_textures(scene).index;
-    let mut compiled = Vec::new();
-    for (i, m) in scene.materials.iter().enumerate() {
-        if let Some(g) = &m.graph {
-            compiled.push((
-                i as u32,
-                compile::compile_with_textures(
-                    &m.name,
-                    &g.graph,
-                    &format!("material_{i}"),
-                    &mut textures,
-                )?,
-            ));
-        }
-    }
-    let list: Vec<(u32, &CompiledMaterial)> = compiled.iter().map(|(i, c)| (*i, c)).collect();
-    Ok(materials_wgsl(&list))
-}
-
-/// The graph of a fixed-parameter material: one principled node holding its values, so
-/// that every material can be edited, saved and compiled as a graph.
-pub fn graph_from_principled(m: &crate::scene::Material) -> Graph {
-    let v = |c: glam::Vec3| Input::Value(Value::Vec3(c.to_array()));
-    let f = |x: f32| Input::Value(Value::Float(x));
-    let strength = m.emission.max_element();
-    let emission_color = if strength > 0.0 {
-        m.emission / strength
-    } else {
-        glam::Vec3::ONE
-    };
-    let inputs = [
-        ("base_color", v(m.base_color)),
-        ("base_weight", f(m.base_weight)),
-        ("diffuse_roughness", f(m.diffuse_roughness)),
-        ("metallic", f(m.metallic)),
-        ("roughness", f(m.roughness)),
-        ("anisotropy", f(m.anisotropy)),
-        ("anisotropy_rotation", f(m.anisotropy_rotation)),
-        ("ior", f(m.ior)),
-        ("specular_weight", f(m.specular_weight)),
-        ("specular_color", v(m.specular_color)),
-        ("transmission_weight", f(m.transmission_weight)),
-        ("transmission_color", v(m.transmission_color)),
-        ("transmission_depth", f(m.transmission_depth)),
-        ("coat_weight", f(m.coat_weight)),
-        ("coat_roughness", f(m.coat_roughness)),
-        ("coat_ior", f(m.coat_ior)),
-        ("coat_color", v(m.coat_color)),
-        ("sheen_weight", f(m.sheen_weight)),
-        ("sheen_color", v(m.sheen_color)),
-        ("sheen_roughness", f(m.sheen_roughness)),
-        ("emission_color", v(emission_color)),
-        ("emission_strength", f(strength)),
-        ("alpha", f(m.opacity)),
-    ];
-    let mut surface = Node::new("principled_bsdf").param("thin_walled", Param::Bool(m.thin_walled));
-    for (name, input) in inputs {
-        surface = surface.input(name, input);
-    }
-    let mut g = Graph::default();
-    g.add("surface", surface);
-    g.add(
-        "output",
-        Node::new("material_output").input("surface", Input::Link(Link::new("surface", "bsdf"))),
-    );
-    g
-}
-
-/// The principled lobes a surface with these weights can reach (`render::kernel::lobes`);
+/// The principled lobes a surface with these weights can reach ([`crate::shader::lobes`]);
 /// `None` is a weight that varies over the surface.
 pub fn principled_lobes(
     coat: Option<f32>,
@@ -253,7 +181,7 @@ pub fn principled_lobes(
     transmission: Option<f32>,
     specular: Option<f32>,
 ) -> u32 {
-    use crate::render::kernel::lobes;
+    use crate::shader::lobes;
     let some = |w: Option<f32>| w.is_none_or(|w| w > 0.0);
     let below_one = |w: Option<f32>| w.is_none_or(|w| w < 1.0);
     let mut set = 0;
@@ -299,19 +227,4 @@ pub fn resolve_files(graph: &mut Graph, base: &Path) {
     for group in graph.groups.values_mut() {
         fix(&mut group.nodes);
     }
-}
-
-/// The images of a scene's graph materials, indexed in material order.
-pub fn scene_textures(scene: &crate::scene::Scene) -> texture::TextureTable {
-    let mut table = texture::TextureTable::default();
-    for m in &scene.materials {
-        let Some(g) = &m.graph else { continue };
-        for (file, image) in &g.images {
-            if !table.index.contains_key(file) {
-                table.index.insert(file.clone(), table.images.len() as u32);
-                table.images.push(std::sync::Arc::clone(image));
-            }
-        }
-    }
-    table
 }

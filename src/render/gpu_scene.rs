@@ -5,16 +5,17 @@ use glam::{Vec2, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
-use super::bindings::{PAGES, Resource, bound, scene_layout_entries};
 use super::context::GpuContext;
-use super::gpu_types::{
+use crate::accel::SceneAccel;
+use crate::scene::{Scene, shapes};
+use crate::shader::KernelFeatures;
+use crate::shader::bindings::{PAGES, Resource, bound, scene_layout_entries};
+use crate::shader::gpu_types::BvhNode;
+use crate::shader::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
     INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, LIGHT_DISTANT, LIGHT_POINT,
     LIGHT_SPOT,
 };
-use super::kernel::KernelFeatures;
-use crate::accel::{BvhNode, SceneAccel};
-use crate::scene::{Scene, shapes};
 
 #[derive(Debug, Error)]
 pub enum UploadError {
@@ -537,7 +538,7 @@ impl GpuScene {
         page_bytes: Option<u64>,
     ) -> Result<Self, UploadError> {
         let a = SceneArrays::build(scene, accel);
-        let texture_table = crate::material::scene_textures(scene);
+        let texture_table = super::materials::scene_textures(scene);
         let limit = binding_limit(ctx);
         let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
         let mut bytes = 0;

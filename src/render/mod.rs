@@ -4,11 +4,10 @@
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
-pub mod bindings;
 pub mod context;
 pub mod gpu_scene;
-pub mod gpu_types;
 pub mod kernel;
+pub mod materials;
 pub mod probe;
 mod readback;
 mod renderer;

@@ -9,7 +9,6 @@
 
 use wgpu::util::DeviceExt;
 
-use super::bindings::{PROBE_BINDINGS, PROBE_GROUP, SCENE_GROUP, probe_layout_entries};
 use super::context::GpuContext;
 use super::gpu_scene::{FrameBuffers, GpuScene, scene_bind_group_layout};
 use super::kernel::KernelSource;
@@ -17,6 +16,7 @@ use super::readback::read_buffer;
 use super::renderer::{RenderError, RenderSettings, base_params};
 use crate::accel::build_scene_accel;
 use crate::scene::Scene;
+use crate::shader::bindings::{PROBE_BINDINGS, PROBE_GROUP, SCENE_GROUP, probe_layout_entries};
 
 pub const PROBE_WORKGROUP_SIZE: u32 = 64;
 

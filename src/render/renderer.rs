@@ -16,12 +16,13 @@ use thiserror::Error;
 
 use super::context::{GpuContext, GpuError};
 use super::gpu_scene::{FrameBuffers, GpuScene, UploadError, scene_bind_group_layout};
-use super::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
-use super::kernel::{KernelError, KernelFeatures, path_tracing_kernel};
+use super::kernel::{KernelError, path_tracing_kernel};
 use super::readback::{map_and_read, read_buffer};
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
 use crate::scene::Scene;
+use crate::shader::KernelFeatures;
+use crate::shader::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
 
 const TILE_SIZE: u32 = 256;
 const WORKGROUP_SIZE: u32 = 8;
@@ -220,7 +221,7 @@ impl Renderer {
             scene_features.everything()
         };
         let layout = scene_bind_group_layout(device, &features);
-        let materials = crate::material::scene_materials_wgsl(scene)?;
+        let materials = super::materials::scene_materials_wgsl(scene)?;
         let pipeline = path_tracing_kernel(&features, &materials).create_pipeline(
             &ctx,
             &[&layout],
@@ -356,7 +357,7 @@ impl Renderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(super::bindings::SCENE_GROUP, &self.bind_group, &[]);
+            pass.set_bind_group(crate::shader::bindings::SCENE_GROUP, &self.bind_group, &[]);
             pass.dispatch_workgroups(
                 size[0].div_ceil(WORKGROUP_SIZE).max(1),
                 size[1].div_ceil(WORKGROUP_SIZE).max(1),

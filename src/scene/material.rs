@@ -10,7 +10,7 @@ use std::sync::Arc;
 use glam::Vec3;
 
 use crate::material::texture::{TextureImage, load_texture};
-use crate::material::{Graph, GraphError, MaterialTraits};
+use crate::material::{Graph, GraphError, Input, Link, MaterialTraits, Node, Param, Value};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct Material {
@@ -156,7 +156,7 @@ impl Material {
         })
     }
 
-    /// The principled lobes this material can reach (`render::kernel::lobes`).
+    /// The principled lobes this material can reach ([`crate::shader::lobes`]).
     pub fn lobes(&self) -> u32 {
         if let Some(g) = &self.graph {
             return g.traits.lobes;
@@ -245,4 +245,53 @@ impl Material {
         }
         Ok(())
     }
+}
+
+/// The graph of a fixed-parameter material: one principled node holding its values, so
+/// that every material can be edited, saved and compiled as a graph.
+pub fn graph_from_principled(m: &Material) -> Graph {
+    let v = |c: glam::Vec3| Input::Value(Value::Vec3(c.to_array()));
+    let f = |x: f32| Input::Value(Value::Float(x));
+    let strength = m.emission.max_element();
+    let emission_color = if strength > 0.0 {
+        m.emission / strength
+    } else {
+        glam::Vec3::ONE
+    };
+    let inputs = [
+        ("base_color", v(m.base_color)),
+        ("base_weight", f(m.base_weight)),
+        ("diffuse_roughness", f(m.diffuse_roughness)),
+        ("metallic", f(m.metallic)),
+        ("roughness", f(m.roughness)),
+        ("anisotropy", f(m.anisotropy)),
+        ("anisotropy_rotation", f(m.anisotropy_rotation)),
+        ("ior", f(m.ior)),
+        ("specular_weight", f(m.specular_weight)),
+        ("specular_color", v(m.specular_color)),
+        ("transmission_weight", f(m.transmission_weight)),
+        ("transmission_color", v(m.transmission_color)),
+        ("transmission_depth", f(m.transmission_depth)),
+        ("coat_weight", f(m.coat_weight)),
+        ("coat_roughness", f(m.coat_roughness)),
+        ("coat_ior", f(m.coat_ior)),
+        ("coat_color", v(m.coat_color)),
+        ("sheen_weight", f(m.sheen_weight)),
+        ("sheen_color", v(m.sheen_color)),
+        ("sheen_roughness", f(m.sheen_roughness)),
+        ("emission_color", v(emission_color)),
+        ("emission_strength", f(strength)),
+        ("alpha", f(m.opacity)),
+    ];
+    let mut surface = Node::new("principled_bsdf").param("thin_walled", Param::Bool(m.thin_walled));
+    for (name, input) in inputs {
+        surface = surface.input(name, input);
+    }
+    let mut g = Graph::default();
+    g.add("surface", surface);
+    g.add(
+        "output",
+        Node::new("material_output").input("surface", Input::Link(Link::new("surface", "bsdf"))),
+    );
+    g
 }

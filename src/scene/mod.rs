@@ -22,7 +22,7 @@ pub use camera::Camera;
 pub use environment::EnvironmentMap;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene, save_scene};
 pub use light::Light;
-pub use material::Material;
+pub use material::{Material, graph_from_principled};
 pub use mesh::Mesh;
 
 use std::path::Path;

@@ -122,10 +122,26 @@ pub struct GpuStats {
     pub non_finite: u32,
 }
 
+/// One node as `BvhNode` in `shaders/scene.wgsl`: inner nodes (`count == 0`) have their
+/// children at `first` and `first + 1`; leaves hold primitives `first .. first + count`.
+#[repr(C)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    pub first: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+impl BvhNode {
+    pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
+        (self.min.into(), self.max.into())
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;
-    use crate::accel::BvhNode;
     use naga::proc::Layouter;
 
     /// The struct `name` of `module`: its size and, per member, (name, offset, size), as

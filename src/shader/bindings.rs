@@ -9,11 +9,11 @@
 
 use std::num::NonZeroU64;
 
+use super::KernelFeatures;
 use super::gpu_types::{
-    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats, GpuTriangle,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats,
+    GpuTriangle,
 };
-use super::kernel::KernelFeatures;
-use crate::accel::BvhNode;
 
 /// How the kernel sees a buffer.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -231,7 +231,7 @@ pub const SCENE_BINDINGS: &[Binding] = &[
     ),
     Binding {
         doc: "Page 0 of the paged arrays. Read them through fetch_blas_node and fetch_triangle,\n\
-              which kernel assembly generates for the pages a scene uses (src/render/kernel.rs,\n\
+              which kernel assembly generates for the pages a scene uses (src/shader/features.rs,\n\
               `paging_wgsl`).",
         ..blas_page("blas_nodes_0", 6, 0)
     },
@@ -423,144 +423,7 @@ pub fn probe_layout_entries() -> Vec<wgpu::BindGroupLayoutEntry> {
 
 #[cfg(test)]
 mod tests {
-    use std::collections::BTreeMap;
-
-    use naga::proc::Layouter;
-
     use super::*;
-    use crate::render::kernel::{KernelFeatures, path_tracing_kernel};
-
-    fn feature_sets() -> Vec<KernelFeatures> {
-        let everything = KernelFeatures {
-            node_pages: PAGES as u32,
-            triangle_pages: PAGES as u32,
-            ..KernelFeatures::default()
-        };
-        let nothing_optional = KernelFeatures {
-            node_pages: 1,
-            triangle_pages: 1,
-            lobes: crate::render::kernel::lobes::DIFFUSE,
-            environment_map: false,
-            analytic_lights: false,
-            emissive_triangles: false,
-            textures: false,
-            aovs: false,
-            uv1: false,
-        };
-        let mixed = KernelFeatures {
-            node_pages: 2,
-            triangle_pages: 3,
-            textures: true,
-            aovs: false,
-            uv1: true,
-            ..nothing_optional
-        };
-        vec![everything, nothing_optional, mixed]
-    }
-
-    /// naga's address space for a table entry.
-    fn address_space(space: Space) -> naga::AddressSpace {
-        match space {
-            Space::Uniform => naga::AddressSpace::Uniform,
-            Space::ReadOnly => naga::AddressSpace::Storage {
-                access: naga::StorageAccess::LOAD,
-            },
-            Space::ReadWrite => naga::AddressSpace::Storage {
-                access: naga::StorageAccess::LOAD | naga::StorageAccess::STORE,
-            },
-        }
-    }
-
-    #[test]
-    fn the_assembled_kernel_declares_exactly_the_layout_s_bindings() {
-        for features in feature_sets() {
-            let materials = crate::material::materials_wgsl(&[]);
-            let module = path_tracing_kernel(&features, &materials)
-                .validate()
-                .unwrap_or_else(|e| panic!("{features:?}: {e}"));
-            let mut layouter = Layouter::default();
-            layouter
-                .update(module.to_ctx())
-                .expect("the kernel lays out");
-            // What naga read from the assembled WGSL: binding → (name, space, stride).
-            let mut declared = BTreeMap::new();
-            for (_, var) in module.global_variables.iter() {
-                let Some(rb) = &var.binding else { continue };
-                assert_eq!(
-                    rb.group, SCENE_GROUP,
-                    "{:?} outside the scene's group",
-                    var.name
-                );
-                let stride = match module.types[var.ty].inner {
-                    naga::TypeInner::Array {
-                        size: naga::ArraySize::Dynamic,
-                        stride,
-                        ..
-                    } => stride,
-                    _ => layouter[var.ty].size,
-                };
-                let previous = declared.insert(
-                    rb.binding,
-                    (var.name.clone().unwrap_or_default(), var.space, stride),
-                );
-                assert!(previous.is_none(), "binding {} declared twice", rb.binding);
-            }
-            // What the bind group layout is built from.
-            let layout: BTreeMap<u32, wgpu::BindGroupLayoutEntry> = scene_layout_entries(&features)
-                .into_iter()
-                .map(|e| (e.binding, e))
-                .collect();
-            assert_eq!(
-                declared.keys().collect::<Vec<_>>(),
-                layout.keys().collect::<Vec<_>>(),
-                "{features:?}: bindings declared in WGSL vs the layout's"
-            );
-            for b in bound(&features) {
-                let (name, space, stride) = &declared[&b.binding];
-                assert_eq!(name, b.name, "name of binding {}", b.binding);
-                assert_eq!(*space, address_space(b.space), "address space of {name}");
-                assert_eq!(
-                    *stride as u64, b.element_bytes,
-                    "bytes per element of {name}: WGSL vs the Rust data uploaded"
-                );
-                let wgpu::BindingType::Buffer {
-                    ty,
-                    min_binding_size,
-                    ..
-                } = layout[&b.binding].ty
-                else {
-                    panic!("{name} is not a buffer in the layout");
-                };
-                let expected = match space {
-                    naga::AddressSpace::Uniform => wgpu::BufferBindingType::Uniform,
-                    naga::AddressSpace::Storage { access } => wgpu::BufferBindingType::Storage {
-                        read_only: !access.contains(naga::StorageAccess::STORE),
-                    },
-                    other => panic!("{name} in {other:?}"),
-                };
-                assert_eq!(ty, expected, "layout type of {name}");
-                assert_eq!(min_binding_size.map(|s| s.get()), Some(*stride as u64));
-            }
-            // Unbound bindings with a stand-in are still variables the code can name.
-            for b in SCENE_BINDINGS.iter().filter(|b| !b.is_bound(&features)) {
-                let var = module
-                    .global_variables
-                    .iter()
-                    .find(|(_, v)| v.name.as_deref() == Some(b.name));
-                match (b.stand_in, var) {
-                    (Some(_), Some((_, v))) => {
-                        assert_eq!(v.space, naga::AddressSpace::Private, "{}", b.name)
-                    }
-                    (None, None) => {}
-                    (stand_in, var) => panic!(
-                        "{}: stand-in {stand_in:?}, variable {:?}",
-                        b.name,
-                        var.map(|(_, v)| v.space)
-                    ),
-                }
-            }
-        }
-    }
 
     #[test]
     fn the_table_has_unique_bindings_and_names_and_every_page() {

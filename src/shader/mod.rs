@@ -1,0 +1,77 @@
+//! The shader contract: what the CPU and the kernel agree on, at the bottom of the layers.
+//! The WGSL files of `shaders/` ([`LIBRARY`]), the principled lobes' bits ([`lobes`]), what
+//! a kernel is specialised for ([`features`]), the Rust mirrors of the GPU structs
+//! ([`gpu_types`]) and the one table of bindings ([`bindings`]). It uses no other module
+//! of the crate; every layer above may use it (`tests/architecture.rs`).
+
+pub mod bindings;
+pub mod features;
+pub mod gpu_types;
+
+pub use features::KernelFeatures;
+
+/// One WGSL file of `shaders/`, embedded in the binary.
+#[derive(Clone, Copy, Debug)]
+pub struct ShaderFile {
+    pub path: &'static str,
+    pub source: &'static str,
+}
+
+macro_rules! shader_file {
+    ($path:literal) => {
+        ShaderFile {
+            path: concat!("shaders/", $path),
+            source: include_str!(concat!(env!("CARGO_MANIFEST_DIR"), "/shaders/", $path)),
+        }
+    };
+}
+
+/// The shared kernel code, in the order the files depend on each other.
+pub const LIBRARY: &[ShaderFile] = &[
+    shader_file!("scene.wgsl"),
+    shader_file!("rng.wgsl"),
+    shader_file!("sampling.wgsl"),
+    shader_file!("float_error.wgsl"),
+    shader_file!("intersect.wgsl"),
+    shader_file!("traverse.wgsl"),
+    shader_file!("surface.wgsl"),
+    shader_file!("camera.wgsl"),
+    shader_file!("bsdf/microfacet.wgsl"),
+    shader_file!("bsdf/fresnel.wgsl"),
+    shader_file!("bsdf/conductor.wgsl"),
+    shader_file!("bsdf/ggx_albedo_table.wgsl"),
+    shader_file!("bsdf/multiple_scattering.wgsl"),
+    shader_file!("bsdf/dielectric.wgsl"),
+    shader_file!("bsdf/dielectric_energy.wgsl"),
+    shader_file!("bsdf/lambert.wgsl"),
+    shader_file!("bsdf/diffuse_albedo_table.wgsl"),
+    shader_file!("bsdf/sheen_table.wgsl"),
+    shader_file!("bsdf/sheen.wgsl"),
+    shader_file!("bsdf/principled.wgsl"),
+    shader_file!("lights/emissive_triangle.wgsl"),
+    shader_file!("lights/environment.wgsl"),
+    shader_file!("lights/analytic.wgsl"),
+];
+
+/// The path-tracing entry point `render`.
+pub const PATH_INTEGRATOR: ShaderFile = shader_file!("integrator/path.wgsl");
+
+/// The principled surface's lobes, one bit each, as [`KernelFeatures::lobes`] counts them.
+pub mod lobes {
+    pub const COAT: u32 = 1;
+    pub const SHEEN: u32 = 2;
+    /// The metal and its multiple-scattering compensation.
+    pub const METAL: u32 = 4;
+    pub const GLASS: u32 = 8;
+    pub const SPECULAR: u32 = 16;
+    pub const DIFFUSE: u32 = 32;
+    pub const ALL: u32 = 63;
+    pub const NAMES: [(u32, &str); 6] = [
+        (COAT, "COAT"),
+        (SHEEN, "SHEEN"),
+        (METAL, "METAL"),
+        (GLASS, "GLASS"),
+        (SPECULAR, "SPECULAR"),
+        (DIFFUSE, "DIFFUSE"),
+    ];
+}
