@@ -77,18 +77,15 @@ const INSTANCE_HAS_NORMALS: u32 = 1u;
 const INSTANCE_HAS_UVS: u32 = 2u;
 const INSTANCE_HAS_UV1: u32 = 4u;
 
-// A principled material: the seven vec4s of `principled_unpack`, emission (+ opacity in
-// w), and the parameters outside those vec4s.
+// A fixed-parameter material: the principled parameters packed as `principled_unpack`
+// reads them (generated from src/shader/principled.rs, like PRINCIPLED_VEC4S).
 struct Material {
-    principled: array<vec4<f32>, 7>,
+    principled: array<vec4<f32>, PRINCIPLED_VEC4S>,
+    // rgb: the emitted radiance light sampling knows in advance (0 where a graph varies it).
     emission: vec4<f32>,
-    // 1 if thin-walled.
-    thin_walled: u32,
     // 1 if light passes through: the surface keeps its geometric orientation.
     transmissive: u32,
-    diffuse_roughness: f32,
-    // The anisotropic tangent's rotation, in turns.
-    anisotropy_rotation: f32,
+    _pad: array<u32, 3>,
 };
 
 // An emissive triangle in world space, for next-event estimation.

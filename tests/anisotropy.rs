@@ -7,6 +7,7 @@ mod common;
 use common::{gpu, mean, render, rmse, settings};
 use glam::{Affine3A, Vec2, Vec3};
 use kiln::scene::{Camera, Light, Material, Mesh, Scene, shapes};
+use kiln::shader::principled::Principled;
 
 /// A brushed-metal floor seen at a slant, with a small sphere light in its mirror
 /// direction: the highlight stretches along the tangent.
@@ -14,11 +15,14 @@ fn brushed_floor(mesh: Mesh, anisotropy_rotation: f32) -> Vec<Vec3> {
     let mut scene = Scene::empty(Camera::look_at(Vec3::new(0.0, 2.0, 2.0), Vec3::ZERO, 50.0));
     let m = scene.add_material(Material {
         name: "brushed".into(),
-        base_color: Vec3::splat(0.9),
-        metallic: 1.0,
-        roughness: 0.4,
-        anisotropy: 1.0,
-        anisotropy_rotation,
+        principled: Principled {
+            base_color: Vec3::splat(0.9),
+            metallic: 1.0,
+            roughness: 0.4,
+            anisotropy: 1.0,
+            anisotropy_rotation,
+            ..Principled::default()
+        },
         ..Material::default()
     });
     let floor = scene.add_mesh(mesh);

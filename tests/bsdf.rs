@@ -24,8 +24,8 @@ const SAMPLES: u32 = 1 << 20;
 const SAMPLES_PER_INVOCATION: u32 = 256;
 const DISPATCH: &str = include_str!("../shaders/tests/lobe_dispatch.wgsl");
 
-/// The principled surface's parameters, packed as `principled_unpack` in
-/// shaders/bsdf/principled.wgsl reads them.
+/// The principled parameters the chi-square cases vary (the rest are the lobe's or fixed:
+/// [`Lobe::encode`]).
 #[derive(Clone, Debug)]
 struct Principled {
     base_color: Vec3,
@@ -77,44 +77,45 @@ impl Lobe {
         [a / k, a * k]
     }
 
-    fn encode(&self) -> [[u32; 4]; 12] {
-        let bits = |v: Vec3, w: f32| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), w.to_bits()];
+    /// The configuration `lobe_params` in shaders/tests/lobe_dispatch.wgsl reads:
+    /// five vec4s, then the principled surface packed as the material buffer holds it.
+    fn encode(&self) -> Vec<[u32; 4]> {
+        let bits = |v: Vec3| [v.x.to_bits(), v.y.to_bits(), v.z.to_bits(), 0];
         let [ax, ay] = self.alpha();
         let p = self.principled.clone().unwrap_or_else(Principled::plastic);
-        [
+        let surface = kiln::shader::principled::Principled {
+            base_color: p.base_color,
+            diffuse_roughness: p.diffuse_roughness,
+            metallic: p.metallic,
+            roughness: self.roughness,
+            anisotropy: self.anisotropy,
+            ior: self.eta,
+            specular_weight: p.specular_weight,
+            transmission_weight: p.transmission_weight,
+            transmission_color: self.tint,
+            coat_weight: p.coat_weight,
+            coat_roughness: p.coat_roughness,
+            coat_color: Vec3::new(0.9, 0.95, 1.0),
+            sheen_weight: p.sheen_weight,
+            sheen_color: Vec3::new(1.0, 0.9, 0.8),
+            sheen_roughness: p.sheen_roughness,
+            thin_walled: self.thin,
+            ..Default::default()
+        };
+        let mut config = vec![
             // The principled mixture costs several lobes per evaluation: lower quadrature
             // orders keep each GPU invocation short (see tests/bsdf_pdf.wgsl).
             match self.kind {
                 5 => [self.kind, self.thin as u32, 40, 8],
                 _ => [self.kind, self.thin as u32, 0, 0],
             },
-            [
-                ax.to_bits(),
-                ay.to_bits(),
-                self.eta.to_bits(),
-                p.diffuse_roughness.to_bits(),
-            ],
-            bits(self.f0, 0.0),
-            bits(self.tint, 0.0),
-            bits(self.wo, 0.0),
-            bits(p.base_color, 1.0),
-            bits(Vec3::ONE, p.specular_weight),
-            bits(self.tint, p.transmission_weight),
-            bits(Vec3::new(0.9, 0.95, 1.0), p.coat_weight),
-            bits(Vec3::new(1.0, 0.9, 0.8), p.sheen_weight),
-            [
-                p.metallic.to_bits(),
-                self.roughness.to_bits(),
-                self.anisotropy.to_bits(),
-                self.eta.to_bits(),
-            ],
-            [
-                p.coat_roughness.to_bits(),
-                1.5f32.to_bits(),
-                p.sheen_roughness.to_bits(),
-                0,
-            ],
-        ]
+            [ax.to_bits(), ay.to_bits(), self.eta.to_bits(), 0],
+            bits(self.f0),
+            bits(self.tint),
+            bits(self.wo),
+        ];
+        config.extend(surface.pack().map(|v| v.map(f32::to_bits)));
+        config
     }
 }
 

@@ -7,6 +7,7 @@ mod common;
 use common::{furnace_scene, gpu, mean, render, settings};
 use glam::{Affine3A, Vec3};
 use kiln::scene::{Camera, Material, Scene, shapes};
+use kiln::shader::principled::Principled;
 
 const SIZE: u32 = 24;
 
@@ -177,8 +178,11 @@ fn sphere_mean_and_error(name: &str, material: &Material, light_sampling: bool) 
 
 fn white() -> Material {
     Material {
-        base_color: Vec3::ONE,
-        specular_color: Vec3::ONE,
+        principled: Principled {
+            base_color: Vec3::ONE,
+            specular_color: Vec3::ONE,
+            ..Principled::default()
+        },
         ..Material::default()
     }
 }
@@ -191,34 +195,46 @@ fn furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors() {
         (
             "smooth glass",
             Material {
-                transmission_weight: 1.0,
-                roughness: 0.0,
+                principled: Principled {
+                    transmission_weight: 1.0,
+                    roughness: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
         ),
         (
             "smooth white metal",
             Material {
-                metallic: 1.0,
-                roughness: 0.0,
+                principled: Principled {
+                    metallic: 1.0,
+                    roughness: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
         ),
         (
             "smooth coat over white diffuse",
             Material {
-                coat_weight: 1.0,
-                coat_roughness: 0.0,
-                specular_weight: 0.0,
+                principled: Principled {
+                    coat_weight: 1.0,
+                    coat_roughness: 0.0,
+                    specular_weight: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
         ),
         (
             "thin-walled glass",
             Material {
-                transmission_weight: 1.0,
-                roughness: 0.0,
-                thin_walled: true,
+                principled: Principled {
+                    transmission_weight: 1.0,
+                    roughness: 0.0,
+                    thin_walled: true,
+                    ..white().principled
+                },
                 ..white()
             },
         ),
@@ -248,8 +264,11 @@ fn furnace_white_metal_stays_white_at_every_roughness() {
     // (0.89 at roughness 0.5 without it, measured on this sphere).
     for roughness in [0.25, 0.5, 0.75, 1.0] {
         let material = Material {
-            metallic: 1.0,
-            roughness,
+            principled: Principled {
+                metallic: 1.0,
+                roughness,
+                ..white().principled
+            },
             ..white()
         };
         let (_, on_sphere) = principled_furnace(material, true, 256);
@@ -268,9 +287,12 @@ fn furnace_white_glass_stays_white_at_every_roughness() {
     for thin_walled in [false, true] {
         for roughness in [0.25, 0.5, 0.75, 1.0] {
             let material = Material {
-                transmission_weight: 1.0,
-                roughness,
-                thin_walled,
+                principled: Principled {
+                    transmission_weight: 1.0,
+                    roughness,
+                    thin_walled,
+                    ..white().principled
+                },
                 ..white()
             };
             let (_, on_sphere) = principled_furnace(material, true, 256);
@@ -302,8 +324,11 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         (
             "rough white metal",
             Material {
-                metallic: 1.0,
-                roughness: 0.5,
+                principled: Principled {
+                    metallic: 1.0,
+                    roughness: 0.5,
+                    ..white().principled
+                },
                 ..white()
             },
             1.0,
@@ -311,7 +336,10 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         (
             "white plastic",
             Material {
-                roughness: 0.5,
+                principled: Principled {
+                    roughness: 0.5,
+                    ..white().principled
+                },
                 ..white()
             },
             0.990,
@@ -319,8 +347,11 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         (
             "rough (Oren–Nayar) white diffuse",
             Material {
-                diffuse_roughness: 1.0,
-                specular_weight: 0.0,
+                principled: Principled {
+                    diffuse_roughness: 1.0,
+                    specular_weight: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
             1.0,
@@ -328,8 +359,11 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         (
             "sheen over white diffuse",
             Material {
-                sheen_weight: 1.0,
-                specular_weight: 0.0,
+                principled: Principled {
+                    sheen_weight: 1.0,
+                    specular_weight: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
             1.0,
@@ -337,9 +371,12 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         (
             "rough coat over white diffuse",
             Material {
-                coat_weight: 1.0,
-                coat_roughness: 0.5,
-                specular_weight: 0.0,
+                principled: Principled {
+                    coat_weight: 1.0,
+                    coat_roughness: 0.5,
+                    specular_weight: 0.0,
+                    ..white().principled
+                },
                 ..white()
             },
             0.990,

@@ -454,7 +454,7 @@ fn obj_files_import_with_their_materials() {
         .find(|m| m.name == "lamp")
         .expect("the lamp material");
     assert_eq!(
-        lamp.emission,
+        lamp.emission(),
         Vec3::splat(5.0),
         "a constant emitter is a light"
     );

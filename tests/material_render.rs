@@ -9,6 +9,7 @@ use kiln::material::compile::link;
 use kiln::material::{Graph, Node};
 use kiln::scene::graph_from_principled;
 use kiln::scene::{Camera, Light, Material, Scene, shapes};
+use kiln::shader::principled::Principled;
 
 /// Spheres of the given materials on a floor, under an area light, a sphere light and a sky.
 fn spheres(materials: Vec<Material>) -> Scene {
@@ -55,30 +56,42 @@ fn fixed_materials() -> Vec<Material> {
     vec![
         Material {
             name: "plastic".into(),
-            base_color: Vec3::new(0.1, 0.35, 0.8),
-            roughness: 0.25,
+            principled: Principled {
+                base_color: Vec3::new(0.1, 0.35, 0.8),
+                roughness: 0.25,
+                ..Principled::default()
+            },
             ..Material::default()
         },
         Material {
             name: "gold".into(),
-            base_color: Vec3::new(1.0, 0.78, 0.34),
-            metallic: 1.0,
-            roughness: 0.35,
+            principled: Principled {
+                base_color: Vec3::new(1.0, 0.78, 0.34),
+                metallic: 1.0,
+                roughness: 0.35,
+                ..Principled::default()
+            },
             ..Material::default()
         },
         Material {
             name: "glass".into(),
-            transmission_weight: 1.0,
-            roughness: 0.2,
+            principled: Principled {
+                transmission_weight: 1.0,
+                roughness: 0.2,
+                ..Principled::default()
+            },
             ..Material::default()
         },
         Material {
             name: "coated velvet".into(),
-            base_color: Vec3::new(0.15, 0.02, 0.25),
-            sheen_weight: 1.0,
-            coat_weight: 0.5,
-            anisotropy: 0.5,
-            anisotropy_rotation: 0.2,
+            principled: Principled {
+                base_color: Vec3::new(0.15, 0.02, 0.25),
+                sheen_weight: 1.0,
+                coat_weight: 0.5,
+                anisotropy: 0.5,
+                anisotropy_rotation: 0.2,
+                ..Principled::default()
+            },
             ..Material::default()
         },
     ]
@@ -116,7 +129,7 @@ fn a_constant_graph_emitter_is_sampled_as_a_light() {
     );
     let emitter = Material::from_graph("lamp", g).unwrap();
     assert_eq!(
-        emitter.emission,
+        emitter.emission(),
         Vec3::splat(8.0),
         "constant emission known in advance"
     );

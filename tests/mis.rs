@@ -10,6 +10,7 @@ mod common;
 use common::{gpu, render, settings};
 use glam::{Affine3A, Vec3};
 use kiln::scene::{Camera, EnvironmentMap, Material, Scene, shapes};
+use kiln::shader::principled::Principled;
 
 const SEEDS: u32 = 8;
 const SIZE: u32 = 24;
@@ -96,26 +97,35 @@ fn mis_is_never_noisier_than_bsdf_sampling_and_agrees_with_it() {
         (
             "glass",
             Material {
-                transmission_weight: 1.0,
-                roughness: 0.0,
+                principled: Principled {
+                    transmission_weight: 1.0,
+                    roughness: 0.0,
+                    ..Principled::default()
+                },
                 ..Material::default()
             },
         ),
         (
             "rough gold",
             Material {
-                base_color: Vec3::new(1.0, 0.78, 0.34),
-                metallic: 1.0,
-                roughness: 0.35,
+                principled: Principled {
+                    base_color: Vec3::new(1.0, 0.78, 0.34),
+                    metallic: 1.0,
+                    roughness: 0.35,
+                    ..Principled::default()
+                },
                 ..Material::default()
             },
         ),
         (
             "coated red",
             Material {
-                base_color: Vec3::new(0.6, 0.05, 0.05),
-                coat_weight: 1.0,
-                coat_roughness: 0.05,
+                principled: Principled {
+                    base_color: Vec3::new(0.6, 0.05, 0.05),
+                    coat_weight: 1.0,
+                    coat_roughness: 0.05,
+                    ..Principled::default()
+                },
                 ..Material::default()
             },
         ),

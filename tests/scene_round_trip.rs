@@ -12,6 +12,7 @@ use kiln::plugin::PluginHost;
 use kiln::scene::{
     Camera, EnvironmentMap, Light, Material, Mesh, Scene, SceneSettings, load_scene, save_scene,
 };
+use kiln::shader::principled::Principled;
 use proptest::prelude::*;
 
 /// Saves `scene` as `name` in `dir` and loads it back.
@@ -123,17 +124,21 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
     };
     let plain = scene.add_material(Material {
         name: "plain".into(),
-        base_color: Vec3::new(0.8, 0.1, 0.1),
-        roughness: 0.3,
-        anisotropy: 0.5,
-        anisotropy_rotation: 0.125,
-        coat_weight: 0.7,
-        sheen_weight: 0.2,
-        transmission_weight: 0.4,
-        transmission_depth: 2.0,
-        emission: Vec3::new(3.0, 2.0, 1.0),
-        opacity: 0.9,
-        thin_walled: true,
+        principled: Principled {
+            base_color: Vec3::new(0.8, 0.1, 0.1),
+            roughness: 0.3,
+            anisotropy: 0.5,
+            anisotropy_rotation: 0.125,
+            coat_weight: 0.7,
+            sheen_weight: 0.2,
+            transmission_weight: 0.4,
+            transmission_depth: 2.0,
+            emission_color: Vec3::new(3.0, 2.0, 1.0),
+            emission_strength: 1.0,
+            alpha: 0.9,
+            thin_walled: true,
+            ..Principled::default()
+        },
         ..Material::default()
     });
     let textured = scene.add_material(graph_material(
@@ -425,33 +430,35 @@ fn material() -> impl Strategy<Value = Material> {
     )
         .prop_map(
             |(u, c, (rotation, specular, ior, coat_ior, depth), (emission, thin_walled))| {
-                Material {
-                    name: String::new(),
-                    base_color: c[0],
-                    base_weight: u[0],
-                    diffuse_roughness: u[1],
-                    metallic: u[2],
-                    roughness: u[3],
-                    anisotropy: u[4],
-                    anisotropy_rotation: rotation,
-                    specular_weight: specular,
-                    specular_color: c[1],
-                    ior,
-                    transmission_weight: u[5],
-                    transmission_color: c[2],
-                    transmission_depth: depth,
-                    coat_weight: u[6],
-                    coat_roughness: u[7],
-                    coat_ior,
-                    coat_color: c[3],
-                    sheen_weight: u[8],
-                    sheen_color: c[4],
-                    sheen_roughness: u[9],
-                    emission: if u[10] < 0.3 { emission } else { Vec3::ZERO },
-                    opacity: u[11],
-                    thin_walled,
-                    graph: None,
-                }
+                Material::with(
+                    "",
+                    Principled {
+                        base_color: c[0],
+                        base_weight: u[0],
+                        diffuse_roughness: u[1],
+                        metallic: u[2],
+                        roughness: u[3],
+                        anisotropy: u[4],
+                        anisotropy_rotation: rotation,
+                        specular_weight: specular,
+                        specular_color: c[1],
+                        ior,
+                        transmission_weight: u[5],
+                        transmission_color: c[2],
+                        transmission_depth: depth,
+                        coat_weight: u[6],
+                        coat_roughness: u[7],
+                        coat_ior,
+                        coat_color: c[3],
+                        sheen_weight: u[8],
+                        sheen_color: c[4],
+                        sheen_roughness: u[9],
+                        emission_color: if u[10] < 0.3 { emission } else { Vec3::ONE },
+                        emission_strength: if u[10] < 0.3 { 10.0 * u[12] } else { 0.0 },
+                        alpha: u[11],
+                        thin_walled,
+                    },
+                )
             },
         )
 }

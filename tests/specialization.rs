@@ -8,6 +8,7 @@ use kiln::accel::build_scene_accel;
 use kiln::render::gpu_scene::GpuScene;
 use kiln::scene::{Material, Scene, default_scene};
 use kiln::shader::features::features_wgsl;
+use kiln::shader::principled::Principled;
 use kiln::shader::{KernelFeatures, lobes};
 
 fn features(scene: &Scene) -> KernelFeatures {
@@ -41,7 +42,10 @@ fn lobes_follow_the_materials_and_graphs() {
     let mut scene = default_scene().unwrap();
     let glass = scene.add_material(Material {
         name: "glass".into(),
-        transmission_weight: 1.0,
+        principled: Principled {
+            transmission_weight: 1.0,
+            ..Principled::default()
+        },
         ..Material::default()
     });
     scene.instances[0].material = glass;

@@ -19,30 +19,8 @@
 // (multiple_scattering.wgsl, dielectric_energy.wgsl), so white ones stay white at every
 // roughness. Not yet: coat/base layering beyond albedo scaling.
 
-struct Principled {
-    base_color: vec3<f32>,
-    base_weight: f32,
-    metallic: f32,
-    roughness: f32,
-    anisotropy: f32,
-    specular_weight: f32,
-    specular_color: vec3<f32>,
-    ior: f32,
-    transmission_weight: f32,
-    transmission_color: vec3<f32>,
-    // > 0: the colour is reached at this depth inside (Beer–Lambert) and the surface
-    // itself is untinted.
-    transmission_depth: f32,
-    coat_weight: f32,
-    coat_roughness: f32,
-    coat_ior: f32,
-    coat_color: vec3<f32>,
-    sheen_weight: f32,
-    sheen_color: vec3<f32>,
-    sheen_roughness: f32,
-    thin_walled: bool,
-    diffuse_roughness: f32,
-};
+// `struct Principled`, its packed form and defaults are generated from the parameter table
+// (src/shader/principled.rs).
 
 const LOBE_COAT: u32 = 0u;
 const LOBE_SHEEN: u32 = 1u;
@@ -284,32 +262,4 @@ fn principled_extinction(p: Principled) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     return -log(clamp(p.transmission_color, vec3<f32>(1e-6), vec3<f32>(1.0))) / p.transmission_depth;
-}
-
-// The packed form materials are stored in (see `Material` in scene.wgsl):
-// (base colour, base weight), (specular colour, specular weight), (transmission colour,
-// transmission weight), (coat colour, coat weight), (sheen colour, sheen weight),
-// (metallic, roughness, anisotropy, IOR), (coat roughness, coat IOR, sheen roughness,
-// transmission depth), then thin-walled and the diffuse roughness.
-fn principled_unpack(
-    base: vec4<f32>,
-    specular: vec4<f32>,
-    transmission: vec4<f32>,
-    coat: vec4<f32>,
-    sheen: vec4<f32>,
-    params: vec4<f32>,
-    layers: vec4<f32>,
-    thin_walled: bool,
-    diffuse_roughness: f32,
-) -> Principled {
-    return Principled(
-        base.rgb, base.w,
-        params.x, params.y, params.z,
-        specular.w, specular.rgb, params.w,
-        transmission.w, transmission.rgb, layers.w,
-        coat.w, layers.x, layers.y, coat.rgb,
-        sheen.w, sheen.rgb, layers.z,
-        thin_walled,
-        diffuse_roughness,
-    );
 }

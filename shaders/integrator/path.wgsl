@@ -28,19 +28,9 @@ var<private> aov_depth: f32;
 // Surfaces a path may pass through (alpha cut-outs) before it counts as lost.
 const MAX_PASS_THROUGH: u32 = 64u;
 
-fn material_principled(m: Material) -> Principled {
-    return principled_unpack(
-        m.principled[0], m.principled[1], m.principled[2], m.principled[3],
-        m.principled[4], m.principled[5], m.principled[6],
-        m.thin_walled != 0u,
-        m.diffuse_roughness,
-    );
-}
-
 // The fixed-parameter material of the material buffer (materials without a graph).
 fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
-    let m = materials[id];
-    return MaterialEval(material_principled(m), m.emission.rgb, m.emission.w, sp.n, m.anisotropy_rotation);
+    return material_eval(principled_unpack(materials[id].principled), sp.n);
 }
 
 // A small hash of the instance index in [0, 1), for the Object Info node.

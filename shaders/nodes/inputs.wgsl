@@ -36,6 +36,11 @@ struct MaterialEval {
     anisotropy_rotation: f32,
 };
 
+// What the integrator reads of a principled surface with shading normal `normal`.
+fn material_eval(p: Principled, normal: vec3<f32>) -> MaterialEval {
+    return MaterialEval(p, p.emission_color * p.emission_strength, p.alpha, normal, p.anisotropy_rotation);
+}
+
 struct NdTextureCoordinate {
     generated: vec3<f32>,
     normal: vec3<f32>,
@@ -208,9 +213,5 @@ fn nd_ramp_mix(a: vec4<f32>, b: vec4<f32>, pa: f32, pb: f32, t: f32, mode: u32) 
 
 // An unconnected material output: Blender's default principled surface.
 fn nd_default_surface(sp: ShadingPoint) -> MaterialEval {
-    let p = Principled(
-        vec3<f32>(0.8), 1.0, 0.0, 0.5, 0.0, 1.0, vec3<f32>(1.0), 1.5, 0.0, vec3<f32>(1.0), 0.0,
-        0.0, 0.03, 1.5, vec3<f32>(1.0), 0.0, vec3<f32>(1.0), 0.3, false, 0.0,
-    );
-    return MaterialEval(p, vec3<f32>(0.0), 1.0, sp.n, 0.0);
+    return material_eval(principled_default(), sp.n);
 }

@@ -30,16 +30,28 @@ fn extreme_principled(bits: u32, roughness: f32, anisotropy: f32, colour: f32) -
     let h = pcg_hash(bits);
     let w = COLOURS[h % 5u];
     let v = COLOURS[(h >> 3u) % 5u];
-    return Principled(
-        vec3<f32>(colour, v, 0.5), w,
-        COLOURS[(h >> 6u) % 5u], roughness, anisotropy,
-        v, vec3<f32>(1.0, colour, w), IORS[(h >> 9u) & 7u],
-        COLOURS[(h >> 12u) % 5u], vec3<f32>(w, colour, 1.0), select(0.0, 0.5, ((h >> 15u) & 1u) != 0u),
-        COLOURS[(h >> 16u) % 5u], ROUGHNESS[(h >> 19u) & 7u], IORS[(h >> 22u) & 7u], vec3<f32>(v, 1.0, colour),
-        COLOURS[(h >> 25u) % 5u], vec3<f32>(1.0, w, colour), ROUGHNESS[(h >> 28u) & 7u],
-        ((h >> 31u) & 1u) != 0u,
-        COLOURS[(h >> 27u) % 5u],
-    );
+    var p = principled_default();
+    p.base_color = vec3<f32>(colour, v, 0.5);
+    p.base_weight = w;
+    p.metallic = COLOURS[(h >> 6u) % 5u];
+    p.roughness = roughness;
+    p.anisotropy = anisotropy;
+    p.specular_weight = v;
+    p.specular_color = vec3<f32>(1.0, colour, w);
+    p.ior = IORS[(h >> 9u) & 7u];
+    p.transmission_weight = COLOURS[(h >> 12u) % 5u];
+    p.transmission_color = vec3<f32>(w, colour, 1.0);
+    p.transmission_depth = select(0.0, 0.5, ((h >> 15u) & 1u) != 0u);
+    p.coat_weight = COLOURS[(h >> 16u) % 5u];
+    p.coat_roughness = ROUGHNESS[(h >> 19u) & 7u];
+    p.coat_ior = IORS[(h >> 22u) & 7u];
+    p.coat_color = vec3<f32>(v, 1.0, colour);
+    p.sheen_weight = COLOURS[(h >> 25u) % 5u];
+    p.sheen_color = vec3<f32>(1.0, w, colour);
+    p.sheen_roughness = ROUGHNESS[(h >> 28u) & 7u];
+    p.thin_walled = ((h >> 31u) & 1u) != 0u;
+    p.diffuse_roughness = COLOURS[(h >> 27u) % 5u];
+    return p;
 }
 
 @compute @workgroup_size(64)

@@ -3,13 +3,13 @@
 // including it declares `probe_in: array<vec4<u32>>`.
 //
 // A lobe configuration is CONFIG_STRIDE vec4s starting at `base`: (kind, thin, 0, 0),
-// (alpha.x, alpha.y, eta, 0) as f32 bits, f0 or albedo, tint, wo, then for the principled
-// surface its seven packed vec4s (principled_unpack).
+// (alpha.x, alpha.y, eta, 0) as f32 bits, f0 or albedo, tint, wo, then the principled
+// surface's PRINCIPLED_VEC4S packed vec4s (principled_unpack).
 // Kinds: 0 diffuse, 1 conductor, 2 dielectric, 3 sheen (roughness in alpha.x), 4 dielectric
 // reflection only (scale in tint), 5 the principled surface, 6 single-scattering rough
 // diffuse (sigma in alpha.x).
 
-const CONFIG_STRIDE: u32 = 12u;
+const CONFIG_STRIDE: u32 = 5u + PRINCIPLED_VEC4S;
 
 struct LobeParams {
     kind: u32,
@@ -24,6 +24,10 @@ struct LobeParams {
 
 fn lobe_params(base: u32) -> LobeParams {
     let a = bitcast<vec4<f32>>(probe_in[base + 1u]);
+    var packed: array<vec4<f32>, PRINCIPLED_VEC4S>;
+    for (var i = 0u; i < PRINCIPLED_VEC4S; i++) {
+        packed[i] = bitcast<vec4<f32>>(probe_in[base + 5u + i]);
+    }
     return LobeParams(
         probe_in[base].x,
         a.xy,
@@ -32,17 +36,7 @@ fn lobe_params(base: u32) -> LobeParams {
         bitcast<vec3<f32>>(probe_in[base + 2u].xyz),
         bitcast<vec3<f32>>(probe_in[base + 3u].xyz),
         bitcast<vec3<f32>>(probe_in[base + 4u].xyz),
-        principled_unpack(
-            bitcast<vec4<f32>>(probe_in[base + 5u]),
-            bitcast<vec4<f32>>(probe_in[base + 6u]),
-            bitcast<vec4<f32>>(probe_in[base + 7u]),
-            bitcast<vec4<f32>>(probe_in[base + 8u]),
-            bitcast<vec4<f32>>(probe_in[base + 9u]),
-            bitcast<vec4<f32>>(probe_in[base + 10u]),
-            bitcast<vec4<f32>>(probe_in[base + 11u]),
-            probe_in[base].y != 0u,
-            bitcast<f32>(probe_in[base + 1u].w),
-        ),
+        principled_unpack(packed),
     );
 }
 

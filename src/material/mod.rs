@@ -140,7 +140,10 @@ pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> 
 /// material's function, and the dispatcher `evaluate_material(id, sp)` the integrator
 /// calls. Materials not listed read their fixed parameters from the material buffer.
 pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, String)> {
-    let mut roots: BTreeSet<String> = ["ShadingPoint", "MaterialEval"].map(String::from).into();
+    // The integrator reads the material buffer through `material_eval` too.
+    let mut roots: BTreeSet<String> = ["ShadingPoint", "MaterialEval", "material_eval"]
+        .map(String::from)
+        .into();
     for (_, m) in materials {
         roots.extend(m.calls.iter().cloned());
     }

@@ -17,6 +17,7 @@ use std::sync::OnceLock;
 
 use super::compile::{GraphError, MaterialTraits};
 use super::graph::{Param, RampStop, SocketType, Value};
+use crate::shader::principled::{self, ParamValue};
 
 /// The node a material renders: the root of compilation, part of the graph model rather
 /// than a node the library could do without.
@@ -1265,55 +1266,9 @@ fn build() -> Vec<NodeDef> {
             label: "Principled BSDF",
             category: "Shader",
             doc: "The layered surface of shaders/bsdf/principled.wgsl (Blender's Principled BSDF). Inputs are clamped to their valid ranges.",
-            inputs: vec![
-                color("base_color", [0.8; 3], "diffuse albedo or metal colour"),
-                float("base_weight", 1.0, "scales the base colour"),
-                float(
-                    "diffuse_roughness",
-                    0.0,
-                    "Oren–Nayar roughness of the diffuse base",
-                ),
-                float("metallic", 0.0, "0 dielectric, 1 metal"),
-                float("roughness", 0.5, "perceptual roughness"),
-                float("anisotropy", 0.0, "stretches highlights along the tangent"),
-                float("anisotropy_rotation", 0.0, "turns the tangent, in turns"),
-                float("ior", 1.5, "index of refraction"),
-                float("specular_weight", 1.0, "scales dielectric reflection"),
-                color(
-                    "specular_color",
-                    [1.0; 3],
-                    "tints dielectric reflection; metal edge tint",
-                ),
-                float("transmission_weight", 0.0, "0 opaque, 1 glass"),
-                color("transmission_color", [1.0; 3], "glass tint"),
-                float(
-                    "transmission_depth",
-                    0.0,
-                    "depth at which light inside reaches the transmission colour (0: tint at the surface)",
-                ),
-                float("coat_weight", 0.0, "clear coat amount"),
-                float("coat_roughness", 0.03, "coat roughness"),
-                float("coat_ior", 1.5, "coat index of refraction"),
-                color("coat_color", [1.0; 3], "tints what lies under the coat"),
-                float("sheen_weight", 0.0, "microfibre sheen amount"),
-                color("sheen_color", [1.0; 3], "sheen colour"),
-                float("sheen_roughness", 0.3, "sheen roughness"),
-                color("emission_color", [1.0; 3], "emitted colour"),
-                float("emission_strength", 0.0, "emitted radiance scale"),
-                float("alpha", 1.0, "opacity; below 1 light passes through"),
-                implicit(
-                    "normal",
-                    "sp.n",
-                    "the shading normal",
-                    "shading normal (world space)",
-                ),
-            ],
+            inputs: principled_inputs(),
             outputs: vec![out("bsdf", Bsdf, "", "the surface")],
-            params: vec![ParamDef {
-                name: "thin_walled",
-                kind: ParamKind::Bool(false),
-                doc: "a surface with no inside",
-            }],
+            params: principled_params(),
             traits: Some(principled_bsdf_traits),
             fold: None,
             code: Code::Generated(generate_principled_bsdf),
@@ -1493,43 +1448,22 @@ fn generate_bump(e: &mut dyn Emit) -> Result<String, GraphError> {
     ))
 }
 
-/// `MaterialEval(Principled(..), emission, alpha, normal, anisotropy rotation)`, every
-/// input clamped to its valid range (non-finite values replaced by the default).
+/// `material_eval(Principled(..), normal)`: one field per principled parameter in the
+/// table's order, each input clamped to the parameter's range (non-finite values replaced
+/// by the default) and each flag from the node's parameters.
 fn generate_principled_bsdf(e: &mut dyn Emit) -> Result<String, GraphError> {
-    let thin = e.params().flag("thin_walled");
+    let mut fields = Vec::new();
+    for p in &principled::PARAMETERS {
+        fields.push(match p.default_value() {
+            ParamValue::Bool(_) => e.params().flag(p.name).to_string(),
+            ParamValue::Float(d) => p.range.clamp_wgsl(p.kind, &e.input(p.name), d),
+            ParamValue::Color(_) => p.range.clamp_wgsl(p.kind, &e.input(p.name), 0.0),
+        });
+    }
     let code = format!(
-        "MaterialEval(Principled(nd_unit3({base_color}), nd_unit({base_weight}), nd_unit({metallic}), nd_unit({roughness}), \
-         nd_unit({anisotropy}), max(nd_finite({specular_weight}, 1.0), 0.0), nd_unit3({specular_color}), \
-         clamp(nd_finite({ior}, 1.5), 1.0, 100.0), nd_unit({transmission_weight}), nd_unit3({transmission_color}), \
-         max(nd_finite({transmission_depth}, 0.0), 0.0), nd_unit({coat_weight}), nd_unit({coat_roughness}), \
-         clamp(nd_finite({coat_ior}, 1.5), 1.0, 100.0), nd_unit3({coat_color}), nd_unit({sheen_weight}), \
-         nd_unit3({sheen_color}), nd_unit({sheen_roughness}), {thin}, nd_unit({diffuse_roughness})), \
-         max(nd_finite3({emission_color}), vec3<f32>(0.0)) * max(nd_finite({emission_strength}, 0.0), 0.0), \
-         nd_unit({alpha}), nd_safe_normal({normal}, sp.n), nd_finite({anisotropy_rotation}, 0.0))",
-        base_color = e.input("base_color"),
-        base_weight = e.input("base_weight"),
-        metallic = e.input("metallic"),
-        roughness = e.input("roughness"),
-        anisotropy = e.input("anisotropy"),
-        specular_weight = e.input("specular_weight"),
-        specular_color = e.input("specular_color"),
-        ior = e.input("ior"),
-        transmission_weight = e.input("transmission_weight"),
-        transmission_color = e.input("transmission_color"),
-        transmission_depth = e.input("transmission_depth"),
-        coat_weight = e.input("coat_weight"),
-        coat_roughness = e.input("coat_roughness"),
-        coat_ior = e.input("coat_ior"),
-        coat_color = e.input("coat_color"),
-        sheen_weight = e.input("sheen_weight"),
-        sheen_color = e.input("sheen_color"),
-        sheen_roughness = e.input("sheen_roughness"),
-        diffuse_roughness = e.input("diffuse_roughness"),
-        emission_color = e.input("emission_color"),
-        emission_strength = e.input("emission_strength"),
-        alpha = e.input("alpha"),
-        normal = e.input("normal"),
-        anisotropy_rotation = e.input("anisotropy_rotation"),
+        "material_eval(Principled({}), nd_safe_normal({}, sp.n))",
+        fields.join(", "),
+        e.input("normal")
     );
     e.call(&[
         "nd_unit",
@@ -1539,6 +1473,41 @@ fn generate_principled_bsdf(e: &mut dyn Emit) -> Result<String, GraphError> {
         "nd_safe_normal",
     ]);
     Ok(code)
+}
+
+/// The Principled BSDF's sockets: one per principled parameter (`crate::shader::principled`,
+/// flags aside), then the shading normal.
+fn principled_inputs() -> Vec<SocketDef> {
+    let mut inputs: Vec<SocketDef> = principled::PARAMETERS
+        .iter()
+        .filter_map(|p| match p.default_value() {
+            ParamValue::Float(x) => Some(float(p.name, x, p.doc)),
+            ParamValue::Color(c) => Some(color(p.name, c.to_array(), p.doc)),
+            ParamValue::Bool(_) => None,
+        })
+        .collect();
+    inputs.push(implicit(
+        "normal",
+        "sp.n",
+        "the shading normal",
+        "shading normal (world space)",
+    ));
+    inputs
+}
+
+/// The Principled BSDF's parameters: the principled flags.
+fn principled_params() -> Vec<ParamDef> {
+    principled::PARAMETERS
+        .iter()
+        .filter_map(|p| match p.default_value() {
+            ParamValue::Bool(b) => Some(ParamDef {
+                name: p.name,
+                kind: ParamKind::Bool(b),
+                doc: p.doc,
+            }),
+            _ => None,
+        })
+        .collect()
 }
 
 // ------------------------------------------------------------------ surface traits

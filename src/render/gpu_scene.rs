@@ -191,27 +191,11 @@ pub fn environment_data(map: &crate::scene::EnvironmentMap) -> Vec<[f32; 4]> {
 
 /// The GPU form of a material (`Material` in shaders/scene.wgsl).
 pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
-    let v = |c: Vec3, w: f32| [c.x, c.y, c.z, w];
     GpuMaterial {
-        principled: [
-            v(m.base_color, m.base_weight),
-            v(m.specular_color, m.specular_weight),
-            v(m.transmission_color, m.transmission_weight),
-            v(m.coat_color, m.coat_weight),
-            v(m.sheen_color, m.sheen_weight),
-            [m.metallic, m.roughness, m.anisotropy, m.ior],
-            [
-                m.coat_roughness,
-                m.coat_ior,
-                m.sheen_roughness,
-                m.transmission_depth,
-            ],
-        ],
-        emission: v(m.emission, m.opacity),
-        thin_walled: m.thin_walled as u32,
+        principled: m.principled.pack(),
+        emission: m.emission().extend(0.0).into(),
         transmissive: m.is_transmissive() as u32,
-        diffuse_roughness: m.diffuse_roughness,
-        anisotropy_rotation: m.anisotropy_rotation,
+        _pad: [0; 3],
     }
 }
 
@@ -417,7 +401,7 @@ impl SceneArrays {
             if !material.is_emissive() {
                 continue;
             }
-            let lum = luminance(material.emission);
+            let lum = luminance(material.emission());
             let mesh = &scene.meshes[inst.mesh];
             // A mirroring transform flips the winding; keep the emitting side where the
             // kernel's transformed normal says it is.
@@ -438,7 +422,7 @@ impl SceneArrays {
                     p0: p0.extend(1.0).into(),
                     p1: p1.extend(1.0).into(),
                     p2: p2.extend(1.0).into(),
-                    emission: material.emission.extend(0.0).into(),
+                    emission: material.emission().extend(0.0).into(),
                 });
             }
         }

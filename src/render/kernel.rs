@@ -54,6 +54,10 @@ impl KernelSource {
                 source.push("generated: scene bindings", &bindings_wgsl(features));
                 source.push("generated: paged array accessors", &paging_wgsl(features));
                 source.push("generated: kernel features", &features_wgsl(features));
+                source.push(
+                    "generated: principled parameters (src/shader/principled.rs)",
+                    &crate::shader::principled::wgsl(),
+                );
             }
         }
         source

@@ -72,55 +72,14 @@ impl MaterialDesc {
             (None, None) => None,
         };
         if let Some(graph) = graph {
-            let plain = MaterialDesc {
-                graph: None,
-                graph_file: None,
-                ..MaterialDesc::default()
-            };
-            let rest = MaterialDesc {
-                graph: None,
-                graph_file: None,
-                ..self.clone()
-            };
-            if rest != plain {
-                return Err("a material with a graph takes its parameters from the graph:                             remove the other fields"
-                    .into());
+            if let Some(first) = self.given.first() {
+                return Err(format!(
+                    "a material with a graph takes its parameters from the graph: remove `{first}`"
+                ));
             }
             return Material::from_graph(name, graph).map_err(|e| e.to_string());
         }
-        let strength = self.emission_strength;
-        if !strength.is_finite() || strength < 0.0 {
-            return Err(format!(
-                "emission_strength {strength} must be finite and non-negative"
-            ));
-        }
-        let material = Material {
-            name: name.to_owned(),
-            base_color: self.base_color.into(),
-            base_weight: self.base_weight,
-            diffuse_roughness: self.diffuse_roughness,
-            metallic: self.metallic,
-            roughness: self.roughness,
-            anisotropy: self.anisotropy,
-            anisotropy_rotation: self.anisotropy_rotation,
-            specular_weight: self.specular_weight,
-            specular_color: self.specular_color.into(),
-            ior: self.ior,
-            transmission_weight: self.transmission_weight,
-            transmission_color: self.transmission_color.into(),
-            transmission_depth: self.transmission_depth,
-            coat_weight: self.coat_weight,
-            coat_roughness: self.coat_roughness,
-            coat_ior: self.coat_ior,
-            coat_color: self.coat_color.into(),
-            sheen_weight: self.sheen_weight,
-            sheen_color: self.sheen_color.into(),
-            sheen_roughness: self.sheen_roughness,
-            emission: Vec3::from(self.emission) * strength,
-            opacity: self.opacity,
-            thin_walled: self.thin_walled,
-            graph: None,
-        };
+        let material = Material::with(name, self.principled);
         material.validate()?;
         Ok(material)
     }

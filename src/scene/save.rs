@@ -107,10 +107,7 @@ pub fn save_scene(
                 for group in graph.groups.values_mut() {
                     rename(&mut group.nodes);
                 }
-                MaterialDesc {
-                    graph: Some(graph),
-                    ..MaterialDesc::default()
-                }
+                MaterialDesc::from_graph(graph)
             }
             None => MaterialDesc::from_params(m),
         };

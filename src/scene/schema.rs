@@ -13,6 +13,7 @@ use serde::de::{Error as _, MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{Material, SceneSettings};
+use crate::shader::principled::{self, Kind, ParamValue, Principled};
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -168,80 +169,170 @@ pub(super) enum Projection {
     },
 }
 
-/// The principled material's parameters (docs/SCENE_FORMAT.md lists them); any left out
-/// take Blender's defaults.
-#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
-#[serde(deny_unknown_fields, default)]
+/// A material: principled parameters by name (the table of `crate::shader::principled`;
+/// any left out take Blender's defaults), or a node graph. docs/SCENE_FORMAT.md lists the
+/// fields.
+///
+/// Two shorthands are read besides the table's names: `emission`, a radiance (the emission
+/// colour, with strength 1 unless `emission_strength` is given), and `opacity` for
+/// `alpha`. Writing uses the table's names.
+#[derive(Clone, Debug, PartialEq, Default)]
 pub(super) struct MaterialDesc {
-    pub(super) base_color: [f32; 3],
-    pub(super) base_weight: f32,
-    pub(super) diffuse_roughness: f32,
-    pub(super) metallic: f32,
-    pub(super) roughness: f32,
-    pub(super) anisotropy: f32,
-    pub(super) anisotropy_rotation: f32,
-    pub(super) specular_weight: f32,
-    pub(super) specular_color: [f32; 3],
-    pub(super) ior: f32,
-    pub(super) transmission_weight: f32,
-    pub(super) transmission_color: [f32; 3],
-    pub(super) transmission_depth: f32,
-    pub(super) coat_weight: f32,
-    pub(super) coat_roughness: f32,
-    pub(super) coat_ior: f32,
-    pub(super) coat_color: [f32; 3],
-    pub(super) sheen_weight: f32,
-    pub(super) sheen_color: [f32; 3],
-    pub(super) sheen_roughness: f32,
-    pub(super) emission: [f32; 3],
-    pub(super) emission_strength: f32,
-    pub(super) opacity: f32,
-    pub(super) thin_walled: bool,
-    /// A node graph (docs/NODES.md) computing the parameters instead of the fields above.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    pub(super) principled: Principled,
+    /// The parameters the file gave, by their table names.
+    pub(super) given: BTreeSet<&'static str>,
+    /// A node graph (docs/NODES.md) computing the parameters instead.
     pub(super) graph: Option<crate::material::Graph>,
-    /// A `.kmat` material file, relative to the scene file, instead of the fields above.
-    #[serde(skip_serializing_if = "Option::is_none")]
+    /// A `.kmat` material file, relative to the scene file, instead of parameters.
     pub(super) graph_file: Option<String>,
 }
 
-impl Default for MaterialDesc {
-    fn default() -> Self {
-        Self::from_params(&Material::default())
+const EMISSION_SHORTHAND: &str = "emission";
+const OPACITY_SHORTHAND: &str = "opacity";
+
+/// Every field name a material may have, for serde's messages.
+const MATERIAL_FIELDS: [&str; principled::PARAMETERS.len() + 4] = {
+    let mut fields = [""; principled::PARAMETERS.len() + 4];
+    let mut i = 0;
+    while i < principled::PARAMETERS.len() {
+        fields[i] = principled::PARAMETERS[i].name;
+        i += 1;
     }
-}
+    fields[i] = "graph";
+    fields[i + 1] = "graph_file";
+    fields[i + 2] = EMISSION_SHORTHAND;
+    fields[i + 3] = OPACITY_SHORTHAND;
+    fields
+};
 
 impl MaterialDesc {
-    /// The fixed parameters of `m` (its graph, if any, aside).
+    /// The fixed parameters of `m` (its graph, if any, aside), every one given.
     pub(super) fn from_params(m: &Material) -> Self {
         Self {
-            base_color: m.base_color.into(),
-            base_weight: m.base_weight,
-            diffuse_roughness: m.diffuse_roughness,
-            metallic: m.metallic,
-            roughness: m.roughness,
-            anisotropy: m.anisotropy,
-            anisotropy_rotation: m.anisotropy_rotation,
-            specular_weight: m.specular_weight,
-            specular_color: m.specular_color.into(),
-            ior: m.ior,
-            transmission_weight: m.transmission_weight,
-            transmission_color: m.transmission_color.into(),
-            transmission_depth: m.transmission_depth,
-            coat_weight: m.coat_weight,
-            coat_roughness: m.coat_roughness,
-            coat_ior: m.coat_ior,
-            coat_color: m.coat_color.into(),
-            sheen_weight: m.sheen_weight,
-            sheen_color: m.sheen_color.into(),
-            sheen_roughness: m.sheen_roughness,
-            emission: m.emission.into(),
-            emission_strength: 1.0,
-            opacity: m.opacity,
-            thin_walled: m.thin_walled,
+            principled: m.principled,
+            given: principled::PARAMETERS.iter().map(|p| p.name).collect(),
             graph: None,
             graph_file: None,
         }
+    }
+
+    /// A material computed by `graph`.
+    pub(super) fn from_graph(graph: crate::material::Graph) -> Self {
+        Self {
+            graph: Some(graph),
+            ..Self::default()
+        }
+    }
+}
+
+impl Serialize for MaterialDesc {
+    fn serialize<S: Serializer>(&self, serializer: S) -> Result<S::Ok, S::Error> {
+        use serde::ser::SerializeStruct;
+        let parameters = principled::PARAMETERS
+            .iter()
+            .filter(|p| self.given.contains(p.name));
+        let count = parameters.clone().count()
+            + self.graph.is_some() as usize
+            + self.graph_file.is_some() as usize;
+        let mut out = serializer.serialize_struct("MaterialDesc", count)?;
+        for p in parameters {
+            match self
+                .principled
+                .get(p.name)
+                .expect("every parameter is a field")
+            {
+                ParamValue::Float(x) => out.serialize_field(p.name, &x)?,
+                ParamValue::Color(c) => out.serialize_field(p.name, &c.to_array())?,
+                ParamValue::Bool(b) => out.serialize_field(p.name, &b)?,
+            }
+        }
+        if let Some(graph) = &self.graph {
+            out.serialize_field("graph", graph)?;
+        }
+        if let Some(file) = &self.graph_file {
+            out.serialize_field("graph_file", file)?;
+        }
+        out.end()
+    }
+}
+
+impl<'de> Deserialize<'de> for MaterialDesc {
+    fn deserialize<D: Deserializer<'de>>(deserializer: D) -> Result<Self, D::Error> {
+        struct FieldName(String);
+        impl<'de> Deserialize<'de> for FieldName {
+            fn deserialize<D: Deserializer<'de>>(d: D) -> Result<Self, D::Error> {
+                struct Name;
+                impl Visitor<'_> for Name {
+                    type Value = FieldName;
+                    fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                        f.write_str("a material field name")
+                    }
+                    fn visit_str<E: serde::de::Error>(self, v: &str) -> Result<FieldName, E> {
+                        Ok(FieldName(v.to_owned()))
+                    }
+                }
+                d.deserialize_identifier(Name)
+            }
+        }
+
+        struct Fields;
+        impl<'de> Visitor<'de> for Fields {
+            type Value = MaterialDesc;
+            fn expecting(&self, f: &mut fmt::Formatter) -> fmt::Result {
+                f.write_str("a material's fields")
+            }
+            fn visit_map<A: MapAccess<'de>>(self, mut map: A) -> Result<MaterialDesc, A::Error> {
+                let mut desc = MaterialDesc::default();
+                let mut seen = BTreeSet::new();
+                let mut emission_shorthand = false;
+                while let Some(FieldName(key)) = map.next_key()? {
+                    let Some(field) = MATERIAL_FIELDS.iter().find(|f| **f == key) else {
+                        return Err(A::Error::unknown_field(&key, &MATERIAL_FIELDS));
+                    };
+                    if !seen.insert(*field) {
+                        return Err(A::Error::duplicate_field(field));
+                    }
+                    let name = match *field {
+                        "graph" => {
+                            desc.graph = Some(map.next_value()?);
+                            continue;
+                        }
+                        "graph_file" => {
+                            desc.graph_file = Some(map.next_value()?);
+                            continue;
+                        }
+                        EMISSION_SHORTHAND => {
+                            emission_shorthand = true;
+                            "emission_color"
+                        }
+                        OPACITY_SHORTHAND => "alpha",
+                        name => name,
+                    };
+                    let p = Principled::parameter(name).expect("a table name");
+                    let value = match p.kind {
+                        Kind::Float => ParamValue::Float(map.next_value()?),
+                        Kind::Color => ParamValue::Color(map.next_value::<[f32; 3]>()?.into()),
+                        Kind::Bool => ParamValue::Bool(map.next_value()?),
+                    };
+                    if !desc.given.insert(p.name) {
+                        return Err(A::Error::custom(format!(
+                            "`{key}` gives {} a second time",
+                            p.name
+                        )));
+                    }
+                    desc.principled
+                        .set(p.name, value)
+                        .map_err(A::Error::custom)?;
+                }
+                if emission_shorthand && !desc.given.contains("emission_strength") {
+                    desc.principled.emission_strength = 1.0;
+                    desc.given.insert("emission_strength");
+                }
+                Ok(desc)
+            }
+        }
+
+        deserializer.deserialize_struct("MaterialDesc", &MATERIAL_FIELDS, Fields)
     }
 }
 

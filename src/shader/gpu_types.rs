@@ -17,7 +17,7 @@ pub const LIGHT_DISTANT: u32 = 2;
 
 /// Every constant above with its WGSL name, for the test that compares them with
 /// `shaders/scene.wgsl`.
-pub const MIRRORED_CONSTANTS: [(&str, u32); 8] = [
+pub const MIRRORED_CONSTANTS: [(&str, u32); 9] = [
     ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
     ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
     ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
@@ -26,6 +26,7 @@ pub const MIRRORED_CONSTANTS: [(&str, u32); 8] = [
     ("LIGHT_POINT", LIGHT_POINT),
     ("LIGHT_SPOT", LIGHT_SPOT),
     ("LIGHT_DISTANT", LIGHT_DISTANT),
+    ("PRINCIPLED_VEC4S", super::principled::PACKED_VEC4S as u32),
 ];
 
 #[repr(C)]
@@ -81,17 +82,14 @@ pub struct GpuTriangle {
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuMaterial {
-    /// The seven vec4s `principled_unpack` reads (shaders/bsdf/principled.wgsl).
-    pub principled: [[f32; 4]; 7],
-    /// rgb: emitted radiance; w: opacity.
+    /// The principled parameters, [`super::principled::Principled::pack`]ed.
+    pub principled: [[f32; 4]; super::principled::PACKED_VEC4S],
+    /// rgb: the emitted radiance light sampling knows in advance (0 where a graph varies
+    /// it).
     pub emission: [f32; 4],
-    /// 1 if thin-walled.
-    pub thin_walled: u32,
     /// 1 if light passes through (the surface keeps its geometric orientation).
     pub transmissive: u32,
-    pub diffuse_roughness: f32,
-    /// The anisotropic tangent's rotation, in turns.
-    pub anisotropy_rotation: f32,
+    pub _pad: [u32; 3],
 }
 
 #[repr(C)]
@@ -201,10 +199,19 @@ mod tests {
         }};
     }
 
+    /// `shaders/scene.wgsl` with the generated principled declarations it uses.
+    fn scene_wgsl_module() -> naga::Module {
+        let text = format!(
+            "{}{}",
+            super::super::principled::wgsl(),
+            include_str!("../../shaders/scene.wgsl")
+        );
+        naga::front::wgsl::parse_str(&text).expect("scene.wgsl parses")
+    }
+
     #[test]
     fn every_gpu_struct_matches_the_wgsl_layout_field_by_field() {
-        let module = naga::front::wgsl::parse_str(include_str!("../../shaders/scene.wgsl"))
-            .expect("scene.wgsl parses");
+        let module = scene_wgsl_module();
         assert_same_layout!(
             &module,
             GpuParams,
@@ -247,14 +254,7 @@ mod tests {
             &module,
             GpuMaterial,
             "Material",
-            [
-                principled,
-                emission,
-                thin_walled,
-                transmissive,
-                diffuse_roughness,
-                anisotropy_rotation
-            ]
+            [principled, emission, transmissive, _pad]
         );
         assert_same_layout!(
             &module,
@@ -273,8 +273,7 @@ mod tests {
 
     #[test]
     fn every_mirrored_constant_has_its_wgsl_value() {
-        let module = naga::front::wgsl::parse_str(include_str!("../../shaders/scene.wgsl"))
-            .expect("scene.wgsl parses");
+        let module = scene_wgsl_module();
         let wgsl: Vec<(String, naga::Literal)> = module
             .constants
             .iter()

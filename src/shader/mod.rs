@@ -1,12 +1,14 @@
 //! The shader contract: what the CPU and the kernel agree on, at the bottom of the layers.
 //! The WGSL files of `shaders/` ([`LIBRARY`]), the principled lobes' bits ([`lobes`]), what
-//! a kernel is specialised for ([`features`]), the Rust mirrors of the GPU structs
+//! a kernel is specialised for ([`features`]), the principled parameters ([`principled`]),
+//! the Rust mirrors of the GPU structs
 //! ([`gpu_types`]) and the one table of bindings ([`bindings`]). It uses no other module
 //! of the crate; every layer above may use it (`tests/architecture.rs`).
 
 pub mod bindings;
 pub mod features;
 pub mod gpu_types;
+pub mod principled;
 
 pub use features::KernelFeatures;
 
