@@ -146,8 +146,9 @@ struct RenderArgs {
     /// No progress bar.
     #[arg(short, long)]
     quiet: bool,
-    /// Options for the exporter plugin, `key=value;…` (PNG: `bits=16`; JPEG: `quality=90`;
-    /// EXR: `compression=zip|piz|none`).
+    /// Options for the image writer (an exporter plugin, or the host's own for PNG, JPEG
+    /// and EXR), `key=value;…` (PNG: `bits=16`; JPEG: `quality=90`; EXR:
+    /// `compression=zip|piz|none`).
     #[arg(long, default_value = "")]
     export_options: String,
 }
@@ -415,12 +416,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     }
     settings.seed = args.seed;
     settings.light_sampling = !args.no_light_sampling;
-    // An EXR written by a plugin gets the AOV layers too.
-    let exr = args
+    // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,
+    // which is the plugin's code).
+    settings.aovs = args
         .output
         .extension()
         .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
-    settings.aovs = exr && plugins.handles(PluginKind::Exporter, &args.output);
 
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
@@ -492,28 +493,25 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         exposure_ev: args.exposure,
         tonemap: args.tonemap.into(),
     };
-    if plugins.handles(PluginKind::Exporter, &args.output) {
-        let mut layers = Vec::new();
-        if let Some(aovs) = renderer.read_aovs()? {
-            for (name, channels, data) in [
-                ("albedo", 3, aovs.albedo),
-                ("normal", 3, aovs.normal),
-                ("depth", 1, aovs.depth),
-            ] {
-                layers.push(ExportLayer {
-                    name: name.into(),
-                    channels,
-                    data,
-                });
-            }
+    let mut layers = Vec::new();
+    if let Some(aovs) = renderer.read_aovs()? {
+        for (name, channels, data) in [
+            ("albedo", 3, aovs.albedo),
+            ("normal", 3, aovs.normal),
+            ("depth", 1, aovs.depth),
+        ] {
+            layers.push(ExportLayer {
+                name: name.into(),
+                channels,
+                data,
+            });
         }
-        plugins.export(
-            &args.output,
-            &ExportFilm::from_film(&film, view, layers),
-            &args.export_options,
-        )?;
+    }
+    let film = ExportFilm::from_film(&film, view, layers);
+    if plugins.handles(PluginKind::Exporter, &args.output) {
+        plugins.export(&args.output, &film, &args.export_options)?;
     } else {
-        write_image(&args.output, &film, view)?;
+        write_image(&args.output, &film, &args.export_options)?;
     }
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     let reason = if stats.completed {

@@ -1,7 +1,8 @@
 //! Importing through the bundled plugins: the Khronos glTF-Validator corpus (no crash, no
 //! escaped panic, no hang; every file the validator finds errors in is refused or imported
-//! with warnings, every file it finds valid is imported), hostile inputs, and exporter
-//! round trips.
+//! with warnings, every file it finds valid is imported), hostile inputs, exporter
+//! round trips, and the host's own OBJ reader and image writers giving what the plugins
+//! give (they run the same code, `kiln-formats`).
 
 mod common;
 
@@ -11,7 +12,7 @@ use std::time::{Duration, Instant};
 
 use base64::Engine as _;
 use common::resource;
-use glam::Vec3;
+use glam::{Vec2, Vec3, Vec4};
 use kiln::plugin::{ExportFilm, ExportLayer, PluginHost, PluginKind};
 
 const CORPUS: &str = concat!(
@@ -291,11 +292,9 @@ fn hostile_gltf_inputs_are_refused_with_a_message() {
     );
 }
 
-#[test]
-fn exporters_round_trip_the_film() {
-    let host = host();
-    let dir = tempfile::tempdir().unwrap();
-    let (w, h) = (7u32, 5u32);
+/// A film with every value distinct: radiance up to 3, display values in [0, 1], and
+/// albedo, normal and depth AOVs.
+fn sample_film(w: u32, h: u32) -> ExportFilm {
     let n = (w * h) as usize;
     let radiance: Vec<f32> = (0..4 * n)
         .map(|i| {
@@ -314,26 +313,35 @@ fn exporters_round_trip_the_film() {
             .map(|i| i as f32 * 0.25 - 1.0)
             .collect(),
     };
-    let film = ExportFilm {
+    ExportFilm {
         width: w,
         height: h,
-        radiance: radiance.clone(),
-        display: display.clone(),
+        radiance,
+        display,
         layers: vec![layer("albedo", 3), layer("normal", 3), layer("depth", 1)],
-    };
+    }
+}
+
+#[test]
+fn exporters_round_trip_the_film() {
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    let (w, h) = (7u32, 5u32);
+    let film = sample_film(w, h);
+    let (radiance, display) = (&film.radiance, &film.display);
     // EXR: read back with the image crate (the main RGBA layer), bit for bit.
     let exr = dir.path().join("film.exr");
     host.export(&exr, &film, "").unwrap();
     let back = image::open(&exr).unwrap().to_rgba32f();
     assert_eq!((back.width(), back.height()), (w, h));
-    for (a, b) in back.as_raw().iter().zip(&radiance) {
+    for (a, b) in back.as_raw().iter().zip(radiance) {
         assert_eq!(a.to_bits(), b.to_bits(), "EXR changed a value");
     }
     // PNG: the display image, quantized to 8 bits.
     let png = dir.path().join("film.png");
     host.export(&png, &film, "").unwrap();
     let back = image::open(&png).unwrap().to_rgba8();
-    for (a, b) in back.as_raw().iter().zip(&display) {
+    for (a, b) in back.as_raw().iter().zip(display) {
         assert_eq!(*a, (b * 255.0).round() as u8);
     }
     // 16-bit PNG on request.
@@ -349,6 +357,130 @@ fn exporters_round_trip_the_film() {
         .unwrap_err()
         .to_string();
     assert!(e.contains("missing/dir/x.png"), "{e}");
+}
+
+#[test]
+fn the_host_writes_the_same_bytes_as_the_exporter_plugins() {
+    // Without a plugin for the format the host writes the image itself, through the
+    // plugins' own writers: same film and options, same file.
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    let film = sample_film(9, 4);
+    for (name, options) in [
+        ("film.png", ""),
+        ("film16.png", "bits=16"),
+        ("film.jpg", "quality=70"),
+        ("film.exr", ""),
+        ("film_piz.exr", "compression=piz"),
+    ] {
+        let by_plugin = dir.path().join(format!("plugin_{name}"));
+        let by_host = dir.path().join(format!("host_{name}"));
+        host.export(&by_plugin, &film, options).unwrap();
+        kiln::film::output::write_image(&by_host, &film, options).unwrap();
+        let (plugin_bytes, host_bytes) = (
+            std::fs::read(&by_plugin).unwrap(),
+            std::fs::read(&by_host).unwrap(),
+        );
+        assert!(
+            plugin_bytes == host_bytes,
+            "{name} ({options}): the host wrote {} bytes, the plugin {}, not the same",
+            host_bytes.len(),
+            plugin_bytes.len()
+        );
+        if name.ends_with(".exr") {
+            // The AOV layers are in both (channel names are stored as text).
+            let text = String::from_utf8_lossy(&host_bytes);
+            for channel in ["albedo.R", "normal.X", "depth.Z"] {
+                assert!(text.contains(channel), "{name} lacks {channel}");
+            }
+        }
+    }
+}
+
+/// The mesh of `obj` as a scene file's `Obj(...)` mesh loads it, through the host.
+fn host_obj_mesh(obj: &Path) -> kiln::scene::Mesh {
+    let scene = obj.with_extension("kiln");
+    std::fs::write(
+        &scene,
+        format!(
+            r#"(
+                version: 1,
+                camera: (position: (0, 0, 5), look_at: (0, 0, 0), projection: Perspective(fov_y: 40)),
+                materials: {{ "grey": (base_color: (0.5, 0.5, 0.5)) }},
+                meshes: {{ "it": Obj("{}") }},
+                instances: [(mesh: "it", material: "grey")],
+            )"#,
+            obj.file_name().unwrap().to_str().unwrap()
+        ),
+    )
+    .unwrap();
+    let mut scene = kiln::scene::load_scene(&scene).unwrap();
+    assert_eq!(scene.meshes.len(), 1);
+    scene.meshes.remove(0)
+}
+
+#[test]
+fn the_host_reads_an_obj_mesh_as_the_importer_plugin_does() {
+    let host = host();
+    let dir = tempfile::tempdir().unwrap();
+    let files = [
+        // As Kiln saves meshes: aligned corners, an unused vertex, a second UV set and
+        // colour alpha, read in file order.
+        (
+            "aligned.obj",
+            "# saved (written by Kiln; vertices are aligned)\n\
+             v 0 0 0 1 0 0\nv 1 0 0 0 1 0\nv 0 1 0 0 0 1\nv 9 9 9 1 1 1\n\
+             #kiln alpha 0.5\n#kiln alpha 1\n#kiln alpha 0.25\n#kiln alpha 0\n\
+             vt 0 0\nvt 1 0\nvt 0 1\nvt 0.5 0.5\n\
+             #kiln uv1 0.1 0.2\n#kiln uv1 0.3 0.4\n#kiln uv1 0.5 0.6\n#kiln uv1 0.7 0.8\n\
+             vn 0 0 1\nvn 0 0 1\nvn 0 0 1\nvn 0 1 0\n\
+             f 3/3/3 1/1/1 2/2/2\n",
+        ),
+        // Any other file: a quad whose corners index positions and texture coordinates
+        // differently, re-indexed by first use and split into two triangles.
+        (
+            "quad.obj",
+            "o quad\nv 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nvt 0 0\nvt 1 1\n\
+             vn 0 0 1\nf 1/2/1 2/1/1 3/2/1 4/1/1\n",
+        ),
+    ];
+    for (name, text) in files {
+        let path = dir.path().join(name);
+        std::fs::write(&path, text).unwrap();
+        let by_host = host_obj_mesh(&path);
+        let imported = host.import(&path).unwrap();
+        assert_eq!(imported.scene.meshes.len(), 1, "{name}");
+        let by_plugin = &imported.scene.meshes[0];
+        assert_eq!(
+            (
+                &by_host.positions,
+                &by_host.normals,
+                &by_host.uvs,
+                &by_host.uvs1,
+                &by_host.colors,
+                &by_host.indices
+            ),
+            (
+                &by_plugin.positions,
+                &by_plugin.normals,
+                &by_plugin.uvs,
+                &by_plugin.uvs1,
+                &by_plugin.colors,
+                &by_plugin.indices
+            ),
+            "{name}: the host and the plugin read different meshes"
+        );
+        assert!(
+            !by_host.normals.is_empty() && !by_host.uvs.is_empty(),
+            "{name}"
+        );
+    }
+    // The aligned file kept its order, its unused vertex and its extensions.
+    let aligned = host_obj_mesh(&dir.path().join("aligned.obj"));
+    assert_eq!(aligned.positions.len(), 4);
+    assert_eq!(aligned.indices, vec![[2, 0, 1]]);
+    assert_eq!(aligned.uvs1[3], Vec2::new(0.7, 0.8));
+    assert_eq!(aligned.colors[2], Vec4::new(0.0, 0.0, 1.0, 0.25));
 }
 
 #[test]

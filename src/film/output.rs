@@ -1,15 +1,23 @@
-//! Writing a film to an image file: PNG and JPEG (tonemapped, 8-bit sRGB) or OpenEXR
-//! (linear 32-bit float radiance). Every write goes to a temporary file in the target's
-//! folder that is renamed over the target only when complete, so a failed or interrupted
-//! write never leaves a truncated image or destroys the previous one.
+//! Writing a film to an image file when no exporter plugin handles the format: PNG and
+//! JPEG (the tonemapped display image) or OpenEXR (linear 32-bit float radiance and the
+//! AOV layers), through the same writers the bundled exporter plugins wrap
+//! (`kiln_formats::image`, `kiln_formats::exr`), so the host and a plugin write the same
+//! bytes for the same film and options (`tests/import.rs`). Every write goes to a
+//! temporary file in the target's folder that is renamed over the target only when
+//! complete, so a failed or interrupted write never leaves a truncated image or destroys
+//! the previous one.
+//!
+//! [`ExportFilm`] is the film as both receive it: this module's writers directly, the
+//! plugins through the C ABI (`plugin::PluginHost::export`).
 
 use std::path::{Path, PathBuf};
 
-use image::{ImageFormat, Rgb32FImage, RgbImage};
+use image::RgbImage;
+use kiln_formats::{exr, image as display_image};
 use thiserror::Error;
 
 use super::Film;
-use super::tonemap::{Tonemap, to_srgb8};
+use super::tonemap::{Tonemap, srgb_encode, to_srgb8};
 
 #[derive(Debug, Error)]
 pub enum OutputError {
@@ -60,24 +68,81 @@ pub fn to_srgb_image(film: &Film, view: ViewSettings) -> RgbImage {
     })
 }
 
-/// Writes the film atomically (`kiln_plugin_api::atomic`, shared with the exporter
-/// plugins): a complete image or none, never a truncated one.
-pub fn write_image(path: &Path, film: &Film, view: ViewSettings) -> Result<(), OutputError> {
-    let format = OutputFormat::from_path(path)?;
-    kiln_plugin_api::atomic::write_atomically(path, |writer| {
-        let result = match format {
-            OutputFormat::Png => to_srgb_image(film, view).write_to(writer, ImageFormat::Png),
-            OutputFormat::Jpeg => to_srgb_image(film, view).write_to(writer, ImageFormat::Jpeg),
-            OutputFormat::Exr => {
-                let pixels: Vec<f32> = film.radiance().iter().flat_map(|c| c.to_array()).collect();
-                Rgb32FImage::from_raw(film.width, film.height, pixels)
-                    .expect("one rgb triple per pixel")
-                    .write_to(writer, ImageFormat::OpenExr)
+/// A named AOV layer of an exported film.
+pub struct ExportLayer {
+    pub name: String,
+    pub channels: u32,
+    pub data: Vec<f32>,
+}
+
+/// The film as image writers receive it, the host's and the exporter plugins'.
+pub struct ExportFilm {
+    pub width: u32,
+    pub height: u32,
+    /// Linear RGBA.
+    pub radiance: Vec<f32>,
+    /// Tonemapped, sRGB-encoded RGBA in [0, 1].
+    pub display: Vec<f32>,
+    pub layers: Vec<ExportLayer>,
+}
+
+impl ExportFilm {
+    /// The film's mean radiance, and its display rendering under `view`.
+    pub fn from_film(film: &Film, view: ViewSettings, layers: Vec<ExportLayer>) -> Self {
+        let mut radiance = Vec::with_capacity(film.width as usize * film.height as usize * 4);
+        let mut display = Vec::with_capacity(radiance.capacity());
+        for y in 0..film.height {
+            for x in 0..film.width {
+                let c = film.pixel(x, y);
+                radiance.extend([c.x, c.y, c.z, 1.0]);
+                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
+                display.extend(d.to_array().map(srgb_encode));
+                display.push(1.0);
             }
-        };
-        result.map_err(|e| e.to_string())
-    })
-    .map_err(|message| OutputError::Write {
+        }
+        Self {
+            width: film.width,
+            height: film.height,
+            radiance,
+            display,
+            layers,
+        }
+    }
+
+    /// The view the shared writers take (the plugin API's safe film).
+    pub fn view(&self) -> kiln_plugin_api::Film<'_> {
+        kiln_plugin_api::Film {
+            width: self.width,
+            height: self.height,
+            radiance: &self.radiance,
+            display: &self.display,
+            layers: self
+                .layers
+                .iter()
+                .map(|l| kiln_plugin_api::Layer {
+                    name: &l.name,
+                    channels: l.channels,
+                    data: &l.data,
+                })
+                .collect(),
+        }
+    }
+}
+
+/// Writes the film atomically in the format of `path`'s extension, with `options` as the
+/// exporter plugins take them (`bits=16`, `quality=90`, `compression=piz`): a complete
+/// image or none, never a truncated one. EXR files get the film's AOV layers.
+pub fn write_image(path: &Path, film: &ExportFilm, options: &str) -> Result<(), OutputError> {
+    let format = OutputFormat::from_path(path)?;
+    let options = kiln_plugin_api::parse_options(options);
+    let result = match format {
+        OutputFormat::Png | OutputFormat::Jpeg => display_image::Format::new(path, &options)
+            .and_then(|f| display_image::write(path, &film.view(), f)),
+        OutputFormat::Exr => exr::compression(&options)
+            .map_err(|message| format!("cannot write {}: {message}", path.display()))
+            .and_then(|c| exr::write(path, &film.view(), c)),
+    };
+    result.map_err(|message| OutputError::Write {
         path: path.to_owned(),
         message,
     })
@@ -96,13 +161,17 @@ mod tests {
         film
     }
 
+    fn export(film: &Film, view: ViewSettings) -> ExportFilm {
+        ExportFilm::from_film(film, view, Vec::new())
+    }
+
     #[test]
     fn png_holds_the_tonemapped_film() {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.png");
         let film = gradient_film();
         let view = ViewSettings::default();
-        write_image(&path, &film, view).unwrap();
+        write_image(&path, &export(&film, view), "").unwrap();
         let read = image::open(&path).unwrap().to_rgb8();
         assert_eq!(read, to_srgb_image(&film, view));
         // Only the image is left behind: no temporary files.
@@ -124,7 +193,7 @@ mod tests {
         let dir = tempfile::tempdir().unwrap();
         let path = dir.path().join("out.exr");
         let film = gradient_film();
-        write_image(&path, &film, ViewSettings::default()).unwrap();
+        write_image(&path, &export(&film, ViewSettings::default()), "").unwrap();
         let read = image::open(&path).unwrap().to_rgb32f();
         for (x, y, p) in read.enumerate_pixels() {
             assert_eq!(p.0, film.pixel(x, y).to_array());
@@ -134,13 +203,20 @@ mod tests {
     #[test]
     fn unknown_extension_is_refused_and_nothing_is_written() {
         let dir = tempfile::tempdir().unwrap();
-        let err = write_image(
-            &dir.path().join("out.bmpx"),
-            &gradient_film(),
-            ViewSettings::default(),
-        )
-        .unwrap_err();
+        let film = export(&gradient_film(), ViewSettings::default());
+        let err = write_image(&dir.path().join("out.bmpx"), &film, "").unwrap_err();
         assert!(err.to_string().contains(".png"), "{err}");
+        assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
+    }
+
+    #[test]
+    fn a_bad_option_is_refused_naming_the_file_and_nothing_is_written() {
+        let dir = tempfile::tempdir().unwrap();
+        let film = export(&gradient_film(), ViewSettings::default());
+        for (name, options) in [("a.png", "quality=50"), ("b.exr", "compression=dwaa")] {
+            let err = write_image(&dir.path().join(name), &film, options).unwrap_err();
+            assert!(err.to_string().contains(name), "{err}");
+        }
         assert_eq!(std::fs::read_dir(dir.path()).unwrap().count(), 0);
     }
 
@@ -148,6 +224,7 @@ mod tests {
     fn write_into_a_missing_folder_fails_with_the_path() {
         let dir = tempfile::tempdir().unwrap();
         let missing = dir.path().join("no such folder").join("out.png");
-        assert!(write_image(&missing, &gradient_film(), ViewSettings::default()).is_err());
+        let film = export(&gradient_film(), ViewSettings::default());
+        assert!(write_image(&missing, &film, "").is_err());
     }
 }

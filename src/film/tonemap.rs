@@ -112,9 +112,10 @@ pub fn srgb_encode(v: f32) -> f32 {
 /// encoding, rounding.
 pub fn to_srgb8(c: Vec3, exposure_ev: f32, tonemap: Tonemap) -> [u8; 3] {
     let display = tonemap.apply(c * exposure_ev.exp2());
+    // The exporters' quantization, so this matches their 8-bit PNGs.
     display
         .to_array()
-        .map(|v| (srgb_encode(v) * 255.0 + 0.5).floor() as u8)
+        .map(|v| kiln_formats::image::quantize(srgb_encode(v), 255) as u8)
 }
 
 #[cfg(test)]

@@ -16,6 +16,8 @@ use kiln_plugin_api as api;
 use thiserror::Error;
 
 pub use builder::Imported;
+// The film layer's: it writes the same film itself when no plugin handles the format.
+pub use crate::film::output::{ExportFilm, ExportLayer};
 
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum PluginKind {
@@ -316,51 +318,5 @@ impl Loaded {
                 text
             },
         })
-    }
-}
-
-/// A named AOV layer of an exported film.
-pub struct ExportLayer {
-    pub name: String,
-    pub channels: u32,
-    pub data: Vec<f32>,
-}
-
-/// The film as exporters receive it.
-pub struct ExportFilm {
-    pub width: u32,
-    pub height: u32,
-    /// Linear RGBA.
-    pub radiance: Vec<f32>,
-    /// Tonemapped, sRGB-encoded RGBA in [0, 1].
-    pub display: Vec<f32>,
-    pub layers: Vec<ExportLayer>,
-}
-
-impl ExportFilm {
-    /// The film's mean radiance, and its display rendering under `view`.
-    pub fn from_film(
-        film: &crate::film::Film,
-        view: crate::film::output::ViewSettings,
-        layers: Vec<ExportLayer>,
-    ) -> Self {
-        let mut radiance = Vec::with_capacity(film.width as usize * film.height as usize * 4);
-        let mut display = Vec::with_capacity(radiance.capacity());
-        for y in 0..film.height {
-            for x in 0..film.width {
-                let c = film.pixel(x, y);
-                radiance.extend([c.x, c.y, c.z, 1.0]);
-                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
-                display.extend(d.to_array().map(crate::film::tonemap::srgb_encode));
-                display.push(1.0);
-            }
-        }
-        Self {
-            width: film.width,
-            height: film.height,
-            radiance,
-            display,
-            layers,
-        }
     }
 }

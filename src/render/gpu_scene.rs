@@ -1,20 +1,24 @@
-//! Scene upload: the meshes, their BVHs, instances, materials and the emissive-triangle
-//! light list, flattened into the storage buffers of `shaders/scene.wgsl`.
+//! Scene upload: the meshes, their BVHs, instances, materials and lights, flattened into
+//! the storage buffers of `shaders/scene.wgsl`, and the bind group over them.
+//!
+//! Not here: which light to sample with what probability (`light_distribution`) and the
+//! environment map's sampling distribution (`environment_cdf`); this file packs and
+//! uploads what they compute.
 
 use glam::{Vec2, Vec3};
 use thiserror::Error;
 use wgpu::util::DeviceExt;
 
 use super::context::GpuContext;
+use super::environment_cdf::environment_data;
+use super::light_distribution::{emissive_triangles, light_selection};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
 use crate::shader::KernelFeatures;
 use crate::shader::bindings::{PAGES, Resource, bound, scene_layout_entries};
-use crate::shader::gpu_types::BvhNode;
 use crate::shader::gpu_types::{
-    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, LIGHT_DISTANT, LIGHT_POINT,
-    LIGHT_SPOT,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
 };
 
 #[derive(Debug, Error)]
@@ -117,78 +121,6 @@ pub fn encode_octahedral(n: Vec3) -> u32 {
     pack_snorm16(e.x) | (pack_snorm16(e.y) << 16)
 }
 
-pub fn luminance(c: Vec3) -> f32 {
-    c.dot(Vec3::new(0.2126, 0.7152, 0.0722))
-}
-
-/// Polar angle of the centre of row `y` of an equirectangular map `height` rows tall.
-fn row_theta(y: usize, height: usize) -> f64 {
-    (y as f64 + 0.5) / height as f64 * std::f64::consts::PI
-}
-
-/// Radiance averaged over the sphere (the uniform sky of the same power).
-fn mean_environment_luminance(map: &crate::scene::EnvironmentMap) -> f64 {
-    let (w, h) = (map.width as usize, map.height as usize);
-    let mut sum = 0.0;
-    for y in 0..h {
-        let s = row_theta(y, h).sin();
-        for x in 0..w {
-            sum += luminance(map.texels[y * w + x]) as f64 * s;
-        }
-    }
-    // Each texel spans (2π / w) (π / h) sin θ steradians; the sphere has 4π.
-    sum * map.strength as f64 * 2.0 * std::f64::consts::PI * std::f64::consts::PI
-        / (w * h) as f64
-        / (4.0 * std::f64::consts::PI)
-}
-
-/// The map and its sampling distribution, proportional to luminance × sin θ (texels near
-/// the poles cover less solid angle): per row an inclusive conditional CDF over columns
-/// (in each texel's w), then an inclusive marginal CDF over rows.
-pub fn environment_data(map: &crate::scene::EnvironmentMap) -> Vec<[f32; 4]> {
-    let (w, h) = (map.width as usize, map.height as usize);
-    let mut data = Vec::with_capacity(1 + w * h + h);
-    data.push([
-        map.width as f32,
-        map.height as f32,
-        map.strength,
-        map.rotation_degrees.to_radians(),
-    ]);
-    let mut row_sums = Vec::with_capacity(h);
-    for y in 0..h {
-        let s = row_theta(y, h).sin();
-        let weights: Vec<f64> = (0..w)
-            .map(|x| luminance(map.texels[y * w + x]) as f64 * s)
-            .collect();
-        let row: f64 = weights.iter().sum();
-        let mut acc = 0.0;
-        for (x, weight) in weights.iter().enumerate() {
-            acc += weight;
-            // A black row is sampled uniformly (it is then never chosen anyway).
-            let cdf = if row > 0.0 {
-                acc / row
-            } else {
-                (x + 1) as f64 / w as f64
-            };
-            let t = map.texels[y * w + x];
-            data.push([t.x, t.y, t.z, if x + 1 == w { 1.0 } else { cdf as f32 }]);
-        }
-        row_sums.push(row);
-    }
-    let total: f64 = row_sums.iter().sum();
-    let mut acc = 0.0;
-    for (y, row) in row_sums.iter().enumerate() {
-        acc += row;
-        let cdf = if total > 0.0 {
-            acc / total
-        } else {
-            (y + 1) as f64 / h as f64
-        };
-        data.push([if y + 1 == h { 1.0 } else { cdf as f32 }, 0.0, 0.0, 0.0]);
-    }
-    data
-}
-
 /// The GPU form of a material (`Material` in shaders/scene.wgsl).
 pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
     GpuMaterial {
@@ -289,154 +221,18 @@ impl SceneArrays {
 
         a.materials = scene.materials.iter().map(pack_material).collect();
 
-        a.build_lights(scene);
+        let emissive = emissive_triangles(scene);
+        let selection = light_selection(scene, a.tlas_nodes.first(), emissive.power);
+        a.light_triangles = emissive.triangles;
+        a.light_cdf = emissive.cdf;
+        a.light_power = emissive.power;
+        a.analytic_lights = selection.analytic_lights;
+        a.environment_pick = selection.environment_pick;
+        a.triangle_pick = selection.triangle_pick;
         if let Some(map) = &scene.environment_map {
             a.environment_data = environment_data(map);
         }
-        a.build_light_selection(scene);
         a
-    }
-
-    /// Splits next-event estimation between the environment, the emissive triangles and
-    /// each analytic light in proportion to estimated power. The estimates only steer
-    /// sampling (any positive split is unbiased): an environment or a distant light is
-    /// weighed by the area of the scene's bounding sphere.
-    fn build_light_selection(&mut self, scene: &Scene) {
-        let radius = self
-            .tlas_nodes
-            .first()
-            .map(|n| 0.5 * (Vec3::from(n.max) - Vec3::from(n.min)).length())
-            .filter(|r| r.is_finite() && *r > 0.0)
-            .unwrap_or(1.0) as f64;
-        let pi = std::f64::consts::PI;
-        let sky = match &scene.environment_map {
-            Some(map) => mean_environment_luminance(map),
-            None => luminance(scene.environment) as f64,
-        };
-        let environment = sky * 4.0 * pi * pi * radius * radius;
-        let triangles = pi * self.light_power as f64;
-        let mut analytic = Vec::new();
-        for light in &scene.lights {
-            let (power, gpu) = match *light {
-                crate::scene::Light::Point {
-                    position,
-                    intensity,
-                    radius,
-                } => (
-                    4.0 * pi * luminance(intensity) as f64,
-                    GpuAnalyticLight {
-                        position: position.into(),
-                        kind: LIGHT_POINT,
-                        axis: [0.0, 0.0, 1.0, radius],
-                        intensity: intensity.extend(0.0).into(),
-                        shape: [0.0; 4],
-                    },
-                ),
-                crate::scene::Light::Spot {
-                    position,
-                    direction,
-                    intensity,
-                    cone_angle,
-                    blend,
-                    radius,
-                } => {
-                    let outer = cone_angle.to_radians();
-                    let inner = outer * (1.0 - blend);
-                    (
-                        2.0 * pi * (1.0 - outer.cos() as f64) * luminance(intensity) as f64,
-                        GpuAnalyticLight {
-                            position: position.into(),
-                            kind: LIGHT_SPOT,
-                            axis: direction.normalize().extend(radius).into(),
-                            intensity: intensity.extend(0.0).into(),
-                            shape: [outer.cos(), inner.cos(), 0.0, 0.0],
-                        },
-                    )
-                }
-                crate::scene::Light::Distant {
-                    direction,
-                    irradiance,
-                    angular_diameter,
-                } => {
-                    let half = (0.5 * angular_diameter).to_radians();
-                    let s = (0.5 * half).sin();
-                    (
-                        luminance(irradiance) as f64 * pi * radius * radius,
-                        GpuAnalyticLight {
-                            position: direction.normalize().into(),
-                            kind: LIGHT_DISTANT,
-                            // 1 - cos(half) without cancellation.
-                            axis: [0.0, 0.0, 1.0, 2.0 * s * s],
-                            intensity: irradiance.extend(0.0).into(),
-                            shape: [0.0; 4],
-                        },
-                    )
-                }
-            };
-            analytic.push((power, gpu));
-        }
-        let total = environment + triangles + analytic.iter().map(|(p, _)| p).sum::<f64>();
-        if total <= 0.0 {
-            return;
-        }
-        self.environment_pick = (environment / total) as f32;
-        self.triangle_pick = (triangles / total) as f32;
-        let mut cumulative = environment + triangles;
-        for (power, mut gpu) in analytic {
-            gpu.intensity[3] = (power / total) as f32;
-            cumulative += power;
-            gpu.shape[3] = (cumulative / total) as f32;
-            self.analytic_lights.push(gpu);
-        }
-        if let Some(last) = self.analytic_lights.last_mut() {
-            last.shape[3] = 1.0;
-        }
-    }
-
-    /// Every front-facing emissive triangle in world space, picked by power.
-    fn build_lights(&mut self, scene: &Scene) {
-        let mut powers = Vec::new();
-        for inst in &scene.instances {
-            let material = &scene.materials[inst.material];
-            if !material.is_emissive() {
-                continue;
-            }
-            let lum = luminance(material.emission());
-            let mesh = &scene.meshes[inst.mesh];
-            // A mirroring transform flips the winding; keep the emitting side where the
-            // kernel's transformed normal says it is.
-            let mirrored = inst.transform.matrix3.determinant() < 0.0;
-            for t in 0..mesh.indices.len() {
-                let [p0, mut p1, mut p2] =
-                    mesh.triangle(t).map(|p| inst.transform.transform_point3(p));
-                if mirrored {
-                    std::mem::swap(&mut p1, &mut p2);
-                }
-                let area = 0.5 * (p1 - p0).cross(p2 - p0).length();
-                let power = lum * area;
-                if !(power > 0.0 && power.is_finite()) {
-                    continue;
-                }
-                powers.push(power as f64);
-                self.light_triangles.push(GpuLightTriangle {
-                    p0: p0.extend(1.0).into(),
-                    p1: p1.extend(1.0).into(),
-                    p2: p2.extend(1.0).into(),
-                    emission: material.emission().extend(0.0).into(),
-                });
-            }
-        }
-        let total: f64 = powers.iter().sum();
-        let mut running = 0.0f64;
-        for (light, power) in self.light_triangles.iter_mut().zip(&powers) {
-            light.emission[3] = (power / total) as f32;
-            running += power;
-            self.light_cdf.push((running / total) as f32);
-        }
-        if let Some(last) = self.light_cdf.last_mut() {
-            *last = 1.0;
-        }
-        self.light_power = total as f32;
     }
 }
 

@@ -1,12 +1,16 @@
 //! The GPU side: device ([`context`]), kernel assembly ([`kernel`]), scene upload
-//! ([`gpu_scene`]), and the progressive [`Renderer`] that accumulates samples into a film.
+//! ([`gpu_scene`]) with the light-selection distributions ([`light_distribution`]) and
+//! the environment map's CDF ([`environment_cdf`]), and the progressive [`Renderer`]
+//! that accumulates samples into a film.
 //!
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
 pub mod context;
+pub mod environment_cdf;
 pub mod gpu_scene;
 pub mod kernel;
+pub mod light_distribution;
 pub mod materials;
 pub mod probe;
 mod readback;

@@ -191,18 +191,28 @@ pub fn save_scene(
             },
         })
         .collect();
-    // The map is written as a 32-bit float EXR, which holds its texels exactly.
+    // The map is written as a 32-bit float EXR, which holds its texels exactly, by the
+    // writer of the EXR exporter plugin (alpha 1).
     let environment_map = match &scene.environment_map {
         Some(map) => {
             let file = format!("{assets}/environment.exr");
-            let texels = map.texels.iter().flat_map(|t| t.to_array()).collect();
-            let image = image::Rgb32FImage::from_raw(map.width, map.height, texels)
-                .ok_or_else(|| fail(format!("{file}: the map's size and texels disagree")))?;
-            write_atomically(&dir.join(&file), |w| {
-                image
-                    .write_to(w, image::ImageFormat::OpenExr)
-                    .map_err(|e| e.to_string())
-            })
+            let radiance: Vec<f32> = map
+                .texels
+                .iter()
+                .flat_map(|t| t.extend(1.0).to_array())
+                .collect();
+            let film = kiln_plugin_api::Film {
+                width: map.width,
+                height: map.height,
+                radiance: &radiance,
+                display: &[],
+                layers: Vec::new(),
+            };
+            kiln_formats::exr::write(
+                &dir.join(&file),
+                &film,
+                kiln_formats::exr::Compression::ZIP16,
+            )
             .map_err(fail)?;
             Some(EnvironmentMapDesc {
                 file,

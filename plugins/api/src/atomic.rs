@@ -1,8 +1,8 @@
 //! Writing a file so that it is either complete or untouched: the bytes go to a temporary
 //! file in the target's folder, which is renamed over the target only once it is complete
 //! and synced. A failed or interrupted export never leaves a truncated image behind nor
-//! destroys the previous one. The same convention as the host's `src/film/output.rs`;
-//! shared by the bundled exporters.
+//! destroys the previous one. Every file the host or a bundled plugin writes goes through
+//! it (the image writers of `kiln-formats`, the scene saver).
 
 use std::fs::File;
 use std::io::{BufWriter, Write};

@@ -25,7 +25,7 @@
 //! them. Ambient terms (`Ka`, `map_Ka`) mean nothing to a path tracer and are dropped
 //! quietly; other statements Kiln cannot use are reported as warnings.
 
-use tobj::Material;
+use kiln_formats::obj::Material;
 
 use crate::texture::{Channel, TextureRef, parse_texture};
 use kiln_plugin_api::kmat::{Graph, Node, Value};
