@@ -60,27 +60,90 @@ pub fn to_srgb_image(film: &Film, view: ViewSettings) -> RgbImage {
     })
 }
 
-/// Writes the film atomically (`kiln_plugin_api::atomic`, shared with the exporter
-/// plugins): a complete image or none, never a truncated one.
-pub fn write_image(path: &Path, film: &Film, view: ViewSettings) -> Result<(), OutputError> {
-    let format = OutputFormat::from_path(path)?;
-    kiln_plugin_api::atomic::write_atomically(path, |writer| {
-        let result = match format {
-            OutputFormat::Png => to_srgb_image(film, view).write_to(writer, ImageFormat::Png),
-            OutputFormat::Jpeg => to_srgb_image(film, view).write_to(writer, ImageFormat::Jpeg),
-            OutputFormat::Exr => {
-                let pixels: Vec<f32> = film.radiance().iter().flat_map(|c| c.to_array()).collect();
-                Rgb32FImage::from_raw(film.width, film.height, pixels)
-                    .expect("one rgb triple per pixel")
-                    .write_to(writer, ImageFormat::OpenExr)
-            }
+/// An image file's pixels, assembled from bands of a film's rows before it is written:
+/// a large film is read back and converted a band at a time, so that only the image's own
+/// buffer (3 bytes a pixel for PNG and JPEG, 12 for EXR) is held whole, never the film.
+pub struct OutputImage {
+    path: PathBuf,
+    format: OutputFormat,
+    view: ViewSettings,
+    pixels: Pixels,
+}
+
+enum Pixels {
+    Srgb(RgbImage),
+    Linear(Rgb32FImage),
+}
+
+impl OutputImage {
+    /// A black `width`×`height` image for `path`, in the format its extension names.
+    pub fn new(
+        path: &Path,
+        width: u32,
+        height: u32,
+        view: ViewSettings,
+    ) -> Result<Self, OutputError> {
+        let format = OutputFormat::from_path(path)?;
+        let pixels = match format {
+            OutputFormat::Png | OutputFormat::Jpeg => Pixels::Srgb(RgbImage::new(width, height)),
+            OutputFormat::Exr => Pixels::Linear(Rgb32FImage::new(width, height)),
         };
-        result.map_err(|e| e.to_string())
-    })
-    .map_err(|message| OutputError::Write {
-        path: path.to_owned(),
-        message,
-    })
+        Ok(Self {
+            path: path.to_owned(),
+            format,
+            view,
+            pixels,
+        })
+    }
+
+    /// Converts `band`, the film's rows from `first_row` down (as wide as the image), into
+    /// the image's pixels. Rows past the image's bottom are ignored.
+    pub fn put_rows(&mut self, first_row: u32, band: &Film) {
+        let view = self.view;
+        for y in 0..band.height {
+            let row = first_row + y;
+            for x in 0..band.width {
+                let c = band.pixel(x, y);
+                match &mut self.pixels {
+                    Pixels::Srgb(img) if row < img.height() && x < img.width() => {
+                        img.put_pixel(
+                            x,
+                            row,
+                            image::Rgb(to_srgb8(c, view.exposure_ev, view.tonemap)),
+                        );
+                    }
+                    Pixels::Linear(img) if row < img.height() && x < img.width() => {
+                        img.put_pixel(x, row, image::Rgb(c.to_array()));
+                    }
+                    _ => {}
+                }
+            }
+        }
+    }
+
+    /// Writes the image atomically (`kiln_plugin_api::atomic`, shared with the exporter
+    /// plugins): a complete image or none, never a truncated one.
+    pub fn write(&self) -> Result<(), OutputError> {
+        kiln_plugin_api::atomic::write_atomically(&self.path, |writer| {
+            let result = match (&self.pixels, self.format) {
+                (Pixels::Srgb(img), OutputFormat::Jpeg) => img.write_to(writer, ImageFormat::Jpeg),
+                (Pixels::Srgb(img), _) => img.write_to(writer, ImageFormat::Png),
+                (Pixels::Linear(img), _) => img.write_to(writer, ImageFormat::OpenExr),
+            };
+            result.map_err(|e| e.to_string())
+        })
+        .map_err(|message| OutputError::Write {
+            path: self.path.clone(),
+            message,
+        })
+    }
+}
+
+/// Writes the film atomically: a complete image or none, never a truncated one.
+pub fn write_image(path: &Path, film: &Film, view: ViewSettings) -> Result<(), OutputError> {
+    let mut image = OutputImage::new(path, film.width, film.height, view)?;
+    image.put_rows(0, film);
+    image.write()
 }
 
 #[cfg(test)]
@@ -128,6 +191,32 @@ mod tests {
         let read = image::open(&path).unwrap().to_rgb32f();
         for (x, y, p) in read.enumerate_pixels() {
             assert_eq!(p.0, film.pixel(x, y).to_array());
+        }
+    }
+
+    #[test]
+    fn an_image_assembled_from_bands_equals_the_whole_film_written_at_once() {
+        let dir = tempfile::tempdir().unwrap();
+        let film = gradient_film();
+        for name in ["whole.png", "whole.exr"] {
+            let whole = dir.path().join(name);
+            write_image(&whole, &film, ViewSettings::default()).unwrap();
+            let banded = dir.path().join(format!("banded.{}", &name[6..]));
+            let mut image = OutputImage::new(&banded, 8, 4, ViewSettings::default()).unwrap();
+            // Bands of 3 and 1 rows, the second put first: order does not matter.
+            let band = |rows: std::ops::Range<usize>| Film {
+                width: 8,
+                height: rows.len() as u32,
+                sums: film.sums[rows.start * 8..rows.end * 8].to_vec(),
+            };
+            image.put_rows(3, &band(3..4));
+            image.put_rows(0, &band(0..3));
+            image.write().unwrap();
+            assert_eq!(
+                std::fs::read(&whole).unwrap(),
+                std::fs::read(&banded).unwrap(),
+                "{name}"
+            );
         }
     }
 

@@ -344,23 +344,38 @@ impl ExportFilm {
         view: crate::film::output::ViewSettings,
         layers: Vec<ExportLayer>,
     ) -> Self {
-        let mut radiance = Vec::with_capacity(film.width as usize * film.height as usize * 4);
-        let mut display = Vec::with_capacity(radiance.capacity());
-        for y in 0..film.height {
-            for x in 0..film.width {
-                let c = film.pixel(x, y);
-                radiance.extend([c.x, c.y, c.z, 1.0]);
-                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
-                display.extend(d.to_array().map(crate::film::tonemap::srgb_encode));
-                display.push(1.0);
-            }
-        }
+        let mut export = Self::with_capacity(film.width, film.height);
+        export.push_rows(film, view);
+        export.layers = layers;
+        export
+    }
+
+    /// An empty `width`×`height` film, to be filled a band of rows at a time with
+    /// [`ExportFilm::push_rows`], so that a large film is never held whole twice.
+    pub fn with_capacity(width: u32, height: u32) -> Self {
+        let floats = width as usize * height as usize * 4;
         Self {
-            width: film.width,
-            height: film.height,
-            radiance,
-            display,
-            layers,
+            width,
+            height,
+            radiance: Vec::with_capacity(floats),
+            display: Vec::with_capacity(floats),
+            layers: Vec::new(),
+        }
+    }
+
+    /// Appends the rows of `band` (a film as wide as this one: the next rows down), as
+    /// mean radiance and as their display rendering under `view`.
+    pub fn push_rows(&mut self, band: &crate::film::Film, view: crate::film::output::ViewSettings) {
+        debug_assert_eq!(band.width, self.width, "bands are as wide as the film");
+        for y in 0..band.height {
+            for x in 0..band.width {
+                let c = band.pixel(x, y);
+                self.radiance.extend([c.x, c.y, c.z, 1.0]);
+                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
+                self.display
+                    .extend(d.to_array().map(crate::film::tonemap::srgb_encode));
+                self.display.push(1.0);
+            }
         }
     }
 }

@@ -1,11 +1,13 @@
 //! The GPU side: device ([`context`]), kernel assembly ([`kernel`]), scene upload
-//! ([`gpu_scene`]), and the progressive [`Renderer`] that accumulates samples into a film.
+//! ([`gpu_scene`]), and the progressive [`Renderer`] that accumulates samples into a film
+//! (on the device in pieces that each fit a binding) in whole-image passes.
 //!
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
 pub mod bindings;
 pub mod context;
+mod film_pieces;
 pub mod gpu_scene;
 pub mod gpu_types;
 pub mod kernel;

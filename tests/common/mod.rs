@@ -27,6 +27,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         page_bytes: None,
         specialize: true,
         aovs: false,
+        film_piece_bytes: None,
     }
 }
 
