@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: the GPU context and small scenes.
 #![allow(dead_code)]
 pub mod chi2;
+pub mod exr;
 pub mod node_reference;
 pub mod resource;
 
