@@ -55,13 +55,12 @@ pub fn piece_rows(
         });
     }
     let max_rows = (limit / row_bytes).clamp(1, height.max(1) as u64) as u32;
-    // As many pieces as needed, then rows shared out evenly: no sliver of a last piece.
-    let pieces = height.div_ceil(max_rows).max(1);
-    let rows = height.div_ceil(pieces);
-    Ok((0..pieces)
-        .map(|i| (i * rows).min(height)..((i + 1) * rows).min(height))
-        .filter(|r| !r.is_empty())
-        .collect())
+    // As many pieces as needed, then rows shared out evenly (no sliver of a last piece):
+    // piece i ends at row ⌊(i + 1) h / n⌋, so lengths differ by at most one row and none
+    // exceeds ⌈h / n⌉ ≤ max_rows.
+    let pieces = height.div_ceil(max_rows).max(1) as u64;
+    let edge = |i: u64| (i * height as u64 / pieces) as u32;
+    Ok((0..pieces).map(|i| edge(i)..edge(i + 1)).collect())
 }
 
 /// Host memory a `width`×`height` film takes per pixel: the film read back to the host
