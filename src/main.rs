@@ -423,6 +423,23 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
 
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
+    // What `write_output` holds whole on the host, per pixel: an exporter plugin's film
+    // (radiance and display RGBA f32, the sample counts, the AOVs), or the host writer's
+    // image; refused before the kernel is built when it cannot fit.
+    let output_bytes = if plugins.handles(PluginKind::Exporter, &args.output) {
+        36 + if settings.aovs { 28 } else { 0 }
+    } else if exr {
+        12
+    } else {
+        3
+    };
+    kiln::render::memory_check(
+        &ctx,
+        settings.width,
+        settings.height,
+        settings.aovs,
+        output_bytes,
+    )?;
     let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
         .with_context(|| format!("cannot prepare {name} for rendering"))?;
 

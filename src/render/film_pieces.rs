@@ -23,11 +23,6 @@ use crate::film::Film;
 pub const SUM_BYTES: u64 = 16;
 /// Bytes per pixel of the AOV film (two `vec4<f32>`).
 pub const AOV_BYTES: u64 = 32;
-/// Bytes per pixel of the film read back to the host (`Film`: four f64).
-const HOST_FILM_BYTES: u64 = 32;
-/// Bytes per pixel of the AOVs read back to the host ([`Aovs`]: 3 + 3 + 1 f32).
-const HOST_AOV_BYTES: u64 = 28;
-
 /// One band of the film's rows on the device.
 pub struct FilmPiece {
     pub rows: Range<u32>,
@@ -63,18 +58,29 @@ pub fn piece_rows(
     Ok((0..pieces).map(|i| edge(i)..edge(i + 1)).collect())
 }
 
-/// Host memory a `width`×`height` film takes per pixel: the film read back to the host
-/// (and its AOVs), plus the device's film where the device's memory is the host's (a CPU
-/// adapter such as lavapipe).
-pub fn film_pixel_bytes(aovs: bool, device_is_host: bool) -> u64 {
-    let host = HOST_FILM_BYTES + if aovs { HOST_AOV_BYTES } else { 0 };
-    let device = 2 * SUM_BYTES + if aovs { AOV_BYTES } else { 0 };
-    host + if device_is_host { device } else { 0 }
+/// Refuses a `width`×`height` film that would not fit in memory, before anything is
+/// allocated: `host_pixel_bytes` per pixel that the caller will hold on the host (its
+/// output image: 3 bytes a pixel for 8-bit RGB, 32 for a whole [`Film`] of four f64),
+/// plus the film on the device where the device's memory is the host's (a CPU
+/// adapter such as lavapipe). Elsewhere the device film is checked when it is allocated.
+pub fn memory_check(
+    ctx: &GpuContext,
+    width: u32,
+    height: u32,
+    aovs: bool,
+    host_pixel_bytes: u64,
+) -> Result<(), RenderError> {
+    let device = if ctx.info.device_type == wgpu::DeviceType::Cpu {
+        2 * SUM_BYTES + if aovs { AOV_BYTES } else { 0 }
+    } else {
+        0
+    };
+    check_film_memory(width, height, host_pixel_bytes + device, available_memory())
 }
 
 /// Refuses a film that cannot fit in `available` bytes, saying the largest film of the
 /// same aspect ratio that would.
-pub fn check_film_memory(
+fn check_film_memory(
     width: u32,
     height: u32,
     pixel_bytes: u64,
@@ -85,7 +91,7 @@ pub fn check_film_memory(
     };
     let pixels = width as u64 * height as u64;
     let needed = pixels * pixel_bytes;
-    if needed <= available {
+    if needed <= available || pixel_bytes == 0 {
         return Ok(());
     }
     let scale = ((available / pixel_bytes) as f64 / pixels as f64).sqrt();
@@ -101,7 +107,7 @@ pub fn check_film_memory(
 
 /// Memory the system could give this process without swapping, where it says
 /// (`MemAvailable` on Linux); None elsewhere.
-pub fn available_memory() -> Option<u64> {
+fn available_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;

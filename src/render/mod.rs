@@ -17,6 +17,7 @@ mod renderer;
 pub mod tables;
 
 pub use context::{Backend, GpuContext, GpuError};
+pub use film_pieces::memory_check;
 pub use renderer::{
     Aovs, Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer,
 };

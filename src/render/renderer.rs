@@ -23,8 +23,8 @@ use thiserror::Error;
 
 use super::context::{GpuContext, GpuError};
 use super::film_pieces::{
-    AOV_BYTES, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, available_memory,
-    check_film_memory, film_pixel_bytes, piece_rows, read_aov_rows, read_film_rows,
+    AOV_BYTES, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check, piece_rows,
+    read_aov_rows, read_film_rows,
 };
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
@@ -304,13 +304,8 @@ impl Renderer {
             .map_or(binding_limit, |b| b.min(binding_limit));
         let widest = if settings.aovs { AOV_BYTES } else { SUM_BYTES };
         let rows = piece_rows(width, height, widest, piece_limit)?;
-        let device_is_host = ctx.info.device_type == wgpu::DeviceType::Cpu;
-        check_film_memory(
-            width,
-            height,
-            film_pixel_bytes(settings.aovs, device_is_host),
-            available_memory(),
-        )?;
+        // The device film alone; callers check it with what they hold (`memory_check`).
+        memory_check(&ctx, width, height, settings.aovs, 0)?;
         let stats_size = std::mem::size_of::<GpuStats>() as u64;
         let stats_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("stats"),
