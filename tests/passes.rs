@@ -136,3 +136,37 @@ fn a_cancel_mid_pass_leaves_counts_within_one_batch() {
     assert_eq!(film.sample_count(50, 0), hi);
     assert_eq!(film.sample_count(50, 95), lo);
 }
+
+#[test]
+fn a_cleared_film_starts_again_with_a_one_sample_first_pass() {
+    let ctx = gpu();
+    let scene = scene::default_scene().expect("bundled scene");
+    let s = settings(16, 16, 500);
+    let mut r = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
+    // Short dispatches: the batch grows well past one sample per pass.
+    let stats = r.render(0..500, RenderControl::default()).unwrap();
+    assert!(
+        stats.passes < 100,
+        "{} passes for 500 samples",
+        stats.passes
+    );
+    assert!(r.has_whole_pass());
+    r.clear_film();
+    assert!(!r.has_whole_pass());
+    let cancel = AtomicBool::new(true);
+    let stats = r
+        .render(
+            0..500,
+            RenderControl {
+                cancel: Some(&cancel),
+                ..RenderControl::default()
+            },
+        )
+        .unwrap();
+    assert_eq!(stats.passes, 1);
+    assert_eq!(
+        count_range(&r.read_film().unwrap()),
+        (1, 1),
+        "the first pass is one sample"
+    );
+}

@@ -489,7 +489,14 @@ impl Renderer {
         let total = pixels * samples.len() as u64;
         let mut next = samples.start;
         'passes: while next < samples.end {
-            let count = self.samples_per_dispatch.min(samples.end - next);
+            // The first pass, which nothing but an error stops, is as short as it can be:
+            // one sample per pixel, whatever batch an earlier render settled on.
+            let batch = if self.film_has_whole_pass {
+                self.samples_per_dispatch
+            } else {
+                1
+            };
+            let count = batch.min(samples.end - next);
             let pass_start = Instant::now();
             let mut pass_pixels = 0u64;
             let mut slowest = Duration::ZERO;
