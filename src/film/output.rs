@@ -1,11 +1,12 @@
 //! Writing a film to an image file: PNG and JPEG (tonemapped, 8-bit sRGB) or OpenEXR
-//! (linear 32-bit float radiance). Every write goes to a temporary file in the target's
+//! (linear 32-bit float radiance, and each pixel's sample count as the `samples` layer,
+//! named as the EXR plugin names layers). Every write goes to a temporary file in the target's
 //! folder that is renamed over the target only when complete, so a failed or interrupted
 //! write never leaves a truncated image or destroys the previous one.
 
 use std::path::{Path, PathBuf};
 
-use image::{ImageFormat, Rgb32FImage, RgbImage};
+use image::{ImageFormat, RgbImage};
 use thiserror::Error;
 
 use super::Film;
@@ -62,7 +63,7 @@ pub fn to_srgb_image(film: &Film, view: ViewSettings) -> RgbImage {
 
 /// An image file's pixels, assembled from bands of a film's rows before it is written:
 /// a large film is read back and converted a band at a time, so that only the image's own
-/// buffer (3 bytes a pixel for PNG and JPEG, 12 for EXR) is held whole, never the film.
+/// buffer (3 bytes a pixel for PNG and JPEG, 16 for EXR) is held whole, never the film.
 pub struct OutputImage {
     path: PathBuf,
     format: OutputFormat,
@@ -72,8 +73,15 @@ pub struct OutputImage {
 
 enum Pixels {
     Srgb(RgbImage),
-    Linear(Rgb32FImage),
+    /// Planar channels, as OpenEXR stores them: R, G, B and the sample counts.
+    Linear {
+        width: u32,
+        channels: [Vec<f32>; 4],
+    },
 }
+
+/// The EXR channel names of [`Pixels::Linear`]'s planes.
+const EXR_CHANNELS: [&str; 4] = ["R", "G", "B", "samples.Y"];
 
 impl OutputImage {
     /// A black `width`×`height` image for `path`, in the format its extension names.
@@ -86,7 +94,10 @@ impl OutputImage {
         let format = OutputFormat::from_path(path)?;
         let pixels = match format {
             OutputFormat::Png | OutputFormat::Jpeg => Pixels::Srgb(RgbImage::new(width, height)),
-            OutputFormat::Exr => Pixels::Linear(Rgb32FImage::new(width, height)),
+            OutputFormat::Exr => Pixels::Linear {
+                width,
+                channels: std::array::from_fn(|_| vec![0.0; width as usize * height as usize]),
+            },
         };
         Ok(Self {
             path: path.to_owned(),
@@ -112,8 +123,14 @@ impl OutputImage {
                             image::Rgb(to_srgb8(c, view.exposure_ev, view.tonemap)),
                         );
                     }
-                    Pixels::Linear(img) if row < img.height() && x < img.width() => {
-                        img.put_pixel(x, row, image::Rgb(c.to_array()));
+                    Pixels::Linear { width, channels } if x < *width => {
+                        let i = row as usize * *width as usize + x as usize;
+                        if i < channels[0].len() {
+                            let samples = band.sample_count(x, y) as f32;
+                            for (plane, v) in channels.iter_mut().zip([c.x, c.y, c.z, samples]) {
+                                plane[i] = v;
+                            }
+                        }
                     }
                     _ => {}
                 }
@@ -123,20 +140,65 @@ impl OutputImage {
 
     /// Writes the image atomically (`kiln_plugin_api::atomic`, shared with the exporter
     /// plugins): a complete image or none, never a truncated one.
-    pub fn write(&self) -> Result<(), OutputError> {
-        kiln_plugin_api::atomic::write_atomically(&self.path, |writer| {
-            let result = match (&self.pixels, self.format) {
+    pub fn write(self) -> Result<(), OutputError> {
+        let Self {
+            path,
+            format,
+            pixels,
+            ..
+        } = self;
+        kiln_plugin_api::atomic::write_atomically(&path, |writer| {
+            let result = match (pixels, format) {
                 (Pixels::Srgb(img), OutputFormat::Jpeg) => img.write_to(writer, ImageFormat::Jpeg),
                 (Pixels::Srgb(img), _) => img.write_to(writer, ImageFormat::Png),
-                (Pixels::Linear(img), _) => img.write_to(writer, ImageFormat::OpenExr),
+                (Pixels::Linear { width, channels }, _) => {
+                    return write_exr(writer, width, channels);
+                }
             };
             result.map_err(|e| e.to_string())
         })
         .map_err(|message| OutputError::Write {
-            path: self.path.clone(),
+            path: path.clone(),
             message,
         })
     }
+}
+
+/// An OpenEXR file of `width`-wide planes named [`EXR_CHANNELS`], 32-bit float, ZIP
+/// compressed in blocks of 16 scan lines (the EXR plugin's default).
+fn write_exr<W: std::io::Write + std::io::Seek>(
+    writer: W,
+    width: u32,
+    channels: [Vec<f32>; 4],
+) -> Result<(), String> {
+    use exr::prelude::{
+        AnyChannel, AnyChannels, Blocks, Compression, Encoding, FlatSamples, Image, Layer,
+        LayerAttributes, LineOrder, SmallVec, Text, Vec2, WritableImage,
+    };
+    let height = channels[0].len() / width.max(1) as usize;
+    let list: SmallVec<[AnyChannel<FlatSamples>; 4]> = EXR_CHANNELS
+        .iter()
+        .zip(channels)
+        .map(|(name, plane)| {
+            // The names are ASCII constants.
+            let name = Text::new_or_none(*name).expect("ASCII channel name");
+            AnyChannel::new(name, FlatSamples::F32(plane))
+        })
+        .collect();
+    let layer = Layer::new(
+        Vec2(width as usize, height),
+        LayerAttributes::default(),
+        Encoding {
+            compression: Compression::ZIP16,
+            blocks: Blocks::ScanLines,
+            line_order: LineOrder::Increasing,
+        },
+        AnyChannels::sort(list),
+    );
+    Image::from_layer(layer)
+        .write()
+        .to_buffered(writer)
+        .map_err(|e| e.to_string())
 }
 
 /// Writes the film atomically: a complete image or none, never a truncated one.
@@ -192,6 +254,16 @@ mod tests {
         for (x, y, p) in read.enumerate_pixels() {
             assert_eq!(p.0, film.pixel(x, y).to_array());
         }
+        // Each pixel's sample count, as the `samples` layer.
+        let layers = exr::prelude::read_all_flat_layers_from_file(&path).unwrap();
+        let samples = layers.layer_data[0]
+            .channel_data
+            .list
+            .iter()
+            .find(|c| c.name.to_string() == "samples.Y")
+            .expect("a samples layer");
+        let counts: Vec<f32> = samples.sample_data.values_as_f32().collect();
+        assert_eq!(counts, vec![2.0; 32]);
     }
 
     #[test]
