@@ -425,11 +425,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     eprintln!("adapter: {}", ctx.describe());
     // What `write_output` holds whole on the host, per pixel: an exporter plugin's film
     // (radiance and display RGBA f32, the sample counts, the AOVs), or the host writer's
-    // image; refused before the kernel is built when it cannot fit.
+    // image (RGB and sample count f32, or RGB8); refused before the kernel is built when it
+    // cannot fit. docs/BENCHMARKS.md has the peaks measured.
     let output_bytes = if plugins.handles(PluginKind::Exporter, &args.output) {
         36 + if settings.aovs { 28 } else { 0 }
     } else if exr {
-        12
+        16
     } else {
         3
     };
