@@ -458,6 +458,10 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
                 kiln_plugin_api::atomic::remove_partial_files(&out_dir);
                 std::process::exit(130);
             }
+            // The first whole pass may still take a while on a large image.
+            eprintln!(
+                "\ninterrupted: the image is written once every pixel has a sample (Ctrl-C again quits without writing)"
+            );
         })
         .context("cannot install the Ctrl-C handler")?;
     }
