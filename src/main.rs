@@ -527,11 +527,16 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         // Whole passes rendered before an error still make an image with a sample in
         // every pixel: write it, then report the error.
         Err(e) if renderer.has_whole_pass() => {
-            write_output(renderer, &args.output, plugins, view, &args.export_options)?;
-            bail!(
-                "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
-                args.output.display()
-            );
+            let written = write_output(renderer, &args.output, plugins, view, &args.export_options);
+            return Err(match written {
+                Ok(()) => anyhow::anyhow!(
+                    "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
+                    args.output.display()
+                ),
+                Err(w) => anyhow::anyhow!(
+                    "the render stopped with an error: {e}; writing what it had rendered failed too: {w:#}"
+                ),
+            });
         }
         Err(e) => return Err(e.into()),
     };
