@@ -43,7 +43,9 @@ struct Params {
     // Probability of picking an emissive triangle in NEE.
     triangle_pick: f32,
     analytic_light_count: u32,
-    _pad: u32,
+    // Index of the first pixel of the film piece bound to this dispatch: the film is split
+    // into bands of rows that each fit one binding (src/render/film_pieces.rs).
+    film_piece_start: u32,
 };
 
 // A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;

@@ -425,6 +425,17 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
 
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
+    // What `write_output` holds whole on the host, per pixel, for a plugin and the host's
+    // writer alike: radiance and display RGBA f32, the sample counts, the AOVs. Refused
+    // before the kernel is built when it cannot fit; docs/BENCHMARKS.md has the peaks.
+    let output_bytes = 36 + if settings.aovs { 28 } else { 0 };
+    kiln::render::memory_check(
+        &ctx,
+        settings.width,
+        settings.height,
+        settings.aovs,
+        output_bytes,
+    )?;
     let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
         .with_context(|| format!("cannot prepare {name} for rendering"))?;
 
@@ -442,6 +453,10 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
                 kiln_plugin_api::atomic::remove_partial_files(&out_dir);
                 std::process::exit(130);
             }
+            // The first whole pass may still take a while on a large image.
+            eprintln!(
+                "\ninterrupted: the image is written once every pixel has a sample (Ctrl-C again quits without writing)"
+            );
         })
         .context("cannot install the Ctrl-C handler")?;
     }
@@ -463,15 +478,25 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     };
     bar.set_style(
         ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}  ETA {eta}",
+            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}",
         )
         .expect("the template is valid"),
     );
     let mut on_progress = |p: &kiln::render::Progress| {
-        bar.set_position(p.pixel_samples_done / pixels.max(1));
+        // The bar counts the samples every pixel has: those of the whole passes.
+        bar.set_position(p.whole_pass_samples as u64);
         let secs = p.elapsed.as_secs_f64().max(1e-9);
+        let next = if p.pass_fraction > 0.0 {
+            let left = p.pass_elapsed.as_secs_f64() * (1.0 - p.pass_fraction) / p.pass_fraction;
+            format!("{left:.1} s")
+        } else {
+            "-".to_owned()
+        };
         bar.set_message(format!(
-            "{:.2} Msamples/s  {:.1} Mrays/s",
+            "pass {} (+{} spp) {:.0}%, next whole image in {next}  {:.2} Msamples/s  {:.1} Mrays/s",
+            p.passes_done + 1,
+            p.pass_samples,
+            p.pass_fraction * 100.0,
             p.pixel_samples_done as f64 / secs / 1e6,
             p.rays as f64 / secs / 1e6
         ));
@@ -479,40 +504,38 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     let deadline = args
         .time_limit
         .map(|t| Instant::now() + Duration::from_secs_f64(t));
-    let stats = renderer.render(
+    let result = renderer.render(
         0..settings.samples_per_pixel,
         RenderControl {
             cancel: Some(&cancel),
             deadline,
             progress: Some(&mut on_progress),
         },
-    )?;
+    );
     bar.finish_and_clear();
-    let film = renderer.read_film()?;
     let view = ViewSettings {
         exposure_ev: args.exposure,
         tonemap: args.tonemap.into(),
     };
-    let mut layers = Vec::new();
-    if let Some(aovs) = renderer.read_aovs()? {
-        for (name, channels, data) in [
-            ("albedo", 3, aovs.albedo),
-            ("normal", 3, aovs.normal),
-            ("depth", 1, aovs.depth),
-        ] {
-            layers.push(ExportLayer {
-                name: name.into(),
-                channels,
-                data,
+    let stats = match result {
+        Ok(stats) => stats,
+        // Whole passes rendered before an error still make an image with a sample in
+        // every pixel: write it, then report the error.
+        Err(e) if renderer.has_whole_pass() => {
+            let written = write_output(renderer, &args.output, plugins, view, &args.export_options);
+            return Err(match written {
+                Ok(()) => anyhow::anyhow!(
+                    "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
+                    args.output.display()
+                ),
+                Err(w) => anyhow::anyhow!(
+                    "the render stopped with an error: {e}; writing what it had rendered failed too: {w:#}"
+                ),
             });
         }
-    }
-    let film = ExportFilm::from_film(&film, view, layers);
-    if plugins.handles(PluginKind::Exporter, &args.output) {
-        plugins.export(&args.output, &film, &args.export_options)?;
-    } else {
-        write_image(&args.output, &film, &args.export_options)?;
-    }
+        Err(e) => return Err(e.into()),
+    };
+    write_output(renderer, &args.output, plugins, view, &args.export_options)?;
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     let reason = if stats.completed {
         ""
@@ -521,11 +544,20 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     } else {
         " (time limit reached)"
     };
+    // A stop waits for the first whole pass; say so when it ran past the time limit.
+    let overrun = match (args.time_limit, stats.first_pass) {
+        (Some(limit), Some(first)) if first.as_secs_f64() > limit => format!(
+            "; the first whole pass took {:.2} s, longer than the {limit} s time limit (it always completes, so that every pixel has a sample)",
+            first.as_secs_f64()
+        ),
+        _ => String::new(),
+    };
     eprintln!(
-        "wrote {}: {:.1} spp average in {:.2} s{reason}, {:.2} Msamples/s, {:.1} Mrays/s{}",
+        "wrote {}: {:.1} spp average in {:.2} s{reason}, {} whole passes, {:.2} Msamples/s, {:.1} Mrays/s{}{overrun}",
         args.output.display(),
         stats.pixel_samples as f64 / pixels as f64,
         secs,
+        stats.passes,
         stats.pixel_samples as f64 / secs / 1e6,
         stats.rays as f64 / secs / 1e6,
         if stats.non_finite > 0 {
@@ -534,5 +566,60 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             String::new()
         }
     );
+    Ok(())
+}
+
+/// Rows of the film read back and converted at a time: large images are never held whole
+/// as a film on the host, only in the output's own form.
+const BAND_ROWS: u32 = 256;
+
+/// Writes the renderer's film to `output`, with the exporter plugin for its extension or
+/// the host's own writer. The renderer (and its film on the device) is dropped before
+/// the file is encoded, so the two are never in memory together.
+fn write_output(
+    renderer: Renderer,
+    output: &Path,
+    plugins: &PluginHost,
+    view: ViewSettings,
+    export_options: &str,
+) -> Result<()> {
+    let RenderSettings { width, height, .. } = *renderer.settings();
+    let bands = (0..height)
+        .step_by(BAND_ROWS as usize)
+        .map(|y| y..(y + BAND_ROWS).min(height));
+    // The film a band of rows at a time, each pixel's own sample count as a layer, and the
+    // AOVs: the same for an exporter plugin and for the host's writer.
+    let mut film = ExportFilm::with_capacity(width, height);
+    let mut samples = Vec::with_capacity(width as usize * height as usize);
+    for rows in bands {
+        let band = renderer.read_film_rows(rows)?;
+        film.push_rows(&band, view);
+        samples.extend(band.sums.iter().map(|s| s[3] as f32));
+    }
+    if let Some(aovs) = renderer.read_aovs()? {
+        for (name, channels, data) in [
+            ("albedo", 3, aovs.albedo),
+            ("normal", 3, aovs.normal),
+            ("depth", 1, aovs.depth),
+        ] {
+            film.layers.push(ExportLayer {
+                name: name.into(),
+                channels,
+                data,
+            });
+        }
+    }
+    film.layers.push(ExportLayer {
+        name: "samples".into(),
+        channels: 1,
+        data: samples,
+    });
+    // The device's film is freed before the file is encoded.
+    drop(renderer);
+    if plugins.handles(PluginKind::Exporter, output) {
+        plugins.export(output, &film, export_options)?;
+    } else {
+        write_image(output, &film, export_options)?;
+    }
     Ok(())
 }

@@ -260,9 +260,12 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (px.x >= params.film_size.x || px.y >= params.film_size.y) {
         return;
     }
+    // Samples are seeded by the pixel's index in the whole film; the buffers bound hold
+    // one piece of it, so that how the film is split never changes a sample.
     let pixel = px.y * params.film_size.x + px.x;
-    var sum = film_sum[pixel];
-    var compensation = film_compensation[pixel];
+    let index = pixel - params.film_piece_start;
+    var sum = film_sum[index];
+    var compensation = film_compensation[index];
     var non_finite = 0u;
     rays_traced = 0u;
     // The AOV sums are carried from the stored ones and added to sample by sample, as the
@@ -271,8 +274,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     var aov_a = vec4<f32>(0.0);
     var aov_n = vec4<f32>(0.0);
     if (FEATURE_AOVS) {
-        aov_a = film_aov[2u * pixel];
-        aov_n = film_aov[2u * pixel + 1u];
+        aov_a = film_aov[2u * index];
+        aov_n = film_aov[2u * index + 1u];
     }
     for (var i = 0u; i < params.sample_count; i++) {
         rng_seed(pixel, params.sample_start + i, params.seed);
@@ -295,11 +298,11 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         compensation = (t * params.opaque_one - sum) - y;
         sum = t;
     }
-    film_sum[pixel] = sum;
-    film_compensation[pixel] = compensation;
+    film_sum[index] = sum;
+    film_compensation[index] = compensation;
     if (FEATURE_AOVS) {
-        film_aov[2u * pixel] = aov_a;
-        film_aov[2u * pixel + 1u] = aov_n;
+        film_aov[2u * index] = aov_a;
+        film_aov[2u * index + 1u] = aov_n;
     }
     atomicAdd(&stats.rays, rays_traced);
     if (non_finite > 0u) {

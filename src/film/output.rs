@@ -89,23 +89,38 @@ pub struct ExportFilm {
 impl ExportFilm {
     /// The film's mean radiance, and its display rendering under `view`.
     pub fn from_film(film: &Film, view: ViewSettings, layers: Vec<ExportLayer>) -> Self {
-        let mut radiance = Vec::with_capacity(film.width as usize * film.height as usize * 4);
-        let mut display = Vec::with_capacity(radiance.capacity());
-        for y in 0..film.height {
-            for x in 0..film.width {
-                let c = film.pixel(x, y);
-                radiance.extend([c.x, c.y, c.z, 1.0]);
-                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
-                display.extend(d.to_array().map(srgb_encode));
-                display.push(1.0);
-            }
-        }
+        let mut export = Self::with_capacity(film.width, film.height);
+        export.push_rows(film, view);
+        export.layers = layers;
+        export
+    }
+
+    /// An empty `width`×`height` film, to be filled a band of rows at a time with
+    /// [`ExportFilm::push_rows`]: a large film is read back and converted a band at a time,
+    /// never held whole as sums beside these buffers.
+    pub fn with_capacity(width: u32, height: u32) -> Self {
+        let floats = width as usize * height as usize * 4;
         Self {
-            width: film.width,
-            height: film.height,
-            radiance,
-            display,
-            layers,
+            width,
+            height,
+            radiance: Vec::with_capacity(floats),
+            display: Vec::with_capacity(floats),
+            layers: Vec::new(),
+        }
+    }
+
+    /// Appends the rows of `band` (a film as wide as this one: the next rows down), as
+    /// mean radiance and as their display rendering under `view`.
+    pub fn push_rows(&mut self, band: &Film, view: ViewSettings) {
+        debug_assert_eq!(band.width, self.width, "bands are as wide as the film");
+        for y in 0..band.height {
+            for x in 0..band.width {
+                let c = band.pixel(x, y);
+                self.radiance.extend([c.x, c.y, c.z, 1.0]);
+                let d = view.tonemap.apply(c * view.exposure_ev.exp2());
+                self.display.extend(d.to_array().map(srgb_encode));
+                self.display.push(1.0);
+            }
         }
     }
 
@@ -163,6 +178,31 @@ mod tests {
 
     fn export(film: &Film, view: ViewSettings) -> ExportFilm {
         ExportFilm::from_film(film, view, Vec::new())
+    }
+
+    #[test]
+    fn a_film_assembled_from_bands_writes_the_same_bytes_as_the_whole_film() {
+        let dir = tempfile::tempdir().unwrap();
+        let film = gradient_film();
+        let band = |rows: std::ops::Range<usize>| Film {
+            width: 8,
+            height: rows.len() as u32,
+            sums: film.sums[rows.start * 8..rows.end * 8].to_vec(),
+        };
+        let mut banded = ExportFilm::with_capacity(8, 4);
+        banded.push_rows(&band(0..3), ViewSettings::default());
+        banded.push_rows(&band(3..4), ViewSettings::default());
+        for name in ["a.png", "a.exr"] {
+            let whole = dir.path().join(format!("whole_{name}"));
+            let parts = dir.path().join(format!("banded_{name}"));
+            write_image(&whole, &export(&film, ViewSettings::default()), "").unwrap();
+            write_image(&parts, &banded, "").unwrap();
+            assert_eq!(
+                std::fs::read(&whole).unwrap(),
+                std::fs::read(&parts).unwrap(),
+                "{name}"
+            );
+        }
     }
 
     #[test]

@@ -1,13 +1,15 @@
 //! The GPU side: device ([`context`]), kernel assembly ([`kernel`]), scene upload
 //! ([`gpu_scene`]) with the light-selection distributions ([`light_distribution`]) and
 //! the environment map's CDF ([`environment_cdf`]), and the progressive [`Renderer`]
-//! that accumulates samples into a film.
+//! that accumulates samples into a film (on the device in pieces that each fit a binding)
+//! in whole-image passes.
 //!
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
 pub mod context;
 pub mod environment_cdf;
+mod film_pieces;
 pub mod gpu_scene;
 pub mod kernel;
 pub mod light_distribution;
@@ -18,6 +20,7 @@ mod renderer;
 pub mod tables;
 
 pub use context::{Backend, GpuContext, GpuError};
+pub use film_pieces::memory_check;
 pub use renderer::{
     Aovs, Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer,
 };

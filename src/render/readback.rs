@@ -7,6 +7,16 @@ pub fn read_buffer(
     buffer: &wgpu::Buffer,
     size: u64,
 ) -> Result<Vec<u8>, GpuError> {
+    read_buffer_range(ctx, buffer, 0, size)
+}
+
+/// `size` bytes of `buffer` from `offset` (both multiples of 4, as copies require).
+pub fn read_buffer_range(
+    ctx: &GpuContext,
+    buffer: &wgpu::Buffer,
+    offset: u64,
+    size: u64,
+) -> Result<Vec<u8>, GpuError> {
     let staging = ctx.device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("readback"),
         size,
@@ -14,7 +24,7 @@ pub fn read_buffer(
         mapped_at_creation: false,
     });
     let mut encoder = ctx.device.create_command_encoder(&Default::default());
-    encoder.copy_buffer_to_buffer(buffer, 0, &staging, 0, size);
+    encoder.copy_buffer_to_buffer(buffer, offset, &staging, 0, size);
     ctx.queue.submit([encoder.finish()]);
     map_and_read(ctx, &staging)
 }

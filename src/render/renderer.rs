@@ -1,10 +1,17 @@
 //! The progressive renderer: uploads a scene once, then renders any range of sample
-//! indices into its film, in dispatches short enough that none runs long (tiles of at
-//! most 256×256 pixels, with the samples per dispatch adapted to a time target).
+//! indices into its film in whole-image passes. A pass adds the same number of samples
+//! to every pixel, in dispatches short enough that none runs long (tiles of at most
+//! 256×256 pixels, with the samples per pass adapted to a time target); the film lives on
+//! the device in pieces that each fit a binding (`film_pieces.rs`).
+//!
+//! A render stops (cancel, deadline) only between dispatches and never before the film
+//! holds one whole pass, so a stopped render has a sample in every pixel and sample
+//! counts that differ across pixels by at most one pass's batch; each pixel is normalised
+//! by its own count.
 //!
 //! Samples are pure functions of (pixel, sample index, seed), and each pixel adds its
 //! samples in index order, so the film after `render(0..n)` is the same bits however the
-//! work was cut into dispatches, and `render(0..k)` then `render(k..n)` equals
+//! work was cut into passes and dispatches, and `render(0..k)` then `render(k..n)` equals
 //! `render(0..n)`.
 
 use std::ops::Range;
@@ -15,9 +22,13 @@ use std::time::{Duration, Instant};
 use thiserror::Error;
 
 use super::context::{GpuContext, GpuError};
-use super::gpu_scene::{FrameBuffers, GpuScene, UploadError, scene_bind_group_layout};
+use super::film_pieces::{
+    AOV_BYTES, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check, piece_rows,
+    read_aov_rows, read_film_rows,
+};
+use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
-use super::readback::{map_and_read, read_buffer};
+use super::readback::map_and_read;
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
 use crate::scene::Scene;
@@ -25,6 +36,7 @@ use crate::shader::KernelFeatures;
 use crate::shader::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
 
 const TILE_SIZE: u32 = 256;
+const GIB: f64 = (1u64 << 30) as f64;
 const WORKGROUP_SIZE: u32 = 8;
 /// Dispatch duration the sample batching aims for.
 const TARGET_DISPATCH: Duration = Duration::from_millis(60);
@@ -47,6 +59,37 @@ pub enum RenderError {
     Gpu(#[from] GpuError),
     #[error(transparent)]
     Material(#[from] crate::material::GraphError),
+    #[error(
+        "a {width}x{height} film needs {:.1} GiB of memory, but {:.1} GiB are available: at this aspect ratio the largest film that fits is about {max_width}x{max_height}",
+        *.needed as f64 / GIB,
+        *.available as f64 / GIB
+    )]
+    FilmTooLarge {
+        width: u32,
+        height: u32,
+        needed: u64,
+        available: u64,
+        max_width: u32,
+        max_height: u32,
+    },
+    #[error(
+        "the device ran out of memory for a {width}x{height} film ({:.1} GiB): render a smaller image ({message})",
+        *.bytes as f64 / GIB
+    )]
+    FilmOutOfMemory {
+        width: u32,
+        height: u32,
+        bytes: u64,
+        message: String,
+    },
+    #[error(
+        "one film row of {width} pixels needs {row_bytes} bytes, more than the {limit}-byte limit of a film buffer"
+    )]
+    FilmRowTooLarge {
+        width: u32,
+        row_bytes: u64,
+        limit: u64,
+    },
 }
 
 #[derive(Clone, Copy, Debug, PartialEq)]
@@ -68,6 +111,10 @@ pub struct RenderSettings {
     pub specialize: bool,
     /// Also render the albedo, normal and depth AOVs ([`Renderer::read_aovs`]).
     pub aovs: bool,
+    /// Largest film buffer in bytes; default: the largest binding the adapter allows. A
+    /// film beyond it is split into pieces of whole rows; tests lower it to split small
+    /// films.
+    pub film_piece_bytes: Option<u64>,
 }
 
 impl RenderSettings {
@@ -82,6 +129,7 @@ impl RenderSettings {
             page_bytes: None,
             specialize: true,
             aovs: false,
+            film_piece_bytes: None,
         }
     }
 }
@@ -102,6 +150,16 @@ pub struct Progress {
     pub pixel_samples_total: u64,
     pub rays: u64,
     pub elapsed: Duration,
+    /// Whole passes over the image finished in this call.
+    pub passes_done: u32,
+    /// Samples every pixel has received in this call (those of the whole passes).
+    pub whole_pass_samples: u32,
+    /// Samples per pixel the pass under way adds.
+    pub pass_samples: u32,
+    /// Share of the image the pass under way has covered, in [0, 1).
+    pub pass_fraction: f64,
+    /// Time since the pass under way began.
+    pub pass_elapsed: Duration,
 }
 
 /// How a caller steers a render: stop it, bound it in time, watch it.
@@ -122,6 +180,11 @@ pub struct RenderStats {
     pub elapsed: Duration,
     /// False when cancelled or out of time before the range was done.
     pub completed: bool,
+    /// Whole passes over the image finished.
+    pub passes: u32,
+    /// How long the film's first whole pass took, when this call rendered it: a cancel or
+    /// deadline waits for it, so it can run past a time limit.
+    pub first_pass: Option<Duration>,
 }
 
 /// What building the renderer cost, for `kiln bench` and the CLI's summary.
@@ -140,11 +203,12 @@ pub struct BuildInfo {
 pub struct Renderer {
     ctx: Arc<GpuContext>,
     pipeline: wgpu::ComputePipeline,
-    bind_group: wgpu::BindGroup,
     params_buffer: wgpu::Buffer,
-    film_sum: wgpu::Buffer,
-    film_compensation: wgpu::Buffer,
-    film_aov: Option<wgpu::Buffer>,
+    /// The film, in bands of rows that each fit a binding.
+    pieces: Vec<FilmPiece>,
+    /// Whether every pixel of the film holds at least one whole pass: until it does,
+    /// only an error stops a render.
+    film_has_whole_pass: bool,
     stats_buffer: wgpu::Buffer,
     stats_staging: wgpu::Buffer,
     base_params: GpuParams,
@@ -189,6 +253,8 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         light_power: gpu.light_power,
         triangle_pick: gpu.triangle_pick,
         analytic_light_count: gpu.analytic_light_count,
+        // Set per dispatch, for the piece it renders into.
+        film_piece_start: 0,
         ..GpuParams::default()
     }
 }
@@ -228,35 +294,28 @@ impl Renderer {
             "render",
         )?;
 
-        let pixels = settings.width as u64 * settings.height as u64;
-        let film_bytes = pixels * 16;
-        let storage = |label: &str, size: u64, extra: wgpu::BufferUsages| {
-            device.create_buffer(&wgpu::BufferDescriptor {
-                label: Some(label),
-                size,
-                usage: wgpu::BufferUsages::STORAGE
-                    | wgpu::BufferUsages::COPY_SRC
-                    | wgpu::BufferUsages::COPY_DST
-                    | extra,
-                mapped_at_creation: false,
-            })
-        };
+        let (width, height) = (settings.width, settings.height);
+        let film_bytes = width as u64 * height as u64 * SUM_BYTES;
         let limits = ctx.limits();
-        if film_bytes > limits.max_storage_buffer_binding_size {
-            return Err(RenderError::Upload(UploadError::TooLarge {
-                buffer: "film",
-                bytes: film_bytes,
-                limit: limits.max_storage_buffer_binding_size,
-            }));
-        }
-        let film_sum = storage("film sum", film_bytes, wgpu::BufferUsages::empty());
-        let film_compensation =
-            storage("film compensation", film_bytes, wgpu::BufferUsages::empty());
-        let film_aov = settings
-            .aovs
-            .then(|| storage("film AOVs", 2 * film_bytes, wgpu::BufferUsages::empty()));
+        let binding_limit = limits
+            .max_storage_buffer_binding_size
+            .min(limits.max_buffer_size);
+        let piece_limit = settings
+            .film_piece_bytes
+            .map_or(binding_limit, |b| b.min(binding_limit));
+        let widest = if settings.aovs { AOV_BYTES } else { SUM_BYTES };
+        let rows = piece_rows(width, height, widest, piece_limit)?;
+        // The device film alone; callers check it with what they hold (`memory_check`).
+        memory_check(&ctx, width, height, settings.aovs, 0)?;
         let stats_size = std::mem::size_of::<GpuStats>() as u64;
-        let stats_buffer = storage("stats", stats_size, wgpu::BufferUsages::empty());
+        let stats_buffer = device.create_buffer(&wgpu::BufferDescriptor {
+            label: Some("stats"),
+            size: stats_size,
+            usage: wgpu::BufferUsages::STORAGE
+                | wgpu::BufferUsages::COPY_SRC
+                | wgpu::BufferUsages::COPY_DST,
+            mapped_at_creation: false,
+        });
         let stats_staging = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("stats staging"),
             size: stats_size,
@@ -269,17 +328,18 @@ impl Renderer {
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
-        let bind_group = gpu_scene.bind_group(
-            device,
+        let pieces = allocate_pieces(
+            &ctx,
+            &gpu_scene,
             &layout,
-            &FrameBuffers {
+            &rows,
+            width,
+            settings.aovs,
+            SharedBuffers {
                 params: &params_buffer,
-                film_sum: &film_sum,
-                film_compensation: &film_compensation,
                 stats: &stats_buffer,
-                film_aov: film_aov.as_ref(),
             },
-        );
+        )?;
         let base_params = base_params(scene, &gpu_scene, &settings);
         let mut renderer = Self {
             build_info: BuildInfo {
@@ -293,11 +353,9 @@ impl Renderer {
             },
             ctx,
             pipeline,
-            bind_group,
             params_buffer,
-            film_sum,
-            film_compensation,
-            film_aov,
+            pieces,
+            film_has_whole_pass: false,
             stats_buffer,
             stats_staging,
             base_params,
@@ -307,7 +365,7 @@ impl Renderer {
         renderer.clear_film();
         // An empty dispatch makes drivers that compile lazily (lavapipe) do it now, so the
         // compile is counted here and not in the first samples.
-        renderer.dispatch([0, 0], [0, 0], 0, 0)?;
+        renderer.dispatch(0, [0, 0], [0, 0], 0, 0)?;
         renderer.build_info.kernel_build = kernel_start.elapsed();
         Ok(renderer)
     }
@@ -320,20 +378,51 @@ impl Renderer {
         self.ctx.describe()
     }
 
+    /// How many pieces the film is split into on the device (1 unless it exceeds a
+    /// binding, or `RenderSettings::film_piece_bytes`).
+    pub fn film_pieces(&self) -> usize {
+        self.pieces.len()
+    }
+
+    /// Whether every pixel of the film holds at least one whole pass of samples (what a
+    /// stopped or failed render can still write).
+    pub fn has_whole_pass(&self) -> bool {
+        self.film_has_whole_pass
+    }
+
     /// Zeroes the film: the next render starts from no samples.
     pub fn clear_film(&mut self) {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
-        encoder.clear_buffer(&self.film_sum, 0, None);
-        encoder.clear_buffer(&self.film_compensation, 0, None);
-        if let Some(aov) = &self.film_aov {
-            encoder.clear_buffer(aov, 0, None);
+        for piece in &self.pieces {
+            encoder.clear_buffer(&piece.sum, 0, None);
+            encoder.clear_buffer(&piece.compensation, 0, None);
+            if let Some(aov) = &piece.aov {
+                encoder.clear_buffer(aov, 0, None);
+            }
         }
         self.ctx.queue.submit([encoder.finish()]);
+        self.film_has_whole_pass = false;
     }
 
-    /// One dispatch over a tile; returns the stats it produced.
+    /// The tiles of a pass: (piece, origin, size), none straddling two pieces.
+    fn tiles(&self) -> Vec<(usize, [u32; 2], [u32; 2])> {
+        let width = self.settings.width;
+        let mut tiles = Vec::new();
+        for (i, piece) in self.pieces.iter().enumerate() {
+            for y in piece.rows.clone().step_by(TILE_SIZE as usize) {
+                for x in (0..width).step_by(TILE_SIZE as usize) {
+                    let size = [TILE_SIZE.min(width - x), TILE_SIZE.min(piece.rows.end - y)];
+                    tiles.push((i, [x, y], size));
+                }
+            }
+        }
+        tiles
+    }
+
+    /// One dispatch over a tile of piece `piece`; returns the stats it produced.
     fn dispatch(
         &mut self,
+        piece: usize,
         origin: [u32; 2],
         size: [u32; 2],
         sample_start: u32,
@@ -344,6 +433,7 @@ impl Renderer {
             tile_size: size,
             sample_start,
             sample_count,
+            film_piece_start: self.pieces[piece].rows.start * self.settings.width,
             ..self.base_params
         };
         let queue = &self.ctx.queue;
@@ -357,7 +447,11 @@ impl Renderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(crate::shader::bindings::SCENE_GROUP, &self.bind_group, &[]);
+            pass.set_bind_group(
+                crate::shader::bindings::SCENE_GROUP,
+                &self.pieces[piece].bind_group,
+                &[],
+            );
             pass.dispatch_workgroups(
                 size[0].div_ceil(WORKGROUP_SIZE).max(1),
                 size[1].div_ceil(WORKGROUP_SIZE).max(1),
@@ -376,57 +470,81 @@ impl Renderer {
         Ok(*bytemuck::from_bytes::<GpuStats>(&bytes))
     }
 
-    /// Adds the samples with indices in `samples` to every pixel of the film. Stops early
-    /// (with `completed: false`) when cancelled or past the deadline; the film then holds
-    /// whole dispatches only, and each pixel knows its own sample count.
+    /// Adds the samples with indices in `samples` to every pixel of the film, in
+    /// whole-image passes. Stops early (with `completed: false`) when cancelled or past
+    /// the deadline, but never before the film holds one whole pass: a stopped film has a
+    /// sample in every pixel, and its pixels' counts differ by at most one pass's batch
+    /// (each pixel knows its own count).
     pub fn render(
         &mut self,
         samples: Range<u32>,
         mut control: RenderControl,
     ) -> Result<RenderStats, RenderError> {
         let start = Instant::now();
-        let (width, height) = (self.settings.width, self.settings.height);
-        let tiles: Vec<([u32; 2], [u32; 2])> = (0..height)
-            .step_by(TILE_SIZE as usize)
-            .flat_map(|y| {
-                (0..width).step_by(TILE_SIZE as usize).map(move |x| {
-                    (
-                        [x, y],
-                        [TILE_SIZE.min(width - x), TILE_SIZE.min(height - y)],
-                    )
-                })
-            })
-            .collect();
-        let pixels = width as u64 * height as u64;
+        let tiles = self.tiles();
+        let pixels = self.settings.width as u64 * self.settings.height as u64;
         let mut stats = RenderStats {
             completed: true,
             ..RenderStats::default()
         };
         let total = pixels * samples.len() as u64;
         let mut next = samples.start;
-        'batches: while next < samples.end {
-            let count = self.samples_per_dispatch.min(samples.end - next);
+        'passes: while next < samples.end {
+            // The first pass, which nothing but an error stops, is as short as it can be:
+            // one sample per pixel, whatever batch an earlier render settled on.
+            let batch = if self.film_has_whole_pass {
+                self.samples_per_dispatch
+            } else {
+                1
+            };
+            let count = batch.min(samples.end - next);
+            let pass_start = Instant::now();
+            let mut pass_pixels = 0u64;
             let mut slowest = Duration::ZERO;
-            for &(origin, size) in &tiles {
+            for &(piece, origin, size) in &tiles {
                 let stop = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
                     || control.deadline.is_some_and(|d| Instant::now() >= d);
-                if stop {
+                if stop && self.film_has_whole_pass {
                     stats.completed = false;
-                    break 'batches;
+                    break 'passes;
                 }
                 let t = Instant::now();
-                let s = self.dispatch(origin, size, next, count)?;
+                let s = self.dispatch(piece, origin, size, next, count)?;
                 slowest = slowest.max(t.elapsed());
+                let tile_pixels = size[0] as u64 * size[1] as u64;
+                pass_pixels += tile_pixels;
                 stats.dispatches += 1;
                 stats.rays += s.rays as u64;
                 stats.non_finite += s.non_finite as u64;
-                stats.pixel_samples += size[0] as u64 * size[1] as u64 * count as u64;
+                stats.pixel_samples += tile_pixels * count as u64;
+                let pass_done = pass_pixels == pixels;
+                if pass_done {
+                    if !self.film_has_whole_pass {
+                        stats.first_pass = Some(pass_start.elapsed());
+                        self.film_has_whole_pass = true;
+                    }
+                    stats.passes += 1;
+                }
                 if let Some(progress) = control.progress.as_mut() {
                     progress(&Progress {
                         pixel_samples_done: stats.pixel_samples,
                         pixel_samples_total: total,
                         rays: stats.rays,
                         elapsed: start.elapsed(),
+                        passes_done: stats.passes,
+                        whole_pass_samples: next - samples.start
+                            + if pass_done { count } else { 0 },
+                        pass_samples: count,
+                        pass_fraction: if pass_done {
+                            0.0
+                        } else {
+                            pass_pixels as f64 / pixels as f64
+                        },
+                        pass_elapsed: if pass_done {
+                            Duration::ZERO
+                        } else {
+                            pass_start.elapsed()
+                        },
                     });
                 }
             }
@@ -448,37 +566,41 @@ impl Renderer {
     /// (distance from the camera to the first hit; 0 where the camera saw nothing). None
     /// unless the settings asked for them.
     pub fn read_aovs(&self) -> Result<Option<Aovs>, RenderError> {
-        let Some(buffer) = &self.film_aov else {
+        self.read_aov_rows(0..self.settings.height)
+    }
+
+    /// Rows `rows` of the AOVs (see [`Renderer::read_aovs`]).
+    pub fn read_aov_rows(&self, rows: Range<u32>) -> Result<Option<Aovs>, RenderError> {
+        if !self.settings.aovs {
             return Ok(None);
-        };
-        let raw = read_buffer(&self.ctx, buffer, buffer.size())?;
-        let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-        let mut aovs = Aovs::default();
-        for px in raw.chunks_exact(2) {
-            let [a, n] = [px[0], px[1]];
-            // The AOV film counts its own samples.
-            let samples = n[3].max(1.0);
-            aovs.albedo.extend([a[0], a[1], a[2]].map(|v| v / samples));
-            aovs.depth.push(a[3] / samples);
-            let normal = glam::Vec3::new(n[0], n[1], n[2]);
-            let unit = normal.try_normalize().unwrap_or(glam::Vec3::ZERO);
-            aovs.normal.extend(unit.to_array());
         }
-        Ok(Some(aovs))
+        read_aov_rows(
+            &self.ctx,
+            &self.pieces,
+            self.settings.width,
+            self.clamp(rows),
+        )
     }
 
     /// Copies the film back from the device.
     pub fn read_film(&self) -> Result<Film, RenderError> {
-        let size = self.film_sum.size();
-        let sums = read_buffer(&self.ctx, &self.film_sum, size)?;
-        let compensation = read_buffer(&self.ctx, &self.film_compensation, size)?;
-        let sums: &[[f32; 4]] = bytemuck::cast_slice(&sums);
-        let compensation: &[[f32; 4]] = bytemuck::cast_slice(&compensation);
-        let mut film = Film::new(self.settings.width, self.settings.height);
-        for ((out, s), c) in film.sums.iter_mut().zip(sums).zip(compensation) {
-            // Kahan: the running sum minus the compensation is the better estimate.
-            *out = std::array::from_fn(|i| s[i] as f64 - c[i] as f64);
-        }
-        Ok(film)
+        self.read_film_rows(0..self.settings.height)
+    }
+
+    /// Copies rows `rows` of the film back from the device, as a film of their own (as
+    /// wide as the image, `rows.len()` high): a large image is read and written a band at
+    /// a time, never held whole twice.
+    pub fn read_film_rows(&self, rows: Range<u32>) -> Result<Film, RenderError> {
+        read_film_rows(
+            &self.ctx,
+            &self.pieces,
+            self.settings.width,
+            self.clamp(rows),
+        )
+    }
+
+    fn clamp(&self, rows: Range<u32>) -> Range<u32> {
+        let h = self.settings.height;
+        rows.start.min(h)..rows.end.min(h)
     }
 }

@@ -57,7 +57,8 @@ pub struct GpuParams {
     /// Probability that next-event estimation picks an emissive triangle.
     pub triangle_pick: f32,
     pub analytic_light_count: u32,
-    pub _pad: u32,
+    /// Index of the first pixel of the film piece bound to this dispatch.
+    pub film_piece_start: u32,
 }
 
 #[repr(C)]
@@ -239,7 +240,7 @@ mod tests {
                 light_power,
                 triangle_pick,
                 analytic_light_count,
-                _pad,
+                film_piece_start,
             ]
         );
         assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);

@@ -1,6 +1,7 @@
 //! Helpers shared by the integration tests: the GPU context and small scenes.
 #![allow(dead_code)]
 pub mod chi2;
+pub mod exr;
 pub mod node_reference;
 pub mod resource;
 
@@ -27,6 +28,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         page_bytes: None,
         specialize: true,
         aovs: false,
+        film_piece_bytes: None,
     }
 }
 

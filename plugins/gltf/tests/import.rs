@@ -528,6 +528,7 @@ fn base_colour_at_vertex_colour(kmat: &str, color: [f32; 4]) -> [f32; 3] {
         page_bytes: None,
         specialize: true,
         aovs: false,
+        film_piece_bytes: None,
     };
     let ctx = GpuContext::new(None).expect("an adapter");
     let mut renderer = Renderer::new(ctx, &scene, settings).expect("renderer");
