@@ -377,10 +377,8 @@ fn list_plugins(plugins: &PluginHost) -> Result<()> {
 }
 
 fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> Result<()> {
-    // Refuse an unwritable format before spending minutes on the render.
-    if !plugins.handles(PluginKind::Exporter, &args.output) {
-        kiln::film::output::OutputFormat::from_path(&args.output)?;
-    }
+    // Refuse an output that cannot be written before spending minutes on the render.
+    check_output(&args.output, plugins, &args.export_options)?;
     if let Some(t) = args.time_limit
         && !(t.is_finite() && t > 0.0)
     {
@@ -573,6 +571,64 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
 /// as a film on the host, only in the output's own form.
 const BAND_ROWS: u32 = 256;
 
+/// Refuses an output that could not be written: a missing or read-only folder, a format
+/// no writer has, options the writer refuses. The writer the render will use writes a 1×1
+/// image with the same options into a temporary folder beside the output, which is then
+/// removed: what passes here fails at the end only if the disk changes meanwhile.
+fn check_output(output: &Path, plugins: &PluginHost, options: &str) -> Result<()> {
+    let folder = match output.parent() {
+        Some(p) if !p.as_os_str().is_empty() => p,
+        _ => Path::new("."),
+    };
+    if !folder.is_dir() {
+        bail!(
+            "cannot write {}: the folder {} does not exist",
+            output.display(),
+            folder.display()
+        );
+    }
+    let scratch = tempfile::Builder::new()
+        .prefix(".kiln-check-")
+        .tempdir_in(folder)
+        .with_context(|| {
+            format!(
+                "cannot write {}: the folder {} is not writable",
+                output.display(),
+                folder.display()
+            )
+        })?;
+    let name = output.file_name().unwrap_or(output.as_os_str());
+    let probe = scratch.path().join(name);
+    let film = ExportFilm::from_film(
+        &kiln::film::Film::new(1, 1),
+        ViewSettings::default(),
+        Vec::new(),
+    );
+    let written = if plugins.handles(PluginKind::Exporter, output) {
+        plugins
+            .export(&probe, &film, options)
+            .map_err(anyhow::Error::from)
+    } else {
+        write_image(&probe, &film, options).map_err(anyhow::Error::from)
+    };
+    // The writer's message names the scratch file; the user knows the output's path.
+    written.map_err(|e| {
+        let message =
+            format!("{e:#}").replace(&probe.display().to_string(), &output.display().to_string());
+        anyhow::anyhow!("cannot write {}: {message}", output.display())
+    })
+}
+
+/// Where an image goes when its own path cannot be written at the end of a render (the
+/// disk filled up, the folder was removed): an EXR in the temporary folder, which keeps
+/// the linear film, its AOV layers and its sample counts.
+fn fallback_path(output: &Path) -> PathBuf {
+    let stem = output
+        .file_stem()
+        .map_or("render".into(), |s| s.to_string_lossy().into_owned());
+    std::env::temp_dir().join(format!("kiln-{stem}-{}.exr", std::process::id()))
+}
+
 /// Writes the renderer's film to `output`, with the exporter plugin for its extension or
 /// the host's own writer. The renderer (and its film on the device) is dropped before
 /// the file is encoded, so the two are never in memory together.
@@ -616,10 +672,27 @@ fn write_output(
     });
     // The device's film is freed before the file is encoded.
     drop(renderer);
-    if plugins.handles(PluginKind::Exporter, output) {
-        plugins.export(output, &film, export_options)?;
+    let written = if plugins.handles(PluginKind::Exporter, output) {
+        plugins
+            .export(output, &film, export_options)
+            .map_err(anyhow::Error::from)
     } else {
-        write_image(output, &film, export_options)?;
+        write_image(output, &film, export_options).map_err(anyhow::Error::from)
+    };
+    if let Err(e) = written {
+        // Hours of rendering are not dropped for want of one path: the film goes to a
+        // fallback file, whose path the error names.
+        let fallback = fallback_path(output);
+        return Err(match write_image(&fallback, &film, "") {
+            Ok(()) => e.context(format!(
+                "the render was saved to {} instead",
+                fallback.display()
+            )),
+            Err(f) => e.context(format!(
+                "saving the render to {} instead failed too: {f}",
+                fallback.display()
+            )),
+        });
     }
     Ok(())
 }
