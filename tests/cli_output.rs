@@ -11,11 +11,13 @@ use std::process::{Command, Output, Stdio};
 
 use common::exr::read_exr;
 
-fn render(args: &[&str]) -> Output {
+/// A 16×16, 1-spp render of the default scene to `output`, with `extra` arguments.
+fn tiny_render(output: &Path, extra: &[&str]) -> Output {
     Command::new(env!("CARGO_BIN_EXE_kiln"))
-        .arg("render")
-        .args(args)
-        .arg("-q")
+        .args(["render", "--size", "16x16", "--spp", "1", "-q"])
+        .args(extra)
+        .arg("-o")
+        .arg(output)
         .output()
         .expect("kiln runs")
 }
@@ -57,15 +59,7 @@ fn a_missing_or_read_only_folder_is_refused_before_rendering() {
     )
     .unwrap();
     if std::fs::write(read_only.join("probe"), b"").is_err() {
-        let target = read_only.join("x.png");
-        let out = render(&[
-            "--size",
-            "16x16",
-            "--spp",
-            "1",
-            "-o",
-            target.to_str().unwrap(),
-        ]);
+        let out = tiny_render(&read_only.join("x.png"), &[]);
         assert_refused_up_front(&out, "is not writable");
     }
     assert_eq!(
@@ -78,20 +72,9 @@ fn a_missing_or_read_only_folder_is_refused_before_rendering() {
 #[test]
 fn options_and_formats_no_writer_takes_are_refused_before_rendering() {
     let dir = tempfile::tempdir().unwrap();
-    let png = dir.path().join("x.png");
-    let out = render(&[
-        "--size",
-        "16x16",
-        "--spp",
-        "1",
-        "--export-options",
-        "bits=7",
-        "-o",
-        png.to_str().unwrap(),
-    ]);
+    let out = tiny_render(&dir.path().join("x.png"), &["--export-options", "bits=7"]);
     assert_refused_up_front(&out, "bits=7");
-    let tga = dir.path().join("x.tga");
-    let out = render(&["--size", "16x16", "--spp", "1", "-o", tga.to_str().unwrap()]);
+    let out = tiny_render(&dir.path().join("x.tga"), &[]);
     assert_refused_up_front(&out, "x.tga");
     assert_eq!(
         std::fs::read_dir(dir.path()).unwrap().count(),
