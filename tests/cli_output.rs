@@ -39,14 +39,7 @@ fn assert_refused_up_front(out: &Output, message: &str) {
 
 #[test]
 fn a_missing_or_read_only_folder_is_refused_before_rendering() {
-    let out = render(&[
-        "--size",
-        "16x16",
-        "--spp",
-        "1",
-        "-o",
-        "/no/such/folder/x.png",
-    ]);
+    let out = tiny_render(Path::new("/no/such/folder/x.png"), &[]);
     assert_refused_up_front(&out, "the folder /no/such/folder does not exist");
 
     // Root may write anywhere; the read-only case only means something for other users.
