@@ -76,8 +76,9 @@ pub struct EditorApp {
     pending: Option<Pending>,
     allow_close: bool,
     title: String,
-    last_frame: Option<Instant>,
-    frame_seconds: f32,
+    /// Frames drawn since `log_start`, for the debug log of the frame rate.
+    frames_logged: u32,
+    log_start: Instant,
     viewport_rect: Option<egui::Rect>,
 }
 
@@ -151,8 +152,8 @@ impl EditorApp {
             pending: None,
             allow_close: false,
             title: String::new(),
-            last_frame: None,
-            frame_seconds: 0.0,
+            frames_logged: 0,
+            log_start: Instant::now(),
             viewport_rect: None,
         }
     }
@@ -475,12 +476,6 @@ impl EditorApp {
                     ui.separator();
                     ui.label(RichText::new(gpu.describe()).weak());
                 }
-                if self.frame_seconds > 0.0 {
-                    ui.separator();
-                    ui.label(
-                        RichText::new(format!("UI {:.0} fps", 1.0 / self.frame_seconds)).weak(),
-                    );
-                }
             });
         });
     }
@@ -756,15 +751,22 @@ impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut Ui, _frame: &mut eframe::Frame) {
         let ctx = ui.ctx().clone();
         let now = Instant::now();
-        if let Some(last) = self.last_frame {
-            let dt = (now - last).as_secs_f32();
-            self.frame_seconds = if self.frame_seconds == 0.0 {
-                dt
-            } else {
-                0.9 * self.frame_seconds + 0.1 * dt
-            };
+        self.frames_logged += 1;
+        if now.duration_since(self.log_start).as_secs_f32() >= 2.0 {
+            // For measuring (KILN_LOG=kiln=debug): frames drawn and the viewport's rate.
+            let seconds = now.duration_since(self.log_start).as_secs_f32();
+            let status = self.viewport_status().unwrap_or_default();
+            tracing::debug!(
+                fps = self.frames_logged as f32 / seconds,
+                samples = status.samples,
+                samples_per_second = status.samples_per_second(),
+                width = status.size[0],
+                height = status.size[1],
+                "editor frames"
+            );
+            self.frames_logged = 0;
+            self.log_start = now;
         }
-        self.last_frame = Some(now);
 
         if ctx.input(|i| i.viewport().close_requested())
             && self.document.is_dirty()

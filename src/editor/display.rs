@@ -140,24 +140,6 @@ impl DisplayPipeline {
         }
     }
 
-    /// Binds another film of the same size to `display`'s texture, so that egui keeps
-    /// drawing the texture it has.
-    pub fn rebind(
-        &self,
-        ctx: &GpuContext,
-        display: &FilmDisplay,
-        film: (&wgpu::Buffer, &wgpu::Buffer),
-    ) -> FilmDisplay {
-        let bind_group = self.bind_group(ctx, film, &display.view, &display.params);
-        FilmDisplay {
-            texture: display.texture.clone(),
-            view: display.view.clone(),
-            params: display.params.clone(),
-            bind_group,
-            size: display.size,
-        }
-    }
-
     fn bind_group(
         &self,
         ctx: &GpuContext,

@@ -165,16 +165,44 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
+/// A coarse film has at most this many pixels: one dispatch (a tile of the renderer) of
+/// it takes tens of milliseconds even on lavapipe, so the image follows a drag.
+const COARSE_PIXELS: u32 = 160 * 120;
+/// The coarse film is shown until no change came for this long (Cycles' viewport
+/// behaves the same: coarse while you move, refining when you stop).
+const REFINE_AFTER: Duration = Duration::from_millis(300);
+/// Coarse samples taken before refining anyway.
+const COARSE_SAMPLES: u32 = 4;
+
+/// A renderer with the texture its film is shown in.
+struct Layer {
+    renderer: Renderer,
+    display: FilmDisplay,
+    samples: u32,
+    /// Changes when this layer's texture is replaced.
+    texture_generation: u64,
+}
+
+/// The divisor of the image size that makes a film of at most [`COARSE_PIXELS`]; 1 when
+/// the image is that small already.
+fn coarse_divisor(size: [u32; 2]) -> u32 {
+    let pixels = size[0] as f64 * size[1] as f64;
+    (pixels / COARSE_PIXELS as f64).sqrt().ceil().max(1.0) as u32
+}
+
 struct Worker {
     ctx: Arc<GpuContext>,
     shared: Arc<Shared>,
     repaint: Box<dyn Fn() + Send>,
     display: DisplayPipeline,
-    renderer: Option<(Renderer, FilmDisplay)>,
+    /// The image at full size, and (for large images) a coarse one shown while the
+    /// user is changing things.
+    full: Option<Layer>,
+    coarse: Option<Layer>,
     current: Option<Target>,
-    samples: u32,
     started: Instant,
-    texture_generation: u64,
+    last_change: Instant,
+    generations: u64,
 }
 
 impl Worker {
@@ -185,17 +213,18 @@ impl Worker {
             shared,
             repaint,
             display,
-            renderer: None,
+            full: None,
+            coarse: None,
             current: None,
-            samples: 0,
             started: Instant::now(),
-            texture_generation: 0,
+            last_change: Instant::now(),
+            generations: 0,
         }
     }
 
     fn done(&self) -> bool {
-        match (&self.renderer, &self.current) {
-            (Some(_), Some(t)) => self.samples >= t.sample_limit,
+        match (&self.full, &self.current) {
+            (Some(full), Some(t)) => full.samples >= t.sample_limit,
             _ => true,
         }
     }
@@ -232,12 +261,41 @@ impl Worker {
         (self.repaint)();
     }
 
+    fn build_layer(
+        &mut self,
+        scene: &Scene,
+        target: &Target,
+        size: [u32; 2],
+    ) -> Result<Layer, String> {
+        let settings = RenderSettings {
+            width: size[0],
+            height: size[1],
+            samples_per_pixel: target.sample_limit,
+            max_bounces: scene.settings.max_bounces,
+            seed: 0,
+            light_sampling: true,
+            page_bytes: None,
+            specialize: false,
+            aovs: false,
+        };
+        let renderer = Renderer::new(Arc::clone(&self.ctx), scene, settings)
+            .map_err(|e| format!("the viewport cannot render this scene: {e}"))?;
+        let display = self.display.bind(&self.ctx, renderer.film_buffers(), size);
+        self.generations += 1;
+        Ok(Layer {
+            renderer,
+            display,
+            samples: 0,
+            texture_generation: self.generations,
+        })
+    }
+
     fn retarget(&mut self, target: Target) {
         let rebuild = match &self.current {
             Some(old) => {
                 old.scene_revision != target.scene_revision
                     || old.size != target.size
-                    || self.renderer.is_none()
+                    || self.full.is_none()
             }
             None => true,
         };
@@ -248,52 +306,33 @@ impl Worker {
                 .is_none_or(|old| old.restarts(&target));
         if rebuild {
             self.publish(|s| s.building = true);
-            let settings = RenderSettings {
-                width: target.size[0],
-                height: target.size[1],
-                samples_per_pixel: target.sample_limit,
-                max_bounces: target.scene.settings.max_bounces,
-                seed: 0,
-                light_sampling: true,
-                page_bytes: None,
-                specialize: false,
-                aovs: false,
-            };
             let mut scene = (*target.scene).clone();
             scene.camera = target.camera;
-            match Renderer::new(Arc::clone(&self.ctx), &scene, settings) {
-                Ok(renderer) => {
-                    // Same size: bind the new film to the texture egui already has.
-                    let reuse = self
-                        .renderer
-                        .as_ref()
-                        .map(|(_, d)| d)
-                        .filter(|d| d.size() == target.size);
-                    let new_texture = reuse.is_none();
-                    let display = match reuse {
-                        Some(old) => self.display.rebind(&self.ctx, old, renderer.film_buffers()),
-                        None => self
-                            .display
-                            .bind(&self.ctx, renderer.film_buffers(), target.size),
+            let divisor = coarse_divisor(target.size);
+            let coarse_size = target.size.map(|v| (v / divisor).max(1));
+            let built = self
+                .build_layer(&scene, &target, target.size)
+                .and_then(|full| {
+                    let coarse = if divisor > 1 {
+                        Some(self.build_layer(&scene, &target, coarse_size)?)
+                    } else {
+                        None
                     };
-                    self.renderer = Some((renderer, display));
-                    if new_texture {
-                        self.texture_generation += 1;
-                    }
-                    let view = self.renderer.as_ref().map(|(_, d)| d.view.clone());
-                    let generation = self.texture_generation;
+                    Ok((full, coarse))
+                });
+            match built {
+                Ok((full, coarse)) => {
+                    self.full = Some(full);
+                    self.coarse = coarse;
                     self.publish(|s| {
                         s.renderer_builds += 1;
                         s.error = None;
                         s.building = false;
-                        if let Some(view) = view {
-                            s.texture = Some((generation, view));
-                        }
                     });
                 }
-                Err(e) => {
-                    let message = format!("the viewport cannot render this scene: {e}");
-                    self.renderer = None;
+                Err(message) => {
+                    self.full = None;
+                    self.coarse = None;
                     self.current = Some(target);
                     self.publish(|s| {
                         s.error = Some(message);
@@ -302,54 +341,114 @@ impl Worker {
                     return;
                 }
             }
-        } else if restart {
-            if let Some((renderer, _)) = &mut self.renderer {
-                renderer.set_camera(&target.camera);
-            }
         }
-        if let Some((renderer, _)) = self.renderer.as_mut().filter(|_| restart) {
-            renderer.clear_film();
-            self.samples = 0;
+        if restart {
+            for layer in [&mut self.full, &mut self.coarse].into_iter().flatten() {
+                layer.renderer.set_camera(&target.camera);
+                layer.renderer.clear_film();
+                layer.samples = 0;
+            }
             self.started = Instant::now();
+            self.last_change = Instant::now();
             self.publish(|s| s.restarts += 1);
-        } else if let Some((_, display)) = &self.renderer {
+        } else if let Some(layer) = self.shown() {
             // Only the view transform or the limit changed: show the same film anew.
-            self.display
-                .run(&self.ctx, display, target.exposure_ev, target.tonemap);
+            self.display.run(
+                &self.ctx,
+                &layer.display,
+                target.exposure_ev,
+                target.tonemap,
+            );
             (self.repaint)();
         }
         self.current = Some(target);
     }
 
+    /// The layer whose image is on screen: the full one once it has a sample.
+    fn shown(&self) -> Option<&Layer> {
+        match (&self.full, &self.coarse) {
+            (Some(full), _) if full.samples > 0 => Some(full),
+            (_, Some(coarse)) => Some(coarse),
+            (full, None) => full.as_ref(),
+        }
+    }
+
     fn render_pass(&mut self) {
-        let (Some((renderer, display)), Some(target)) = (&mut self.renderer, &self.current) else {
+        let Some(target) = &self.current else {
+            return;
+        };
+        let refining = self.last_change.elapsed() >= REFINE_AFTER;
+        let use_coarse = self
+            .coarse
+            .as_ref()
+            .is_some_and(|c| c.samples == 0 || (!refining && c.samples < COARSE_SAMPLES));
+        let layer = if use_coarse {
+            self.coarse.as_mut()
+        } else {
+            self.full.as_mut()
+        };
+        let Some(layer) = layer else {
             return;
         };
         let control = RenderControl {
             cancel: Some(&self.shared.cancel),
             ..Default::default()
         };
-        match renderer.render(self.samples..self.samples + 1, control) {
+        match layer
+            .renderer
+            .render(layer.samples..layer.samples + 1, control)
+        {
             Ok(stats) if stats.completed => {
-                self.samples += 1;
-                self.display
-                    .run(&self.ctx, display, target.exposure_ev, target.tonemap);
-                let (samples, elapsed, size) = (self.samples, self.started.elapsed(), target.size);
+                layer.samples += 1;
+                let (exposure, tonemap) = (target.exposure_ev, target.tonemap);
                 let revision = target.scene_revision;
+                let shown = self.shown().map(|l| {
+                    self.display.run(&self.ctx, &l.display, exposure, tonemap);
+                    (
+                        l.texture_generation,
+                        l.display.view.clone(),
+                        l.display.size(),
+                    )
+                });
+                let samples = self.full.as_ref().map_or(0, |f| f.samples);
+                let elapsed = self.started.elapsed();
                 self.publish(|s| {
                     s.samples = samples;
                     s.elapsed = elapsed;
-                    s.size = size;
                     s.shown_revision = Some(revision);
+                    if let Some((generation, view, size)) = shown {
+                        s.size = size;
+                        s.texture = Some((generation, view));
+                    }
                 });
             }
             // Cancelled: a new target is waiting and will clear the film.
             Ok(_) => {}
             Err(e) => {
                 let message = format!("rendering the viewport failed: {e}");
-                self.renderer = None;
+                self.full = None;
+                self.coarse = None;
                 self.publish(|s| s.error = Some(message));
             }
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_coarse_film_stays_within_its_pixel_budget() {
+        for size in [[1, 1], [160, 120], [161, 120], [950, 754], [3840, 2160]] {
+            let d = coarse_divisor(size);
+            let pixels = (size[0] / d).max(1) * (size[1] / d).max(1);
+            assert!(pixels <= COARSE_PIXELS, "{size:?} / {d} = {pixels} pixels");
+            assert!(
+                d == 1 || pixels * 4 > COARSE_PIXELS / 4,
+                "{size:?}: needlessly coarse"
+            );
+        }
+        assert_eq!(coarse_divisor([160, 120]), 1);
     }
 }
