@@ -515,6 +515,7 @@ impl EditorApp {
             );
             return;
         };
+        viewport.ui_frame();
         viewport.post(target);
         let status = viewport.status();
         if let Some((generation, view)) = &status.texture {

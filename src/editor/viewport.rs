@@ -15,7 +15,7 @@
 //! the unspecialised kernel (every lobe and light type), so that editing a material
 //! parameter or a light never changes the kernel. A camera move rebuilds nothing.
 
-use std::sync::atomic::{AtomicBool, Ordering};
+use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex};
 use std::time::{Duration, Instant};
 
@@ -91,7 +91,17 @@ struct Shared {
     cancel: AtomicBool,
     shutdown: AtomicBool,
     status: Mutex<ViewportStatus>,
+    /// When the UI last drew a frame, in milliseconds since `epoch`.
+    ui_frame_ms: AtomicU64,
+    epoch: Instant,
 }
+
+/// After each dispatch, while the UI is drawing frames (input within this long), the
+/// worker pauses for [`UI_TURN`] so the UI's own GPU work gets into the queue: on a
+/// software adapter the queue runs one submission at a time, and a worker that resubmits
+/// at once can keep a frame waiting for several dispatches.
+const UI_ACTIVE: Duration = Duration::from_millis(150);
+const UI_TURN: Duration = Duration::from_millis(12);
 
 /// The worker thread and the channel to it.
 pub struct ViewportRenderer {
@@ -109,6 +119,8 @@ impl ViewportRenderer {
             cancel: AtomicBool::new(false),
             shutdown: AtomicBool::new(false),
             status: Mutex::new(ViewportStatus::default()),
+            ui_frame_ms: AtomicU64::new(0),
+            epoch: Instant::now(),
         });
         let worker_shared = Arc::clone(&shared);
         let worker = std::thread::Builder::new()
@@ -140,6 +152,12 @@ impl ViewportRenderer {
         *lock(&self.shared.target) = Some(target.clone());
         self.posted = Some(target);
         self.shared.wake.notify_all();
+    }
+
+    /// Tells the worker that the UI is drawing a frame (see [`UI_TURN`]).
+    pub fn ui_frame(&self) {
+        let ms = self.shared.epoch.elapsed().as_millis() as u64;
+        self.shared.ui_frame_ms.store(ms, Ordering::Relaxed);
     }
 
     pub fn status(&self) -> ViewportStatus {
@@ -390,8 +408,18 @@ impl Worker {
         let Some(layer) = layer else {
             return;
         };
+        let shared = &self.shared;
+        let mut give_ui_a_turn = |_: &crate::render::Progress| {
+            let since_ui = shared.epoch.elapsed().saturating_sub(Duration::from_millis(
+                shared.ui_frame_ms.load(Ordering::Relaxed),
+            ));
+            if since_ui < UI_ACTIVE {
+                std::thread::sleep(UI_TURN);
+            }
+        };
         let control = RenderControl {
             cancel: Some(&self.shared.cancel),
+            progress: Some(&mut give_ui_a_turn),
             ..Default::default()
         };
         match layer
