@@ -79,8 +79,8 @@ fn traverse(
         }
         if node.count > 0 {
             let first = node.first as usize;
-            for slot in first..first + node.count as usize {
-                if let Some(t) = leaf(order[slot] as usize, t_max) {
+            for &primitive in &order[first..first + node.count as usize] {
+                if let Some(t) = leaf(primitive as usize, t_max) {
                     t_max = t_max.min(t);
                 }
             }
@@ -154,13 +154,13 @@ mod tests {
         let scene = crate::scene::default_scene().unwrap();
         let picker = Picker::new(&scene).unwrap();
         for instance in [6, 7] {
-            let centre = scene.instances[instance].transform.translation.into();
+            let centre: Vec3 = scene.instances[instance].transform.translation.into();
             let (u, v) = project(&scene.camera, centre);
             let (o, d) = camera_ray(&scene.camera, u, v, 1.0);
             let (hit, t) = picker.pick(&scene, o, d).expect("the block is in view");
             assert_eq!(hit, instance, "u {u} v {v}");
             // The front face is nearer than the centre, but not by more than the block.
-            let to_centre = (Vec3::from(centre) - o).length();
+            let to_centre = (centre - o).length();
             assert!(t < to_centre && t > to_centre - 200.0, "t = {t}");
         }
         // Above both blocks, the ray goes on to the back wall (instance 2) at z = 559.2.
