@@ -18,6 +18,10 @@ const SAMPLE_LIMIT: u32 = 2;
 const WAIT: Duration = Duration::from_secs(240);
 
 fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
+    harness_with(dialogs, PluginHost::default())
+}
+
+fn harness_with(dialogs: ScriptedDialogs, plugins: PluginHost) -> Harness<'static, EditorApp> {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // SAFETY: set before any thread of this test starts a device.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
@@ -31,7 +35,7 @@ fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
                 EditorOptions {
                     file: None,
                     dialogs: Box::new(dialogs),
-                    plugins: PluginHost::default(),
+                    plugins,
                     sample_limit: SAMPLE_LIMIT,
                 },
             )
@@ -257,4 +261,33 @@ fn a_file_that_fails_to_open_is_reported_and_the_document_kept() {
     assert!(error.contains("broken.kiln"), "{error}");
     assert!(harness.query_by_label("Error").is_some());
     assert_eq!(*harness.state().document().scene(), scene);
+}
+
+#[test]
+fn a_gltf_opens_through_the_importer_plugin_and_saves_as_a_kiln_scene() {
+    // The bundled plugins, as `cargo build` left them next to the test executable.
+    let exe = std::env::current_exe().unwrap();
+    let mut plugins = PluginHost::default();
+    plugins.load_dir(exe.parent().unwrap(), true);
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("quad.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
+    let saved = dir.path().join("quad.kiln");
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.open.push_back(glb);
+    dialogs.save.push_back(saved.clone());
+    let mut harness = harness_with(dialogs, plugins);
+    harness.step();
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::O);
+    harness.step();
+    assert_eq!(harness.state().error(), None);
+    let imported = harness.state().document().scene().clone();
+    assert_eq!(imported.triangle_count(), 2, "the quad's two triangles");
+    // An imported file is not a Kiln scene: saving asks where, then writes one.
+    assert_eq!(harness.state().document().path(), None);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.step();
+    assert_eq!(harness.state().document().path(), Some(saved.as_path()));
+    assert_eq!(kiln::scene::load_scene(&saved).unwrap(), imported);
 }
