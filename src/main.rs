@@ -75,6 +75,16 @@ impl From<TonemapArg> for Tonemap {
 enum Command {
     /// Render a scene to an image (the bundled Cornell box when no scene is given).
     Render(RenderArgs),
+    /// Open the editor: a live path-traced viewport, outliner and inspector, on a .kiln
+    /// scene, a file an importer plugin reads, or the bundled Cornell box.
+    Edit {
+        /// A .kiln scene or a file an importer reads (.gltf, .glb, .obj, …).
+        file: Option<PathBuf>,
+        /// Samples per pixel the viewport accumulates before it rests.
+        #[arg(long, default_value_t = kiln::editor::DEFAULT_SAMPLE_LIMIT,
+              value_parser = clap::value_parser!(u32).range(1..))]
+        samples: u32,
+    },
     /// List the GPU adapters and the one Kiln would use.
     Info,
     /// Measure samples/s, rays/s and BVH build time; prints a Markdown table.
@@ -224,6 +234,23 @@ fn ensure_runtime_dir() {
     }
 }
 
+/// Opens the editor's window; returns when it is closed. The editor picks its adapter as
+/// wgpu does for a window (`WGPU_BACKEND` chooses the API).
+fn edit(file: Option<PathBuf>, samples: u32, plugins: PluginHost) -> Result<()> {
+    let import_extensions = plugins
+        .plugins()
+        .filter(|p| p.kind == PluginKind::Importer)
+        .flat_map(|p| p.extensions.clone())
+        .collect();
+    kiln::editor::run(kiln::editor::EditorOptions {
+        file,
+        dialogs: Box::new(kiln::editor::NativeDialogs { import_extensions }),
+        plugins,
+        sample_limit: samples,
+    })
+    .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))
+}
+
 fn main() -> ExitCode {
     #[cfg(unix)]
     ensure_runtime_dir();
@@ -245,6 +272,7 @@ fn main() -> ExitCode {
     let plugins = || PluginHost::discover(&cli.plugin_dirs);
     let result = match cli.command {
         Command::Render(args) => render(args, backend, &plugins()),
+        Command::Edit { file, samples } => edit(file, samples, plugins()),
         Command::Plugins => list_plugins(&plugins()),
         Command::Import { file, output } => import(&plugins(), &file, &output),
         Command::Info => info(backend),

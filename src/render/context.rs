@@ -152,6 +152,35 @@ impl GpuContext {
         }))
     }
 
+    /// Wraps a device another part of the program opened (the editor's window, whose
+    /// eframe renderer and Kiln's renderer share one device): the caller asked it for the
+    /// adapter's own limits, as [`GpuContext::new`] does.
+    pub fn from_device(
+        adapter: wgpu::Adapter,
+        device: wgpu::Device,
+        queue: wgpu::Queue,
+    ) -> Result<Arc<Self>, GpuError> {
+        let info = adapter.get_info();
+        if !adapter
+            .get_downlevel_capabilities()
+            .flags
+            .contains(wgpu::DownlevelFlags::COMPUTE_SHADERS)
+        {
+            return Err(GpuError::NoAdapter {
+                backend: String::new(),
+                reason: format!("{} cannot run compute shaders", describe_adapter(&info)),
+            });
+        }
+        Ok(Arc::new(Self {
+            adapter,
+            device,
+            queue,
+            info,
+            pipelines: Default::default(),
+            pipelines_compiled: Default::default(),
+        }))
+    }
+
     pub fn describe(&self) -> String {
         describe_adapter(&self.info)
     }

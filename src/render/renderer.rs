@@ -582,6 +582,35 @@ impl Renderer {
         )
     }
 
+    /// The film on the device, when it is one piece: per pixel (row-major from the
+    /// top-left) a `vec4<f32>` of the radiance sum (rgb) and sample count (w), and its
+    /// Kahan compensation. For passes that show the film without reading it back (the
+    /// editor's viewport); `None` for a film split into pieces (larger than one binding).
+    pub fn film_buffers(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
+        match self.pieces.as_slice() {
+            [piece] => Some((&piece.sum, &piece.compensation)),
+            _ => None,
+        }
+    }
+
+    /// Moves the camera without rebuilding anything: later samples see `camera`. Clear
+    /// the film ([`Renderer::clear_film`]) before rendering again, or the film mixes the
+    /// two views.
+    pub fn set_camera(&mut self, camera: &crate::scene::Camera) {
+        let (right, up, forward) = camera.frame();
+        let p = &mut self.base_params;
+        p.cam_position = camera.position.extend(1.0).into();
+        p.cam_right = right.extend(0.0).into();
+        p.cam_up = up.extend(0.0).into();
+        p.cam_forward = forward.extend(0.0).into();
+        p.cam_lens = [
+            (camera.fov_y_degrees.to_radians() * 0.5).tan(),
+            self.settings.width as f32 / self.settings.height as f32,
+            camera.aperture_radius,
+            camera.focus_distance,
+        ];
+    }
+
     /// Copies the film back from the device.
     pub fn read_film(&self) -> Result<Film, RenderError> {
         self.read_film_rows(0..self.settings.height)

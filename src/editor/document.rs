@@ -1,0 +1,628 @@
+//! The editor's document: the scene being edited plus what the editor knows about it
+//! (object names, visibility, the selection, the file it came from), and the one way to
+//! change it, [`Document::apply`] with a [`Command`].
+//!
+//! Every edit goes through a command, so undo/redo, the unsaved-changes state and the
+//! viewport's restart all follow from one stream: a command returns its inverse, the
+//! history keeps inverses, and each applied command bumps [`Document::revision`], which the
+//! viewport compares with what it rendered. Commands that continue one gesture (the
+//! frames of one slider drag) merge into a single undo step.
+//!
+//! What this is not: a view. Panels read the document and build commands; nothing here
+//! knows about egui or the GPU.
+
+use std::path::{Path, PathBuf};
+
+use glam::{Affine3A, EulerRot, Quat, Vec3};
+
+use crate::scene::{Camera, Light, Scene};
+use crate::shader::principled::ParamValue;
+
+/// What can be selected.
+#[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
+pub enum Selection {
+    /// An instance of [`Scene::instances`], by index.
+    Object(usize),
+    /// A light of [`Scene::lights`], by index.
+    Light(usize),
+    /// The scene's camera.
+    Camera,
+}
+
+/// The editor's own state of an object or light.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct ItemState {
+    pub name: String,
+    /// Hidden items stay in the document (and in saved files) but are not rendered.
+    pub visible: bool,
+}
+
+/// One edit of the document. Applying a command yields its inverse.
+#[derive(Clone, Debug, PartialEq)]
+pub enum Command {
+    SetTransform {
+        object: usize,
+        transform: Affine3A,
+    },
+    /// One principled parameter of a material, by its name in
+    /// [`crate::shader::principled::PARAMETERS`].
+    SetMaterialParameter {
+        material: usize,
+        parameter: &'static str,
+        value: ParamValue,
+    },
+    SetLight {
+        light: usize,
+        value: Light,
+    },
+    SetCamera(Camera),
+    Rename {
+        target: Selection,
+        name: String,
+    },
+    SetVisible {
+        target: Selection,
+        visible: bool,
+    },
+}
+
+impl Command {
+    /// What a command changes, for merging the frames of a gesture: two commands with the
+    /// same key replace each other's effect.
+    fn key(&self) -> (u8, usize, &'static str) {
+        match self {
+            Command::SetTransform { object, .. } => (0, *object, ""),
+            Command::SetMaterialParameter {
+                material,
+                parameter,
+                ..
+            } => (1, *material, parameter),
+            Command::SetLight { light, .. } => (2, *light, ""),
+            Command::SetCamera(_) => (3, 0, ""),
+            Command::Rename { .. } => (4, 0, ""),
+            Command::SetVisible { .. } => (5, 0, ""),
+        }
+    }
+
+    /// Whether the command changes what is rendered (a rename does not).
+    pub fn changes_image(&self) -> bool {
+        !matches!(self, Command::Rename { .. })
+    }
+}
+
+/// Why a command was refused; the document is unchanged.
+#[derive(Clone, Debug, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct CommandError(pub String);
+
+/// Identifies one continuous gesture (a drag of one widget); commands applied under the
+/// same open gesture merge into one undo step.
+pub type GestureId = u64;
+
+struct Step {
+    /// Unique in the document's life; what "saved" refers to.
+    id: u64,
+    /// Applying these, last first, undoes the step.
+    inverses: Vec<Command>,
+    key: (u8, usize, &'static str),
+    gesture: Option<GestureId>,
+}
+
+/// A transform as the inspector shows it: translation, rotation as Euler angles in
+/// degrees (about X, then Y, then Z, as the scene file's `rotate`), and scale.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct Trs {
+    pub translation: Vec3,
+    pub rotation_degrees: Vec3,
+    pub scale: Vec3,
+}
+
+impl Trs {
+    pub fn from_affine(transform: &Affine3A) -> Self {
+        let (scale, rotation, translation) = transform.to_scale_rotation_translation();
+        let (z, y, x) = rotation.to_euler(EulerRot::ZYX);
+        Self {
+            translation,
+            rotation_degrees: Vec3::new(x, y, z).map(f32::to_degrees),
+            scale,
+        }
+    }
+
+    pub fn to_affine(self) -> Affine3A {
+        let r = self.rotation_degrees.map(f32::to_radians);
+        Affine3A::from_scale_rotation_translation(
+            self.scale,
+            Quat::from_euler(EulerRot::ZYX, r.z, r.y, r.x),
+            self.translation,
+        )
+    }
+}
+
+/// The scene being edited with the editor's state of it and its undo history.
+pub struct Document {
+    scene: Scene,
+    objects: Vec<ItemState>,
+    lights: Vec<ItemState>,
+    /// Images an importer embedded, written beside the scene when it is saved.
+    images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
+    pub selection: Option<Selection>,
+    path: Option<PathBuf>,
+    undo: Vec<Step>,
+    redo: Vec<Step>,
+    open_gesture: Option<GestureId>,
+    revision: u64,
+    /// The revision of the rendered content (renames do not count).
+    image_revision: u64,
+    /// The step on top of the undo stack when the document was read or saved (None: the
+    /// empty stack): undoing back to it makes the document clean again.
+    saved_step: Option<u64>,
+    next_step: u64,
+}
+
+impl Document {
+    /// A document on `scene`, as read from `path` (None: not saved yet). Objects are named
+    /// after their mesh, with Blender's `.001` suffixes where a mesh is placed more than
+    /// once.
+    pub fn new(
+        scene: Scene,
+        path: Option<PathBuf>,
+        images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
+    ) -> Self {
+        let mut objects = Vec::with_capacity(scene.instances.len());
+        let mut seen = std::collections::HashMap::<String, usize>::new();
+        for instance in &scene.instances {
+            let base = scene.meshes[instance.mesh].name.clone();
+            let base = if base.is_empty() {
+                "object".to_owned()
+            } else {
+                base
+            };
+            let count = seen.entry(base.clone()).or_default();
+            let name = if *count == 0 {
+                base
+            } else {
+                format!("{base}.{count:03}")
+            };
+            *count += 1;
+            objects.push(ItemState {
+                name,
+                visible: true,
+            });
+        }
+        let lights = scene
+            .lights
+            .iter()
+            .enumerate()
+            .map(|(i, light)| ItemState {
+                name: format!("{} light {}", light_kind(light), i + 1),
+                visible: true,
+            })
+            .collect();
+        Self {
+            scene,
+            objects,
+            lights,
+            images,
+            selection: None,
+            path,
+            undo: Vec::new(),
+            redo: Vec::new(),
+            open_gesture: None,
+            revision: 0,
+            image_revision: 0,
+            saved_step: None,
+            next_step: 0,
+        }
+    }
+
+    /// The scene as edited, hidden items included (what is saved).
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+
+    /// The scene as rendered: hidden objects and lights left out.
+    pub fn render_scene(&self) -> Scene {
+        let mut scene = self.scene.clone();
+        let mut visible = self.objects.iter().map(|o| o.visible);
+        scene.instances.retain(|_| visible.next().unwrap_or(true));
+        let mut visible = self.lights.iter().map(|l| l.visible);
+        scene.lights.retain(|_| visible.next().unwrap_or(true));
+        scene
+    }
+
+    /// Maps an instance index of [`Document::render_scene`] back to the document's.
+    pub fn object_of_rendered_instance(&self, rendered: usize) -> Option<usize> {
+        self.objects
+            .iter()
+            .enumerate()
+            .filter(|(_, o)| o.visible)
+            .nth(rendered)
+            .map(|(i, _)| i)
+    }
+
+    pub fn objects(&self) -> &[ItemState] {
+        &self.objects
+    }
+
+    pub fn lights(&self) -> &[ItemState] {
+        &self.lights
+    }
+
+    pub fn images(&self) -> &[(String, std::sync::Arc<Vec<u8>>)] {
+        &self.images
+    }
+
+    pub fn path(&self) -> Option<&Path> {
+        self.path.as_deref()
+    }
+
+    /// The name shown for a selectable item.
+    pub fn name(&self, target: Selection) -> &str {
+        match target {
+            Selection::Object(i) => self.objects.get(i).map_or("", |o| o.name.as_str()),
+            Selection::Light(i) => self.lights.get(i).map_or("", |l| l.name.as_str()),
+            Selection::Camera => "Camera",
+        }
+    }
+
+    /// Bumped by every applied, undone or redone command.
+    pub fn revision(&self) -> u64 {
+        self.revision
+    }
+
+    /// Bumped by every change to what is rendered.
+    pub fn image_revision(&self) -> u64 {
+        self.image_revision
+    }
+
+    /// Whether the document differs from the file it was last read from or saved to.
+    pub fn is_dirty(&self) -> bool {
+        self.undo.last().map(|s| s.id) != self.saved_step
+    }
+
+    /// Records that the document was written to `path`.
+    pub fn mark_saved(&mut self, path: PathBuf) {
+        self.path = Some(path);
+        self.saved_step = self.undo.last().map(|s| s.id);
+    }
+
+    pub fn can_undo(&self) -> bool {
+        !self.undo.is_empty()
+    }
+
+    pub fn can_redo(&self) -> bool {
+        !self.redo.is_empty()
+    }
+
+    /// Applies `command` as a new undo step, or, when `gesture` is the gesture of the last
+    /// step and still open, as part of that step (one undo reverts the whole drag).
+    pub fn apply(
+        &mut self,
+        command: Command,
+        gesture: Option<GestureId>,
+    ) -> Result<(), CommandError> {
+        let key = command.key();
+        let changes_image = command.changes_image();
+        let inverse = self.execute(command)?;
+        let merge = gesture.is_some()
+            && self.open_gesture == gesture
+            && self
+                .undo
+                .last()
+                .is_some_and(|s| s.gesture == gesture && s.key == key);
+        let id = self.next_step;
+        self.next_step += 1;
+        match self.undo.last_mut().filter(|_| merge) {
+            // The step's first inverse already restores the state before the gesture; a
+            // new id, since the step now holds more than when it may have been saved.
+            Some(step) => step.id = id,
+            None => self.undo.push(Step {
+                id,
+                inverses: vec![inverse],
+                key,
+                gesture,
+            }),
+        }
+        self.open_gesture = gesture;
+        self.redo.clear();
+        self.bump(changes_image);
+        Ok(())
+    }
+
+    /// Ends the open gesture: the next command starts a new undo step.
+    pub fn end_gesture(&mut self) {
+        self.open_gesture = None;
+    }
+
+    /// Reverts the last step; false when there is none.
+    pub fn undo(&mut self) -> bool {
+        self.transfer(true)
+    }
+
+    /// Re-applies the last undone step; false when there is none.
+    pub fn redo(&mut self) -> bool {
+        self.transfer(false)
+    }
+
+    fn transfer(&mut self, undo: bool) -> bool {
+        self.open_gesture = None;
+        let step = if undo {
+            self.undo.pop()
+        } else {
+            self.redo.pop()
+        };
+        let Some(step) = step else {
+            return false;
+        };
+        let mut inverses = Vec::with_capacity(step.inverses.len());
+        let mut changes_image = false;
+        for command in step.inverses.into_iter().rev() {
+            changes_image |= command.changes_image();
+            // A recorded inverse restores a state the document was in, so it is valid.
+            match self.execute(command) {
+                Ok(inverse) => inverses.push(inverse),
+                Err(e) => {
+                    tracing::error!("undo history out of step with the document: {e}");
+                    return false;
+                }
+            }
+        }
+        let step = Step {
+            id: step.id,
+            inverses,
+            key: step.key,
+            gesture: None,
+        };
+        if undo {
+            self.redo.push(step);
+        } else {
+            self.undo.push(step);
+        }
+        self.bump(changes_image);
+        true
+    }
+
+    fn bump(&mut self, changes_image: bool) {
+        self.revision += 1;
+        if changes_image {
+            self.image_revision += 1;
+        }
+    }
+
+    /// Changes the document; returns the command that reverts the change.
+    fn execute(&mut self, command: Command) -> Result<Command, CommandError> {
+        let err = |m: String| Err(CommandError(m));
+        match command {
+            Command::SetTransform { object, transform } => {
+                let Some(instance) = self.scene.instances.get_mut(object) else {
+                    return err(format!("no object {object}"));
+                };
+                let det = transform.matrix3.determinant();
+                if !transform.is_finite() || det == 0.0 || !det.is_finite() {
+                    return err(format!(
+                        "the transform of \"{}\" must be finite and invertible (no zero scale)",
+                        self.objects[object].name
+                    ));
+                }
+                let old = std::mem::replace(&mut instance.transform, transform);
+                Ok(Command::SetTransform {
+                    object,
+                    transform: old,
+                })
+            }
+            Command::SetMaterialParameter {
+                material,
+                parameter,
+                value,
+            } => {
+                let Some(m) = self.scene.materials.get_mut(material) else {
+                    return err(format!("no material {material}"));
+                };
+                let Some(old) = m.principled.get(parameter) else {
+                    return err(format!("no principled parameter \"{parameter}\""));
+                };
+                let mut changed = m.principled;
+                changed
+                    .set(parameter, value)
+                    .map_err(|e| CommandError(format!("material \"{}\": {e}", m.name)))?;
+                changed
+                    .validate()
+                    .map_err(|e| CommandError(format!("material \"{}\": {e}", m.name)))?;
+                m.principled = changed;
+                Ok(Command::SetMaterialParameter {
+                    material,
+                    parameter,
+                    value: old,
+                })
+            }
+            Command::SetLight { light, value } => {
+                let Some(slot) = self.scene.lights.get_mut(light) else {
+                    return err(format!("no light {light}"));
+                };
+                value
+                    .validate()
+                    .map_err(|e| CommandError(format!("{}: {e}", self.lights[light].name)))?;
+                let old = std::mem::replace(slot, value);
+                Ok(Command::SetLight { light, value: old })
+            }
+            Command::SetCamera(camera) => {
+                camera.validate().map_err(CommandError)?;
+                let old = std::mem::replace(&mut self.scene.camera, camera);
+                Ok(Command::SetCamera(old))
+            }
+            Command::Rename { target, name } => {
+                let slot = match target {
+                    Selection::Object(i) => self.objects.get_mut(i).map(|o| &mut o.name),
+                    Selection::Light(i) => self.lights.get_mut(i).map(|l| &mut l.name),
+                    Selection::Camera => return err("the camera cannot be renamed".into()),
+                };
+                let Some(slot) = slot else {
+                    return err(format!("nothing to rename at {target:?}"));
+                };
+                if name.trim().is_empty() {
+                    return err("a name cannot be empty".into());
+                }
+                let old = std::mem::replace(slot, name);
+                Ok(Command::Rename { target, name: old })
+            }
+            Command::SetVisible { target, visible } => {
+                let slot = match target {
+                    Selection::Object(i) => self.objects.get_mut(i),
+                    Selection::Light(i) => self.lights.get_mut(i),
+                    Selection::Camera => return err("the camera cannot be hidden".into()),
+                };
+                let Some(slot) = slot else {
+                    return err(format!("nothing to hide at {target:?}"));
+                };
+                let old = std::mem::replace(&mut slot.visible, visible);
+                Ok(Command::SetVisible {
+                    target,
+                    visible: old,
+                })
+            }
+        }
+    }
+}
+
+/// A light's kind in a word, for names and headings.
+pub fn light_kind(light: &Light) -> &'static str {
+    match light {
+        Light::Point { .. } => "Point",
+        Light::Spot { .. } => "Spot",
+        Light::Distant { .. } => "Sun",
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn document() -> Document {
+        let scene = crate::scene::default_scene().expect("the bundled scene loads");
+        Document::new(scene, None, Vec::new())
+    }
+
+    fn moved(doc: &Document, object: usize, x: f32) -> Command {
+        let mut trs = Trs::from_affine(&doc.scene().instances[object].transform);
+        trs.translation.x = x;
+        Command::SetTransform {
+            object,
+            transform: trs.to_affine(),
+        }
+    }
+
+    #[test]
+    fn repeated_meshes_get_blender_suffixes() {
+        let doc = document();
+        let names: Vec<&str> = doc.objects().iter().map(|o| o.name.as_str()).collect();
+        assert!(
+            names.contains(&"block") && names.contains(&"block.001"),
+            "{names:?}"
+        );
+    }
+
+    #[test]
+    fn undo_restores_and_redo_reapplies_a_transform() {
+        let mut doc = document();
+        let before = doc.scene().instances[6].transform;
+        doc.apply(moved(&doc, 6, 10.0), None).unwrap();
+        let after = doc.scene().instances[6].transform;
+        assert!((after.translation.x - 10.0).abs() < 1e-4);
+        assert!(doc.is_dirty());
+        assert!(doc.undo());
+        assert_eq!(doc.scene().instances[6].transform, before);
+        assert!(!doc.is_dirty(), "undone back to the file's state");
+        assert!(doc.redo());
+        assert!(doc.is_dirty());
+        assert_eq!(doc.scene().instances[6].transform, after);
+        assert!(!doc.redo(), "nothing left to redo");
+    }
+
+    #[test]
+    fn a_drag_is_one_undo_step_and_a_new_gesture_is_another() {
+        let mut doc = document();
+        let start = doc.scene().instances[6].transform;
+        for x in [1.0, 2.0, 3.0] {
+            doc.apply(moved(&doc, 6, x), Some(7)).unwrap();
+        }
+        doc.end_gesture();
+        let after_first = doc.scene().instances[6].transform;
+        doc.apply(moved(&doc, 6, 4.0), Some(7)).unwrap();
+        assert!(doc.undo());
+        assert_eq!(doc.scene().instances[6].transform, after_first);
+        assert!(doc.undo());
+        assert_eq!(doc.scene().instances[6].transform, start);
+        assert!(!doc.can_undo());
+    }
+
+    #[test]
+    fn an_invalid_edit_is_refused_and_changes_nothing() {
+        let mut doc = document();
+        let revision = doc.revision();
+        let zero_scale = Command::SetTransform {
+            object: 0,
+            transform: Affine3A::from_scale(Vec3::ZERO),
+        };
+        assert!(doc.apply(zero_scale, None).is_err());
+        let bad_ior = Command::SetMaterialParameter {
+            material: 0,
+            parameter: "ior",
+            value: ParamValue::Float(0.5),
+        };
+        assert!(doc.apply(bad_ior, None).is_err());
+        assert_eq!(doc.revision(), revision);
+        assert!(!doc.can_undo() && !doc.is_dirty());
+    }
+
+    #[test]
+    fn hidden_objects_are_saved_but_not_rendered() {
+        let mut doc = document();
+        let target = Selection::Object(6);
+        doc.apply(
+            Command::SetVisible {
+                target,
+                visible: false,
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.scene().instances.len(), 8);
+        assert_eq!(doc.render_scene().instances.len(), 7);
+        assert_eq!(doc.object_of_rendered_instance(6), Some(7));
+    }
+
+    #[test]
+    fn a_rename_marks_the_document_dirty_but_keeps_the_image() {
+        let mut doc = document();
+        let image = doc.image_revision();
+        doc.apply(
+            Command::Rename {
+                target: Selection::Object(0),
+                name: "ground".into(),
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.name(Selection::Object(0)), "ground");
+        assert!(doc.is_dirty());
+        assert_eq!(doc.image_revision(), image);
+    }
+
+    #[test]
+    fn trs_round_trips_the_scene_files_rotation_order() {
+        let trs = Trs {
+            translation: Vec3::new(1.0, 2.0, 3.0),
+            rotation_degrees: Vec3::new(10.0, -16.6, 30.0),
+            scale: Vec3::new(2.0, 3.0, 4.0),
+        };
+        let back = Trs::from_affine(&trs.to_affine());
+        assert!((back.translation - trs.translation).abs().max_element() < 1e-4);
+        assert!(
+            (back.rotation_degrees - trs.rotation_degrees)
+                .abs()
+                .max_element()
+                < 1e-3
+        );
+        assert!((back.scale - trs.scale).abs().max_element() < 1e-4);
+    }
+}

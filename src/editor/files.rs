@@ -1,0 +1,108 @@
+//! Reading and writing the editor's files: `.kiln` scenes through the scene module
+//! (atomic, lossless), any other format an importer plugin reads, and the file dialogs
+//! that ask for paths, behind [`FileDialogs`] so that tests answer them.
+
+use std::path::{Path, PathBuf};
+
+use crate::plugin::PluginHost;
+use crate::scene::{self, Scene};
+
+use super::document::Document;
+
+/// Asks the user for a path. The editor calls it only in response to a user's action.
+pub trait FileDialogs {
+    /// A file to open (a `.kiln` scene or a file an importer reads); None if cancelled.
+    fn open_path(&mut self) -> Option<PathBuf>;
+    /// Where to save a `.kiln` scene, starting from `current`; None if cancelled.
+    fn save_path(&mut self, current: Option<&Path>) -> Option<PathBuf>;
+}
+
+/// The platform's native dialogs (`rfd`).
+pub struct NativeDialogs {
+    /// Extensions the importer plugins read, offered beside `.kiln`.
+    pub import_extensions: Vec<String>,
+}
+
+impl FileDialogs for NativeDialogs {
+    fn open_path(&mut self) -> Option<PathBuf> {
+        let mut all: Vec<&str> = vec!["kiln"];
+        all.extend(self.import_extensions.iter().map(String::as_str));
+        rfd::FileDialog::new()
+            .set_title("Open")
+            .add_filter("Scenes", &all)
+            .add_filter("Kiln scene", &["kiln"])
+            .pick_file()
+    }
+
+    fn save_path(&mut self, current: Option<&Path>) -> Option<PathBuf> {
+        let mut dialog = rfd::FileDialog::new()
+            .set_title("Save As")
+            .add_filter("Kiln scene", &["kiln"]);
+        if let Some(dir) = current.and_then(Path::parent) {
+            dialog = dialog.set_directory(dir);
+        }
+        if let Some(name) = current.and_then(Path::file_name) {
+            dialog = dialog.set_file_name(name.to_string_lossy());
+        } else {
+            dialog = dialog.set_file_name("untitled.kiln");
+        }
+        dialog.save_file().map(|p| {
+            if p.extension().is_none() {
+                p.with_extension("kiln")
+            } else {
+                p
+            }
+        })
+    }
+}
+
+/// Dialogs that answer from a queue of paths, for tests and scripted sessions; an empty
+/// queue answers "cancelled".
+#[derive(Default)]
+pub struct ScriptedDialogs {
+    pub open: std::collections::VecDeque<PathBuf>,
+    pub save: std::collections::VecDeque<PathBuf>,
+}
+
+impl FileDialogs for ScriptedDialogs {
+    fn open_path(&mut self) -> Option<PathBuf> {
+        self.open.pop_front()
+    }
+
+    fn save_path(&mut self, _current: Option<&Path>) -> Option<PathBuf> {
+        self.save.pop_front()
+    }
+}
+
+/// Whether `path` is a Kiln scene file (by its extension).
+pub fn is_kiln_scene(path: &Path) -> bool {
+    path.extension()
+        .is_some_and(|e| e.eq_ignore_ascii_case("kiln"))
+}
+
+/// Reads a document: a `.kiln` scene, or a file an importer plugin of `plugins` reads.
+/// An imported document has no path yet (saving asks where). The message names the file
+/// and what is wrong with it.
+pub fn open_document(path: &Path, plugins: &PluginHost) -> Result<Document, String> {
+    if is_kiln_scene(path) {
+        let scene = scene::load_scene(path).map_err(|e| e.to_string())?;
+        return Ok(Document::new(scene, Some(path.to_owned()), Vec::new()));
+    }
+    let imported = plugins
+        .import(path)
+        .map_err(|e| format!("cannot import {}: {e}", path.display()))?;
+    imported
+        .scene
+        .validate()
+        .map_err(|e| format!("{}: {e}", path.display()))?;
+    Ok(Document::new(imported.scene, None, imported.images))
+}
+
+/// Writes `document`'s scene to `path` (atomically, with its assets beside it) and
+/// records it as saved there.
+pub fn save_document(document: &mut Document, path: &Path) -> Result<(), String> {
+    let scene: &Scene = document.scene();
+    scene::save_scene(scene, path, document.images()).map_err(|e| e.to_string())?;
+    document.mark_saved(path.to_owned());
+    Ok(())
+}
