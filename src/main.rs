@@ -12,7 +12,7 @@ use anyhow::{Context, Result, bail};
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use kiln::plugin::{ExportFilm, ExportLayer, PluginHost, PluginKind};
+use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
@@ -247,6 +247,8 @@ fn edit(file: Option<PathBuf>, samples: u32, plugins: PluginHost) -> Result<()> 
         dialogs: Box::new(kiln::editor::NativeDialogs { import_extensions }),
         plugins,
         sample_limit: samples,
+        state_dir: kiln::editor::session::SessionStore::default_dir(),
+        autosave_every: kiln::editor::AUTOSAVE_EVERY,
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))
 }
@@ -595,10 +597,6 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     Ok(())
 }
 
-/// Rows of the film read back and converted at a time: large images are never held whole
-/// as a film on the host, only in the output's own form.
-const BAND_ROWS: u32 = 256;
-
 /// Refuses an output that could not be written: a missing or read-only folder, a format
 /// no writer has, options the writer refuses. The writer the render will use writes a 1×1
 /// image with the same options into a temporary folder beside the output, which is then
@@ -632,13 +630,9 @@ fn check_output(output: &Path, plugins: &PluginHost, options: &str) -> Result<()
         ViewSettings::default(),
         Vec::new(),
     );
-    let written = if plugins.handles(PluginKind::Exporter, output) {
-        plugins
-            .export(&probe, &film, options)
-            .map_err(anyhow::Error::from)
-    } else {
-        write_image(&probe, &film, options).map_err(anyhow::Error::from)
-    };
+    let written = plugins
+        .write_image(&probe, &film, options)
+        .map_err(anyhow::Error::msg);
     // The writer's message names the scratch file; the user knows the output's path.
     written.map_err(|e| {
         let message =
@@ -667,46 +661,12 @@ fn write_output(
     view: ViewSettings,
     export_options: &str,
 ) -> Result<()> {
-    let RenderSettings { width, height, .. } = *renderer.settings();
-    let bands = (0..height)
-        .step_by(BAND_ROWS as usize)
-        .map(|y| y..(y + BAND_ROWS).min(height));
-    // The film a band of rows at a time, each pixel's own sample count as a layer, and the
-    // AOVs: the same for an exporter plugin and for the host's writer.
-    let mut film = ExportFilm::with_capacity(width, height);
-    let mut samples = Vec::with_capacity(width as usize * height as usize);
-    for rows in bands {
-        let band = renderer.read_film_rows(rows)?;
-        film.push_rows(&band, view);
-        samples.extend(band.sums.iter().map(|s| s[3] as f32));
-    }
-    if let Some(aovs) = renderer.read_aovs()? {
-        for (name, channels, data) in [
-            ("albedo", 3, aovs.albedo),
-            ("normal", 3, aovs.normal),
-            ("depth", 1, aovs.depth),
-        ] {
-            film.layers.push(ExportLayer {
-                name: name.into(),
-                channels,
-                data,
-            });
-        }
-    }
-    film.layers.push(ExportLayer {
-        name: "samples".into(),
-        channels: 1,
-        data: samples,
-    });
+    let film = kiln::render::export_film(&renderer, view)?;
     // The device's film is freed before the file is encoded.
     drop(renderer);
-    let written = if plugins.handles(PluginKind::Exporter, output) {
-        plugins
-            .export(output, &film, export_options)
-            .map_err(anyhow::Error::from)
-    } else {
-        write_image(output, &film, export_options).map_err(anyhow::Error::from)
-    };
+    let written = plugins
+        .write_image(output, &film, export_options)
+        .map_err(anyhow::Error::msg);
     if let Err(e) = written {
         // Hours of rendering are not dropped for want of one path: the film goes to a
         // fallback file, whose path the error names.

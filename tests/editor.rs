@@ -37,6 +37,8 @@ fn harness_with(dialogs: ScriptedDialogs, plugins: PluginHost) -> Harness<'stati
                     dialogs: Box::new(dialogs),
                     plugins,
                     sample_limit: SAMPLE_LIMIT,
+                    state_dir: None,
+                    autosave_every: kiln::editor::AUTOSAVE_EVERY,
                 },
             )
         })

@@ -5,11 +5,13 @@
 
 use std::path::PathBuf;
 use std::sync::Arc;
-use std::time::Instant;
+use std::thread::JoinHandle;
+use std::time::{Duration, Instant};
 
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, RichText, Sense, Ui};
 use glam::Vec3;
 
+use crate::film::output::ViewSettings;
 use crate::film::tonemap::Tonemap;
 use crate::plugin::PluginHost;
 use crate::render::GpuContext;
@@ -17,10 +19,13 @@ use crate::scene::{Camera, Scene};
 
 use super::document::{Command, Document, GestureId, Selection};
 use super::files::{FileDialogs, open_document, save_document};
+use super::final_render::{FinalRender, RenderState};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
+use super::session::{Recovery, SessionStore};
+use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
 use super::viewport::{Target, ViewportRenderer, ViewportStatus};
 
 /// Samples per pixel the viewport accumulates before it stops (Blender's viewport default
@@ -36,14 +41,35 @@ pub struct EditorOptions {
     /// Samples per pixel after which the viewport stops accumulating (and stops asking
     /// for repaints): tests set a small number.
     pub sample_limit: u32,
+    /// The folder for recent files and autosaves ([`SessionStore::default_dir`]); None
+    /// keeps neither (tests that do not test them).
+    pub state_dir: Option<PathBuf>,
+    /// How often a changed document is autosaved for crash recovery.
+    pub autosave_every: Duration,
 }
 
+/// Blender autosaves every two minutes; the issue asks for one.
+pub const AUTOSAVE_EVERY: Duration = Duration::from_secs(60);
+
 /// Something the user asked for that waits on the unsaved-changes prompt.
-#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+#[derive(Clone, Debug, PartialEq, Eq)]
 enum Pending {
-    Open,
+    New,
+    /// Open a file: the one given (a recent file), or one the dialog asks for.
+    Open(Option<PathBuf>),
     Close,
 }
+
+/// The tabs of the properties editor.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+enum Tab {
+    Object,
+    Render,
+    World,
+}
+
+/// Metres (scene units) per second of fly navigation, as a share of the scene's size.
+const FLY_SPEED: f32 = 0.25;
 
 const UNDO: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Z);
 const REDO: KeyboardShortcut =
@@ -53,6 +79,8 @@ const SAVE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::S)
 const SAVE_AS: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
+const NEW: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::N);
+const DUPLICATE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::SHIFT, Key::D);
 
 /// The editor application (an [`eframe::App`]).
 pub struct EditorApp {
@@ -69,9 +97,21 @@ pub struct EditorApp {
     outliner: Outliner,
     picker: Option<((u64, u64), Picker)>,
     render_scene: Option<((u64, u64), Arc<Scene>)>,
-    sample_limit: u32,
-    exposure_ev: f32,
-    tonemap: Tonemap,
+    options: ViewOptions,
+    tab: Tab,
+    final_render: Option<FinalRender>,
+    /// Whether the render window is open, and the texture of the result it shows.
+    render_window: bool,
+    render_texture: Option<(usize, egui::TextureHandle)>,
+    session: Option<SessionStore>,
+    recent: Vec<PathBuf>,
+    autosave_every: Duration,
+    last_autosave: Instant,
+    /// The document revision the last autosave holds, and the autosave under way.
+    autosaved_revision: Option<(u64, u64)>,
+    autosave_job: Option<JoinHandle<Result<(), String>>>,
+    /// An autosave from a crashed session, offered at start.
+    recovery: Option<Recovery>,
     error: Option<String>,
     pending: Option<Pending>,
     allow_close: bool,
@@ -132,6 +172,12 @@ impl EditorApp {
             ViewportRenderer::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
         });
         let view = document.scene().camera;
+        let session = options.state_dir.clone().map(SessionStore::new);
+        if let (Some(store), Some(path)) = (&session, document.path()) {
+            if let Err(e) = store.add_recent(path) {
+                tracing::warn!("cannot record the recent file: {e}");
+            }
+        }
         Self {
             document,
             document_serial: 0,
@@ -145,9 +191,27 @@ impl EditorApp {
             outliner: Outliner::default(),
             picker: None,
             render_scene: None,
-            sample_limit: options.sample_limit.max(1),
-            exposure_ev: 0.0,
-            tonemap: Tonemap::Agx,
+            options: ViewOptions {
+                seed: 0,
+                exposure_ev: 0.0,
+                tonemap: Tonemap::Agx,
+                viewport_samples: options.sample_limit.max(1),
+                export_options: String::new(),
+            },
+            tab: Tab::Object,
+            final_render: None,
+            render_window: false,
+            render_texture: None,
+            recent: session
+                .as_ref()
+                .map(SessionStore::recent)
+                .unwrap_or_default(),
+            recovery: session.as_ref().and_then(SessionStore::recovery),
+            session,
+            autosave_every: options.autosave_every,
+            last_autosave: Instant::now(),
+            autosaved_revision: None,
+            autosave_job: None,
             error,
             pending: None,
             allow_close: false,
@@ -192,6 +256,21 @@ impl EditorApp {
         self.pending.is_some()
     }
 
+    /// The state of the last final render, if one was started.
+    pub fn render_state(&self) -> Option<RenderState> {
+        self.final_render.as_ref().map(FinalRender::state)
+    }
+
+    /// The crashed session's autosave the editor is offering, if any.
+    pub fn offered_recovery(&self) -> Option<&Recovery> {
+        self.recovery.as_ref()
+    }
+
+    /// The files File ▸ Open Recent lists.
+    pub fn recent_files(&self) -> &[PathBuf] {
+        &self.recent
+    }
+
     /// Applies a command, reporting a refused one in the window.
     fn apply(&mut self, command: Command, gesture: Option<GestureId>) {
         if let Err(e) = self.document.apply(command, gesture) {
@@ -226,6 +305,9 @@ impl EditorApp {
     // ---- files ----
 
     fn request(&mut self, action: Pending, ctx: &egui::Context) {
+        if self.pending.is_some() {
+            return;
+        }
         if self.document.is_dirty() {
             self.pending = Some(action);
         } else {
@@ -235,12 +317,17 @@ impl EditorApp {
 
     fn proceed(&mut self, action: Pending, ctx: &egui::Context) {
         match action {
-            Pending::Open => {
+            Pending::New => self.new_document(),
+            Pending::Open(Some(path)) => self.open(path),
+            Pending::Open(None) => {
                 if let Some(path) = self.dialogs.open_path() {
                     self.open(path);
                 }
             }
             Pending::Close => {
+                if let Some(store) = &self.session {
+                    store.clear_autosave();
+                }
                 self.allow_close = true;
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);
             }
@@ -251,8 +338,156 @@ impl EditorApp {
     /// error is shown.
     pub fn open(&mut self, path: PathBuf) {
         match open_document(&path, &self.plugins) {
-            Ok(document) => self.replace_document(document),
+            Ok(document) => {
+                self.replace_document(document);
+                self.remember(&path);
+            }
             Err(e) => self.error = Some(e),
+        }
+    }
+
+    /// Puts `path` first in the recent files.
+    fn remember(&mut self, path: &std::path::Path) {
+        if let Some(store) = &self.session {
+            if let Err(e) = store.add_recent(path) {
+                tracing::warn!("cannot record the recent file: {e}");
+            }
+            self.recent = store.recent();
+        }
+    }
+
+    /// Replaces the document with a new, empty scene: a camera and a grey world.
+    fn new_document(&mut self) {
+        let camera = Camera::look_at(Vec3::new(7.0, 5.0, 7.0), Vec3::ZERO, 40.0);
+        let mut scene = Scene::empty(camera);
+        scene.environment = Vec3::splat(0.05);
+        self.replace_document(Document::new(scene, None, Vec::new()));
+    }
+
+    /// Adds what an importer plugin reads from a file the dialog asks for to the scene,
+    /// as one undo step.
+    fn import(&mut self) {
+        let extensions = self.plugins.import_extensions();
+        if extensions.is_empty() {
+            self.error = Some("no importer plugin is loaded (see `kiln plugins`)".into());
+            return;
+        }
+        let Some(path) = self.dialogs.import_path(&extensions) else {
+            return;
+        };
+        let imported = match self.plugins.import(&path) {
+            Ok(imported) => imported,
+            Err(e) => {
+                self.error = Some(format!("cannot import {}: {e}", path.display()));
+                return;
+            }
+        };
+        if !imported.images.is_empty() {
+            self.error = Some(format!(
+                "{} embeds images, which an import into an open scene does not carry yet: open it as its own document (File ▸ Open) instead",
+                path.display()
+            ));
+            return;
+        }
+        let command = self.document.append(imported.scene);
+        self.apply(command, None);
+    }
+
+    /// Recovers the offered autosave as an unsaved document (Save asks where, starting
+    /// from the file it came from).
+    fn recover(&mut self) {
+        let Some(recovery) = self.recovery.take() else {
+            return;
+        };
+        match crate::scene::load_scene(&recovery.scene) {
+            Ok(scene) => {
+                let mut document = Document::new(scene, None, Vec::new());
+                document.mark_unsaved();
+                self.replace_document(document);
+                if let Some(store) = &self.session {
+                    store.discard(&recovery);
+                }
+            }
+            Err(e) => self.error = Some(format!("the autosave cannot be recovered: {e}")),
+        }
+    }
+
+    /// Writes a changed document to the recovery autosave every [`AUTOSAVE_EVERY`], on a
+    /// thread of its own (a large scene takes a while to write).
+    fn autosave(&mut self) {
+        let Some(store) = &self.session else {
+            return;
+        };
+        if let Some(job) = self.autosave_job.take_if(|j| j.is_finished()) {
+            match job.join() {
+                Ok(Err(e)) => tracing::warn!("autosave failed: {e}"),
+                Err(_) => tracing::warn!("autosave panicked"),
+                Ok(Ok(())) => {}
+            }
+        }
+        let key = (self.document_serial, self.document.revision());
+        if self.autosave_job.is_some()
+            || !self.document.is_dirty()
+            || self.autosaved_revision == Some(key)
+            || self.last_autosave.elapsed() < self.autosave_every
+        {
+            return;
+        }
+        self.last_autosave = Instant::now();
+        self.autosaved_revision = Some(key);
+        let (store, scene) = (store.clone(), self.document.scene().clone());
+        let images = self.document.images().to_vec();
+        let source = self.document.path().map(|p| p.to_owned());
+        self.autosave_job = std::thread::Builder::new()
+            .name("kiln autosave".into())
+            .spawn(move || store.autosave(&scene, &images, source.as_deref()))
+            .ok();
+    }
+
+    /// Starts the final render of the document (hidden items left out) with the kernel
+    /// specialised to it.
+    fn start_render(&mut self, ctx: &egui::Context) {
+        let Some(gpu) = &self.gpu else {
+            self.error = Some("rendering needs a GPU device, and none was found".into());
+            return;
+        };
+        if self
+            .final_render
+            .as_ref()
+            .is_some_and(FinalRender::is_running)
+        {
+            return;
+        }
+        let view = ViewSettings {
+            exposure_ev: self.options.exposure_ev,
+            tonemap: self.options.tonemap,
+        };
+        let repaint = ctx.clone();
+        self.final_render = Some(FinalRender::start(
+            Arc::clone(gpu),
+            self.render_scene(),
+            self.options.seed,
+            view,
+            move || repaint.request_repaint(),
+        ));
+        self.render_window = true;
+    }
+
+    /// Writes the last render through the exporter plugins (or the host's writers).
+    fn export_render(&mut self) {
+        let Some(RenderState::Finished(result)) = self.render_state() else {
+            self.error = Some("render an image first (Render ▸ Render Image, F12)".into());
+            return;
+        };
+        let extensions = self.plugins.export_extensions();
+        let Some(path) = self.dialogs.export_path(&extensions) else {
+            return;
+        };
+        if let Err(e) = self
+            .plugins
+            .write_image(&path, &result.film, &self.options.export_options)
+        {
+            self.error = Some(e);
         }
     }
 
@@ -274,7 +509,10 @@ impl EditorApp {
 
     fn save_to(&mut self, path: PathBuf) -> bool {
         match save_document(&mut self.document, &path) {
-            Ok(()) => true,
+            Ok(()) => {
+                self.remember(&path);
+                true
+            }
             Err(e) => {
                 self.error = Some(e);
                 false
@@ -302,7 +540,33 @@ impl EditorApp {
             self.save();
         }
         if ctx.input_mut(|i| i.consume_shortcut(&OPEN)) {
-            self.request(Pending::Open, ctx);
+            self.request(Pending::Open(None), ctx);
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&NEW)) {
+            self.request(Pending::New, ctx);
+        }
+        if ctx.input(|i| i.key_pressed(Key::F12)) {
+            self.start_render(ctx);
+        }
+        if ctx.input_mut(|i| i.consume_shortcut(&DUPLICATE)) {
+            if let Some(command) = self
+                .document
+                .selection
+                .and_then(|s| self.document.duplicate(s))
+            {
+                self.apply(command, None);
+            }
+        }
+        if ctx.input(|i| {
+            i.key_pressed(Key::Delete) || (i.key_pressed(Key::X) && i.modifiers.is_none())
+        }) {
+            if let Some(command) = self
+                .document
+                .selection
+                .and_then(|s| self.document.delete(s))
+            {
+                self.apply(command, None);
+            }
         }
         if ctx.input(|i| i.key_pressed(Key::Home)) {
             self.view = navigation::frame_all(&self.view, self.document.scene());
@@ -327,11 +591,34 @@ impl EditorApp {
         egui::MenuBar::new().ui(ui, |ui| {
             ui.menu_button("File", |ui| {
                 if ui
+                    .add(egui::Button::new("New").shortcut_text(ui.ctx().format_shortcut(&NEW)))
+                    .clicked()
+                {
+                    self.request(Pending::New, ui.ctx());
+                }
+                if ui
                     .add(egui::Button::new("Open…").shortcut_text(ui.ctx().format_shortcut(&OPEN)))
                     .clicked()
                 {
-                    self.request(Pending::Open, ui.ctx());
+                    self.request(Pending::Open(None), ui.ctx());
                 }
+                ui.menu_button("Open Recent", |ui| {
+                    if self.recent.is_empty() {
+                        ui.weak("No recent files");
+                    }
+                    for path in self.recent.clone() {
+                        let name = path
+                            .file_name()
+                            .map_or(path.display().to_string(), |n| n.to_string_lossy().into());
+                        if ui
+                            .button(name)
+                            .on_hover_text(path.display().to_string())
+                            .clicked()
+                        {
+                            self.request(Pending::Open(Some(path)), ui.ctx());
+                        }
+                    }
+                });
                 if ui
                     .add(egui::Button::new("Save").shortcut_text(ui.ctx().format_shortcut(&SAVE)))
                     .clicked()
@@ -346,6 +633,17 @@ impl EditorApp {
                     .clicked()
                 {
                     self.save_as();
+                }
+                ui.separator();
+                if ui.button("Import…").clicked() {
+                    self.import();
+                }
+                let rendered = matches!(self.render_state(), Some(RenderState::Finished(_)));
+                if ui
+                    .add_enabled(rendered, egui::Button::new("Export Render…"))
+                    .clicked()
+                {
+                    self.export_render();
                 }
                 ui.separator();
                 if ui.button("Quit").clicked() {
@@ -371,6 +669,57 @@ impl EditorApp {
                 {
                     self.document.redo();
                 }
+                ui.separator();
+                let selection = self.document.selection;
+                let duplicate = selection.and_then(|s| self.document.duplicate(s));
+                if ui
+                    .add_enabled(
+                        duplicate.is_some(),
+                        egui::Button::new("Duplicate")
+                            .shortcut_text(ui.ctx().format_shortcut(&DUPLICATE)),
+                    )
+                    .clicked()
+                {
+                    if let Some(command) = duplicate {
+                        self.apply(command, None);
+                    }
+                }
+                let delete = selection.and_then(|s| self.document.delete(s));
+                if ui
+                    .add_enabled(
+                        delete.is_some(),
+                        egui::Button::new("Delete").shortcut_text("X"),
+                    )
+                    .clicked()
+                {
+                    if let Some(command) = delete {
+                        self.apply(command, None);
+                    }
+                }
+            });
+            ui.menu_button("Render", |ui| {
+                let running = self
+                    .final_render
+                    .as_ref()
+                    .is_some_and(FinalRender::is_running);
+                if ui
+                    .add_enabled(
+                        !running,
+                        egui::Button::new("Render Image").shortcut_text("F12"),
+                    )
+                    .clicked()
+                {
+                    self.start_render(ui.ctx());
+                }
+                if ui
+                    .add_enabled(
+                        self.final_render.is_some(),
+                        egui::Button::new("View Render"),
+                    )
+                    .clicked()
+                {
+                    self.render_window = true;
+                }
             });
             ui.menu_button("View", |ui| {
                 if ui
@@ -389,21 +738,7 @@ impl EditorApp {
                     self.view = self.document.scene().camera;
                 }
                 ui.separator();
-                ui.label("View transform");
-                ui.radio_value(&mut self.tonemap, Tonemap::Agx, "AgX");
-                ui.radio_value(&mut self.tonemap, Tonemap::None, "Standard");
-                ui.horizontal(|ui| {
-                    ui.label("Exposure");
-                    ui.add(
-                        egui::DragValue::new(&mut self.exposure_ev)
-                            .speed(0.05)
-                            .range(-10.0..=10.0),
-                    );
-                });
-                ui.horizontal(|ui| {
-                    ui.label("Samples");
-                    ui.add(egui::DragValue::new(&mut self.sample_limit).range(1..=65536));
-                });
+                ui.weak("Fly: hold the right mouse button, move with W A S D, Q E");
             });
         });
     }
@@ -428,24 +763,84 @@ impl EditorApp {
                     }
                 });
                 ui.separator();
-                ui.label(RichText::new("Properties").heading());
-                ui.separator();
-                for action in inspector_ui(ui, &self.document, &self.view) {
-                    match action {
-                        InspectorAction::Edit(edit) => self.apply(edit.command, edit.gesture),
-                        InspectorAction::LookThroughCamera => {
-                            self.view = self.document.scene().camera
-                        }
-                        InspectorAction::CameraFromView => {
-                            let mut camera = self.view;
-                            let old = self.document.scene().camera;
-                            camera.aperture_radius = old.aperture_radius;
-                            camera.focus_distance = (camera.look_at - camera.position).length();
-                            self.apply(Command::SetCamera(camera), None);
-                        }
+                ui.horizontal(|ui| {
+                    for (tab, name) in [
+                        (Tab::Object, "Object"),
+                        (Tab::Render, "Render"),
+                        (Tab::World, "World"),
+                    ] {
+                        ui.selectable_value(&mut self.tab, tab, RichText::new(name).strong());
                     }
+                });
+                ui.separator();
+                match self.tab {
+                    Tab::Object => self.object_tab(ui),
+                    Tab::Render => self.render_tab(ui),
+                    Tab::World => self.world_tab(ui),
                 }
             });
+    }
+
+    fn render_tab(&mut self, ui: &mut Ui) {
+        let state = self.render_state();
+        let actions = egui::ScrollArea::vertical()
+            .auto_shrink([false, false])
+            .show(ui, |ui| {
+                render_tab_ui(ui, &self.document, &mut self.options, state)
+            })
+            .inner;
+        for action in actions {
+            match action {
+                RenderAction::Edit(edit) => self.apply(edit.command, edit.gesture),
+                RenderAction::StartRender => self.start_render(ui.ctx()),
+                RenderAction::CancelRender => {
+                    if let Some(render) = &self.final_render {
+                        render.cancel();
+                    }
+                }
+                RenderAction::ShowResult => self.render_window = true,
+                RenderAction::Export => self.export_render(),
+            }
+        }
+    }
+
+    fn world_tab(&mut self, ui: &mut Ui) {
+        let actions = egui::ScrollArea::vertical()
+            .auto_shrink([false, false])
+            .show(ui, |ui| world_tab_ui(ui, &self.document))
+            .inner;
+        for action in actions {
+            match action {
+                WorldAction::Edit(edit) => self.apply(edit.command, edit.gesture),
+                WorldAction::LoadMap => {
+                    let Some(path) = self.dialogs.environment_path() else {
+                        continue;
+                    };
+                    match crate::scene::EnvironmentMap::load(&path) {
+                        Ok(map) => {
+                            self.apply(Command::SetEnvironmentMap(Some(Box::new(map))), None)
+                        }
+                        Err(e) => self.error = Some(format!("cannot load {}: {e}", path.display())),
+                    }
+                }
+            }
+        }
+    }
+
+    fn object_tab(&mut self, ui: &mut Ui) {
+        for action in inspector_ui(ui, &self.document, &self.view) {
+            match action {
+                InspectorAction::Edit(edit) => self.apply(edit.command, edit.gesture),
+                InspectorAction::LookThroughCamera => self.view = self.document.scene().camera,
+                InspectorAction::CameraFromView => {
+                    let mut camera = self.view;
+                    let old = self.document.scene().camera;
+                    camera.aperture_radius = old.aperture_radius;
+                    camera.focus_distance = (camera.look_at - camera.position).length();
+                    self.apply(Command::SetCamera(camera), None);
+                }
+            }
+        }
     }
 
     fn status_bar(&mut self, ui: &mut Ui) {
@@ -462,7 +857,7 @@ impl EditorApp {
                     ui.label(format!(
                         "Samples {}/{}  ·  {rate} samples/s  ·  {:02}:{:05.2}  ·  {}×{}",
                         status.samples,
-                        self.sample_limit,
+                        self.options.viewport_samples,
                         (t / 60.0) as u32,
                         t % 60.0,
                         status.size[0],
@@ -499,9 +894,9 @@ impl EditorApp {
             scene_revision: (key.0 << 40) | key.1,
             camera: self.view,
             size,
-            sample_limit: self.sample_limit,
-            exposure_ev: self.exposure_ev,
-            tonemap: self.tonemap,
+            sample_limit: self.options.viewport_samples,
+            exposure_ev: self.options.exposure_ev,
+            tonemap: self.options.tonemap,
         };
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_gray(30));
@@ -581,6 +976,9 @@ impl EditorApp {
                 self.view = navigation::orbit(&self.view, delta.x, delta.y);
             }
         }
+        if response.dragged_by(PointerButton::Secondary) {
+            self.fly(ui, delta);
+        }
         if response.hovered() && scroll != 0.0 {
             self.view = navigation::zoom(&self.view, scroll / 50.0);
         }
@@ -588,6 +986,30 @@ impl EditorApp {
             if let Some(pos) = response.interact_pointer_pos() {
                 self.pick(pos, rect);
             }
+        }
+    }
+
+    /// Fly navigation while the right mouse button is held: the mouse turns the view, W A
+    /// S D move it forward, left, back and right, Q and E down and up, Shift is faster.
+    fn fly(&mut self, ui: &Ui, delta: egui::Vec2) {
+        let (keys, fast, dt) = ui.input(|i| {
+            let axis =
+                |plus: Key, minus: Key| (i.key_down(plus) as i32 - i.key_down(minus) as i32) as f32;
+            (
+                Vec3::new(
+                    axis(Key::D, Key::A),
+                    axis(Key::E, Key::Q),
+                    axis(Key::W, Key::S),
+                ),
+                i.modifiers.shift,
+                i.stable_dt.min(0.1),
+            )
+        });
+        let size = navigation::scene_size(self.document.scene()).max(1e-3);
+        let speed = size * FLY_SPEED * if fast { 4.0 } else { 1.0 };
+        self.view = navigation::fly(&self.view, delta.x, delta.y, keys * speed * dt);
+        if keys != Vec3::ZERO {
+            ui.ctx().request_repaint();
         }
     }
 
@@ -674,7 +1096,7 @@ impl EditorApp {
     }
 
     fn dialogs_ui(&mut self, ctx: &egui::Context) {
-        if let Some(action) = self.pending {
+        if let Some(action) = self.pending.clone() {
             let name = self
                 .document
                 .path()
@@ -686,7 +1108,8 @@ impl EditorApp {
                 ui.label(format!(
                     "Save changes to {name} before {}?",
                     match action {
-                        Pending::Open => "opening another file",
+                        Pending::New => "starting a new scene",
+                        Pending::Open(_) => "opening another file",
                         Pending::Close => "closing",
                     }
                 ));
@@ -718,6 +1141,8 @@ impl EditorApp {
                 None => {}
             }
         }
+        self.recovery_ui(ctx);
+        self.render_window_ui(ctx);
         if let Some(message) = self.error.clone() {
             let mut close = false;
             egui::Modal::new(egui::Id::new("error")).show(ctx, |ui| {
@@ -731,6 +1156,128 @@ impl EditorApp {
                 self.error = None;
             }
         }
+    }
+
+    /// Offers the autosave a crashed session left.
+    fn recovery_ui(&mut self, ctx: &egui::Context) {
+        let Some(recovery) = &self.recovery else {
+            return;
+        };
+        let age = recovery
+            .saved_at
+            .elapsed()
+            .map_or("a while".to_owned(), |d| {
+                format!("{} min", d.as_secs() / 60)
+            });
+        let from = recovery
+            .source
+            .as_ref()
+            .map_or("an unsaved scene".to_owned(), |p| p.display().to_string());
+        let mut choice = None;
+        egui::Modal::new(egui::Id::new("recover autosave")).show(ctx, |ui| {
+            ui.set_max_width(480.0);
+            ui.heading("Recover unsaved work?");
+            ui.label(format!(
+                "Kiln did not close normally. An autosave of {from} from {age} ago is available."
+            ));
+            ui.add_space(8.0);
+            ui.horizontal(|ui| {
+                if ui.button("Recover").clicked() {
+                    choice = Some(true);
+                }
+                if ui.button("Discard").clicked() {
+                    choice = Some(false);
+                }
+            });
+        });
+        match choice {
+            Some(true) => self.recover(),
+            Some(false) => {
+                if let (Some(store), Some(recovery)) = (&self.session, self.recovery.take()) {
+                    store.discard(&recovery);
+                }
+            }
+            None => {}
+        }
+    }
+
+    /// The render window: the final render's progress or result.
+    fn render_window_ui(&mut self, ctx: &egui::Context) {
+        if !self.render_window {
+            return;
+        }
+        let Some(state) = self.render_state() else {
+            return;
+        };
+        let mut open = true;
+        let mut export = false;
+        let mut cancel = false;
+        egui::Window::new("Render")
+            .open(&mut open)
+            .default_size([640.0, 480.0])
+            .resizable(true)
+            .show(ctx, |ui| match &state {
+                RenderState::Preparing => {
+                    ui.add(egui::ProgressBar::new(0.0).text("Preparing the kernel…"));
+                    cancel = ui.button("Cancel").clicked();
+                }
+                RenderState::Rendering { fraction, elapsed } => {
+                    ui.add(egui::ProgressBar::new(*fraction as f32).text(format!(
+                        "{:.0} %  ·  {:.1} s",
+                        fraction * 100.0,
+                        elapsed.as_secs_f64()
+                    )));
+                    cancel = ui.button("Cancel").clicked();
+                }
+                RenderState::Failed(message) => {
+                    ui.colored_label(ui.visuals().error_fg_color, message);
+                }
+                RenderState::Finished(result) => {
+                    ui.horizontal(|ui| {
+                        ui.label(format!(
+                            "{}×{}  ·  {:.1} spp  ·  {:.2} s{}",
+                            result.film.width,
+                            result.film.height,
+                            result.samples_per_pixel,
+                            result.elapsed.as_secs_f64(),
+                            if result.completed {
+                                ""
+                            } else {
+                                "  ·  cancelled"
+                            }
+                        ));
+                        export = ui.button("Export…").clicked();
+                    });
+                    let key = Arc::as_ptr(result) as usize;
+                    if self.render_texture.as_ref().is_none_or(|(k, _)| *k != key) {
+                        let film = &result.film;
+                        let pixels: Vec<u8> = film
+                            .display
+                            .iter()
+                            .map(|v| (v.clamp(0.0, 1.0) * 255.0 + 0.5) as u8)
+                            .collect();
+                        let image = egui::ColorImage::from_rgba_unmultiplied(
+                            [film.width as usize, film.height as usize],
+                            &pixels,
+                        );
+                        let texture =
+                            ctx.load_texture("final render", image, egui::TextureOptions::LINEAR);
+                        self.render_texture = Some((key, texture));
+                    }
+                    if let Some((_, texture)) = &self.render_texture {
+                        ui.add(egui::Image::new(texture).shrink_to_fit());
+                    }
+                }
+            });
+        if cancel {
+            if let Some(render) = &self.final_render {
+                render.cancel();
+            }
+        }
+        if export {
+            self.export_render();
+        }
+        self.render_window = open;
     }
 
     fn update_title(&mut self, ctx: &egui::Context) {
@@ -787,5 +1334,20 @@ impl eframe::App for EditorApp {
         egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));
         self.dialogs_ui(&ctx);
         self.update_title(&ctx);
+        self.autosave();
+        if self.autosave_job.is_some() || self.document.is_dirty() {
+            // Come back for the autosave even when nothing else asks for a frame.
+            ctx.request_repaint_after(self.autosave_every.min(Duration::from_secs(5)));
+        }
+    }
+
+    fn on_exit(&mut self) {
+        // A normal close: the autosave is not needed for recovery.
+        if let Some(job) = self.autosave_job.take() {
+            let _ = job.join();
+        }
+        if let Some(store) = &self.session {
+            store.clear_autosave();
+        }
     }
 }

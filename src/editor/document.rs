@@ -15,7 +15,7 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
-use crate::scene::{Camera, Light, Scene};
+use crate::scene::{Camera, EnvironmentMap, Instance, Light, Scene, SceneSettings};
 use crate::shader::principled::ParamValue;
 
 /// What can be selected.
@@ -64,6 +64,61 @@ pub enum Command {
         target: Selection,
         visible: bool,
     },
+    /// Removes an object; its mesh stays in the scene (other objects may share it).
+    DeleteObject {
+        object: usize,
+    },
+    /// Places an object at index `object` (undoing a delete, or a duplicate at the end).
+    InsertObject {
+        object: usize,
+        instance: Instance,
+        state: ItemState,
+    },
+    DeleteLight {
+        light: usize,
+    },
+    InsertLight {
+        light: usize,
+        value: Light,
+        state: ItemState,
+    },
+    AssignMaterial {
+        object: usize,
+        material: usize,
+    },
+    /// The render settings the scene file carries (size, samples, bounces).
+    SetSettings(SceneSettings),
+    /// The uniform environment radiance (linear RGB), shown where no map is.
+    SetEnvironmentColor(Vec3),
+    /// The environment map's strength and rotation (degrees about +Y).
+    SetEnvironmentMapParams {
+        strength: f32,
+        rotation_degrees: f32,
+    },
+    /// Replaces (or removes) the environment map.
+    SetEnvironmentMap(Option<Box<EnvironmentMap>>),
+    /// Adds the meshes, materials, objects and lights of an imported scene after the
+    /// document's own (its objects refer to its own meshes and materials).
+    Append(Box<Appended>),
+    /// Drops everything past the given counts (the inverse of an append).
+    Truncate(Counts),
+}
+
+/// What an [`Command::Append`] adds: a scene's contents with the editor's state of them.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Appended {
+    pub scene: Scene,
+    pub objects: Vec<ItemState>,
+    pub lights: Vec<ItemState>,
+}
+
+/// How many meshes, materials, objects and lights a document holds.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct Counts {
+    pub meshes: usize,
+    pub materials: usize,
+    pub objects: usize,
+    pub lights: usize,
 }
 
 impl Command {
@@ -81,6 +136,11 @@ impl Command {
             Command::SetCamera(_) => (3, 0, ""),
             Command::Rename { .. } => (4, 0, ""),
             Command::SetVisible { .. } => (5, 0, ""),
+            Command::SetSettings(_) => (6, 0, ""),
+            Command::SetEnvironmentColor(_) => (7, 0, ""),
+            Command::SetEnvironmentMapParams { .. } => (8, 0, ""),
+            // Structural edits never merge: each is its own step.
+            _ => (u8::MAX, usize::MAX, ""),
         }
     }
 
@@ -265,6 +325,107 @@ impl Document {
         }
     }
 
+    /// How many meshes, materials, objects and lights the document holds.
+    pub fn counts(&self) -> Counts {
+        Counts {
+            meshes: self.scene.meshes.len(),
+            materials: self.scene.materials.len(),
+            objects: self.objects.len(),
+            lights: self.lights.len(),
+        }
+    }
+
+    /// A name not yet taken among the objects and lights, from `base` with Blender's
+    /// numeric suffixes (`block` → `block.001`, `block.001` → `block.002`).
+    pub fn unique_name(&self, base: &str) -> String {
+        let taken = |n: &str| {
+            self.objects
+                .iter()
+                .chain(&self.lights)
+                .any(|item| item.name == n)
+        };
+        let stem = match base.rsplit_once('.') {
+            Some((stem, digits))
+                if digits.len() == 3 && digits.bytes().all(|b| b.is_ascii_digit()) =>
+            {
+                stem
+            }
+            _ => base,
+        };
+        if !taken(stem) {
+            return stem.to_owned();
+        }
+        (1..)
+            .map(|i| format!("{stem}.{i:03}"))
+            .find(|n| !taken(n))
+            .expect("some suffix is free")
+    }
+
+    /// The command that duplicates `target` (an object or a light) as a new item at the
+    /// end, named after it; None for the camera or a missing item. A duplicated object
+    /// shares its mesh with the original, as Blender's linked duplicate does.
+    pub fn duplicate(&self, target: Selection) -> Option<Command> {
+        match target {
+            Selection::Object(i) => Some(Command::InsertObject {
+                object: self.objects.len(),
+                instance: self.scene.instances.get(i)?.clone(),
+                state: ItemState {
+                    name: self.unique_name(&self.objects[i].name),
+                    visible: self.objects[i].visible,
+                },
+            }),
+            Selection::Light(i) => Some(Command::InsertLight {
+                light: self.lights.len(),
+                value: self.scene.lights.get(i)?.clone(),
+                state: ItemState {
+                    name: self.unique_name(&self.lights[i].name),
+                    visible: self.lights[i].visible,
+                },
+            }),
+            Selection::Camera => None,
+        }
+    }
+
+    /// The command that deletes `target`; None for the camera.
+    pub fn delete(&self, target: Selection) -> Option<Command> {
+        match target {
+            Selection::Object(object) if object < self.objects.len() => {
+                Some(Command::DeleteObject { object })
+            }
+            Selection::Light(light) if light < self.lights.len() => {
+                Some(Command::DeleteLight { light })
+            }
+            _ => None,
+        }
+    }
+
+    /// The command that appends `scene` (an import) to the document, its objects and
+    /// lights named as a newly opened document would name them, made unique.
+    pub fn append(&self, scene: Scene) -> Command {
+        let fresh = Document::new(scene, None, Vec::new());
+        let mut taken = Vec::new();
+        let mut unique = |item: &ItemState| {
+            let mut name = self.unique_name(&item.name);
+            let mut i = 1;
+            while taken.contains(&name) {
+                name = format!("{}.{i:03}", item.name);
+                i += 1;
+            }
+            taken.push(name.clone());
+            ItemState {
+                name,
+                visible: item.visible,
+            }
+        };
+        let objects = fresh.objects.iter().map(&mut unique).collect();
+        let lights = fresh.lights.iter().map(&mut unique).collect();
+        Command::Append(Box::new(Appended {
+            scene: fresh.scene,
+            objects,
+            lights,
+        }))
+    }
+
     /// Bumped by every applied, undone or redone command.
     pub fn revision(&self) -> u64 {
         self.revision
@@ -284,6 +445,12 @@ impl Document {
     pub fn mark_saved(&mut self, path: PathBuf) {
         self.path = Some(path);
         self.saved_step = self.undo.last().map(|s| s.id);
+    }
+
+    /// Marks the document as differing from any file (a recovered autosave): it stays
+    /// dirty until saved.
+    pub fn mark_unsaved(&mut self) {
+        self.saved_step = Some(u64::MAX);
     }
 
     pub fn can_undo(&self) -> bool {
@@ -480,7 +647,209 @@ impl Document {
                     visible: old,
                 })
             }
+            Command::DeleteObject { object } => {
+                if object >= self.objects.len() {
+                    return err(format!("no object {object}"));
+                }
+                self.selection = shifted_selection(self.selection, Selection::Object(object));
+                Ok(Command::InsertObject {
+                    object,
+                    instance: self.scene.instances.remove(object),
+                    state: self.objects.remove(object),
+                })
+            }
+            Command::InsertObject {
+                object,
+                instance,
+                state,
+            } => {
+                if object > self.objects.len() {
+                    return err(format!("cannot insert an object at {object}"));
+                }
+                if instance.mesh >= self.scene.meshes.len()
+                    || instance.material >= self.scene.materials.len()
+                {
+                    return err(format!(
+                        "\"{}\" refers to a mesh or material the scene lacks",
+                        state.name
+                    ));
+                }
+                self.scene.instances.insert(object, instance);
+                self.objects.insert(object, state);
+                self.selection = Some(Selection::Object(object));
+                Ok(Command::DeleteObject { object })
+            }
+            Command::DeleteLight { light } => {
+                if light >= self.lights.len() {
+                    return err(format!("no light {light}"));
+                }
+                self.selection = shifted_selection(self.selection, Selection::Light(light));
+                Ok(Command::InsertLight {
+                    light,
+                    value: self.scene.lights.remove(light),
+                    state: self.lights.remove(light),
+                })
+            }
+            Command::InsertLight {
+                light,
+                value,
+                state,
+            } => {
+                if light > self.lights.len() {
+                    return err(format!("cannot insert a light at {light}"));
+                }
+                value
+                    .validate()
+                    .map_err(|e| CommandError(format!("{}: {e}", state.name)))?;
+                self.scene.lights.insert(light, value);
+                self.lights.insert(light, state);
+                self.selection = Some(Selection::Light(light));
+                Ok(Command::DeleteLight { light })
+            }
+            Command::AssignMaterial { object, material } => {
+                if material >= self.scene.materials.len() {
+                    return err(format!("no material {material}"));
+                }
+                let Some(instance) = self.scene.instances.get_mut(object) else {
+                    return err(format!("no object {object}"));
+                };
+                let old = std::mem::replace(&mut instance.material, material);
+                Ok(Command::AssignMaterial {
+                    object,
+                    material: old,
+                })
+            }
+            Command::SetSettings(settings) => {
+                crate::scene::validate_image_size(settings.width, settings.height)
+                    .map_err(CommandError)?;
+                if settings.samples_per_pixel == 0 {
+                    return err("samples per pixel must be at least 1".into());
+                }
+                let old = std::mem::replace(&mut self.scene.settings, settings);
+                Ok(Command::SetSettings(old))
+            }
+            Command::SetEnvironmentColor(color) => {
+                if !color.is_finite() || color.min_element() < 0.0 {
+                    return err(format!(
+                        "the environment colour must be finite and non-negative, not {color}"
+                    ));
+                }
+                let old = std::mem::replace(&mut self.scene.environment, color);
+                Ok(Command::SetEnvironmentColor(old))
+            }
+            Command::SetEnvironmentMapParams {
+                strength,
+                rotation_degrees,
+            } => {
+                let Some(map) = self.scene.environment_map.as_mut() else {
+                    return err("the scene has no environment map".into());
+                };
+                if !strength.is_finite() || strength < 0.0 || !rotation_degrees.is_finite() {
+                    return err(format!(
+                        "the environment map's strength must be finite and non-negative and its rotation finite (strength {strength}, rotation {rotation_degrees})"
+                    ));
+                }
+                let old = Command::SetEnvironmentMapParams {
+                    strength: map.strength,
+                    rotation_degrees: map.rotation_degrees,
+                };
+                map.strength = strength;
+                map.rotation_degrees = rotation_degrees;
+                Ok(old)
+            }
+            Command::SetEnvironmentMap(map) => {
+                if let Some(map) = &map {
+                    map.validate().map_err(CommandError)?;
+                }
+                let old = std::mem::replace(&mut self.scene.environment_map, map.map(|m| *m));
+                Ok(Command::SetEnvironmentMap(old.map(Box::new)))
+            }
+            Command::Append(appended) => {
+                let Appended {
+                    scene,
+                    objects,
+                    lights,
+                } = *appended;
+                if objects.len() != scene.instances.len() || lights.len() != scene.lights.len() {
+                    return err("an appended scene needs one name per object and light".into());
+                }
+                scene.validate().map_err(CommandError)?;
+                let before = self.counts();
+                let (mesh_base, material_base) = (before.meshes, before.materials);
+                self.scene.meshes.extend(scene.meshes);
+                self.scene.materials.extend(scene.materials);
+                self.scene
+                    .instances
+                    .extend(scene.instances.into_iter().map(|i| Instance {
+                        mesh: i.mesh + mesh_base,
+                        material: i.material + material_base,
+                        ..i
+                    }));
+                self.scene.lights.extend(scene.lights);
+                self.objects.extend(objects);
+                self.lights.extend(lights);
+                Ok(Command::Truncate(before))
+            }
+            Command::Truncate(counts) => {
+                let now = self.counts();
+                if counts.meshes > now.meshes
+                    || counts.materials > now.materials
+                    || counts.objects > now.objects
+                    || counts.lights > now.lights
+                {
+                    return err(format!(
+                        "cannot truncate the document to {counts:?}: it holds {now:?}"
+                    ));
+                }
+                let kept = &self.scene.instances[..counts.objects];
+                if kept
+                    .iter()
+                    .any(|i| i.mesh >= counts.meshes || i.material >= counts.materials)
+                {
+                    return err("a kept object uses a mesh or material that would go".into());
+                }
+                let mut removed = Scene::empty(self.scene.camera);
+                removed.meshes = self.scene.meshes.split_off(counts.meshes);
+                removed.materials = self.scene.materials.split_off(counts.materials);
+                removed.instances = self
+                    .scene
+                    .instances
+                    .split_off(counts.objects)
+                    .into_iter()
+                    .map(|i| Instance {
+                        mesh: i.mesh - counts.meshes.min(i.mesh),
+                        material: i.material - counts.materials.min(i.material),
+                        ..i
+                    })
+                    .collect();
+                removed.lights = self.scene.lights.split_off(counts.lights);
+                let objects = self.objects.split_off(counts.objects);
+                let lights = self.lights.split_off(counts.lights);
+                if matches!(self.selection, Some(Selection::Object(i)) if i >= counts.objects)
+                    || matches!(self.selection, Some(Selection::Light(i)) if i >= counts.lights)
+                {
+                    self.selection = None;
+                }
+                Ok(Command::Append(Box::new(Appended {
+                    scene: removed,
+                    objects,
+                    lights,
+                })))
+            }
         }
+    }
+}
+
+/// The selection after `removed` is taken out of its list: cleared when it was the
+/// selection, moved down one when it came after it in the same list.
+fn shifted_selection(selection: Option<Selection>, removed: Selection) -> Option<Selection> {
+    match (selection, removed) {
+        (Some(s), r) if s == r => None,
+        (Some(Selection::Object(i)), Selection::Object(r)) if i > r => {
+            Some(Selection::Object(i - 1))
+        }
+        (Some(Selection::Light(i)), Selection::Light(r)) if i > r => Some(Selection::Light(i - 1)),
+        (s, _) => s,
     }
 }
 
@@ -606,6 +975,116 @@ mod tests {
         assert_eq!(doc.name(Selection::Object(0)), "ground");
         assert!(doc.is_dirty());
         assert_eq!(doc.image_revision(), image);
+    }
+
+    #[test]
+    fn delete_and_duplicate_undo_to_the_same_scene() {
+        let mut doc = document();
+        let (scene, names) = (doc.scene().clone(), doc.objects().to_vec());
+        doc.selection = Some(Selection::Object(7));
+        doc.apply(doc.delete(Selection::Object(6)).unwrap(), None)
+            .unwrap();
+        assert_eq!(doc.scene().instances.len(), 7);
+        assert_eq!(
+            doc.selection,
+            Some(Selection::Object(6)),
+            "the selection follows its object down"
+        );
+        let copy = doc.duplicate(Selection::Object(0)).unwrap();
+        doc.apply(copy, None).unwrap();
+        let last = doc.objects().len() - 1;
+        assert_eq!(
+            doc.scene().instances[last].mesh,
+            doc.scene().instances[0].mesh,
+            "a duplicate shares its mesh"
+        );
+        assert_ne!(doc.objects()[last].name, doc.objects()[0].name);
+        let light = doc.duplicate(Selection::Light(0));
+        assert!(light.is_none() || doc.apply(light.unwrap(), None).is_ok());
+        while doc.undo() {}
+        assert_eq!(doc.scene(), &scene);
+        assert_eq!(doc.objects(), names.as_slice());
+        assert!(!doc.is_dirty());
+    }
+
+    #[test]
+    fn unique_names_take_the_next_free_suffix() {
+        let doc = document();
+        assert_eq!(doc.unique_name("block"), "block.002");
+        assert_eq!(doc.unique_name("block.001"), "block.002");
+        assert_eq!(doc.unique_name("teapot"), "teapot");
+    }
+
+    #[test]
+    fn an_append_adds_after_the_document_and_undoes_to_it() {
+        let mut doc = document();
+        let before = doc.scene().clone();
+        let other = crate::scene::default_scene().unwrap();
+        let added = other.instances.len();
+        doc.apply(doc.append(other.clone()), None).unwrap();
+        let scene = doc.scene();
+        assert_eq!(scene.instances.len(), before.instances.len() + added);
+        let first = &scene.instances[before.instances.len()];
+        assert_eq!(first.mesh, before.meshes.len() + other.instances[0].mesh);
+        assert_eq!(
+            first.material,
+            before.materials.len() + other.instances[0].material
+        );
+        let names: std::collections::HashSet<&str> =
+            doc.objects().iter().map(|o| o.name.as_str()).collect();
+        assert_eq!(names.len(), doc.objects().len(), "names stay unique");
+        assert!(doc.undo());
+        assert_eq!(doc.scene(), &before);
+        assert!(doc.redo());
+        assert_eq!(doc.scene().instances.len(), before.instances.len() + added);
+    }
+
+    #[test]
+    fn settings_and_environment_edits_are_checked_and_undone() {
+        let mut doc = document();
+        let mut settings = doc.scene().settings;
+        settings.width = 0;
+        assert!(doc.apply(Command::SetSettings(settings), None).is_err());
+        settings.width = 1920;
+        doc.apply(Command::SetSettings(settings), None).unwrap();
+        assert_eq!(doc.scene().settings.width, 1920);
+        let bad = Command::SetEnvironmentColor(Vec3::new(-1.0, 0.0, 0.0));
+        assert!(doc.apply(bad, None).is_err());
+        doc.apply(Command::SetEnvironmentColor(Vec3::splat(0.5)), None)
+            .unwrap();
+        assert!(
+            doc.apply(
+                Command::SetEnvironmentMapParams {
+                    strength: 1.0,
+                    rotation_degrees: 0.0
+                },
+                None
+            )
+            .is_err(),
+            "the Cornell box has no map"
+        );
+        let material = doc.scene().instances[0].material;
+        let other = (material + 1) % doc.scene().materials.len();
+        doc.apply(
+            Command::AssignMaterial {
+                object: 0,
+                material: other,
+            },
+            None,
+        )
+        .unwrap();
+        assert!(
+            doc.apply(
+                Command::AssignMaterial {
+                    object: 0,
+                    material: 999
+                },
+                None
+            )
+            .is_err()
+        );
+        while doc.undo() {}
+        assert_eq!(doc.scene(), &document().scene().clone());
     }
 
     #[test]

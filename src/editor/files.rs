@@ -15,6 +15,12 @@ pub trait FileDialogs {
     fn open_path(&mut self) -> Option<PathBuf>;
     /// Where to save a `.kiln` scene, starting from `current`; None if cancelled.
     fn save_path(&mut self, current: Option<&Path>) -> Option<PathBuf>;
+    /// A file to add to the scene through an importer plugin reading `extensions`.
+    fn import_path(&mut self, extensions: &[String]) -> Option<PathBuf>;
+    /// Where to write a rendered image, in one of `extensions`.
+    fn export_path(&mut self, extensions: &[String]) -> Option<PathBuf>;
+    /// An equirectangular environment map (`.hdr`, `.exr`).
+    fn environment_path(&mut self) -> Option<PathBuf>;
 }
 
 /// The platform's native dialogs (`rfd`).
@@ -54,6 +60,36 @@ impl FileDialogs for NativeDialogs {
             }
         })
     }
+
+    fn import_path(&mut self, extensions: &[String]) -> Option<PathBuf> {
+        rfd::FileDialog::new()
+            .set_title("Import")
+            .add_filter("Importable files", extensions)
+            .pick_file()
+    }
+
+    fn export_path(&mut self, extensions: &[String]) -> Option<PathBuf> {
+        let mut dialog = rfd::FileDialog::new()
+            .set_title("Export Render")
+            .set_file_name("render.png");
+        for extension in extensions {
+            dialog = dialog.add_filter(extension.to_uppercase(), &[extension]);
+        }
+        dialog.save_file().map(|p| {
+            if p.extension().is_none() {
+                p.with_extension("png")
+            } else {
+                p
+            }
+        })
+    }
+
+    fn environment_path(&mut self) -> Option<PathBuf> {
+        rfd::FileDialog::new()
+            .set_title("Environment Map")
+            .add_filter("HDR images", &["hdr", "exr"])
+            .pick_file()
+    }
 }
 
 /// Dialogs that answer from a queue of paths, for tests and scripted sessions; an empty
@@ -62,6 +98,9 @@ impl FileDialogs for NativeDialogs {
 pub struct ScriptedDialogs {
     pub open: std::collections::VecDeque<PathBuf>,
     pub save: std::collections::VecDeque<PathBuf>,
+    pub import: std::collections::VecDeque<PathBuf>,
+    pub export: std::collections::VecDeque<PathBuf>,
+    pub environment: std::collections::VecDeque<PathBuf>,
 }
 
 impl FileDialogs for ScriptedDialogs {
@@ -71,6 +110,18 @@ impl FileDialogs for ScriptedDialogs {
 
     fn save_path(&mut self, _current: Option<&Path>) -> Option<PathBuf> {
         self.save.pop_front()
+    }
+
+    fn import_path(&mut self, _extensions: &[String]) -> Option<PathBuf> {
+        self.import.pop_front()
+    }
+
+    fn export_path(&mut self, _extensions: &[String]) -> Option<PathBuf> {
+        self.export.pop_front()
+    }
+
+    fn environment_path(&mut self) -> Option<PathBuf> {
+        self.environment.pop_front()
     }
 }
 

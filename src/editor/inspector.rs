@@ -30,13 +30,13 @@ pub enum InspectorAction {
 }
 
 /// The gesture a changed widget belongs to: its drag, or none for a typed value.
-fn gesture(response: &Response) -> Option<GestureId> {
+pub(super) fn gesture(response: &Response) -> Option<GestureId> {
     response.dragged().then(|| response.id.value())
 }
 
 /// A row "label  [x] [y] [z]"; returns the gesture when a component changed. The three
 /// fields carry the row's label for accessibility (tests find them by it).
-fn vec3_row(
+pub(super) fn vec3_row(
     ui: &mut Ui,
     label: &str,
     value: &mut Vec3,
@@ -72,7 +72,7 @@ fn vec3_row(
 }
 
 /// A row "label  [value]"; returns the gesture when the value changed.
-fn float_row(
+pub(super) fn float_row(
     ui: &mut Ui,
     label: &str,
     value: &mut f32,
@@ -139,7 +139,7 @@ pub fn inspector_ui(ui: &mut Ui, document: &Document, view: &Camera) -> Vec<Insp
     actions
 }
 
-fn section(ui: &mut Ui, title: &str, body: impl FnOnce(&mut Ui)) {
+pub(super) fn section(ui: &mut Ui, title: &str, body: impl FnOnce(&mut Ui)) {
     egui::CollapsingHeader::new(RichText::new(title).strong())
         .default_open(true)
         .show(ui, |ui| {
@@ -201,6 +201,34 @@ fn object_ui(ui: &mut Ui, document: &Document, object: usize, actions: &mut Vec<
             gesture,
         }));
     }
+    ui.add_space(6.0);
+    ui.horizontal(|ui| {
+        let label = ui.label("Material");
+        let mut chosen = instance.material;
+        egui::ComboBox::from_id_salt(("material of", object))
+            .selected_text(
+                scene
+                    .materials
+                    .get(chosen)
+                    .map_or("(none)", |m| m.name.as_str()),
+            )
+            .show_ui(ui, |ui| {
+                for (i, m) in scene.materials.iter().enumerate() {
+                    ui.selectable_value(&mut chosen, i, &m.name);
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        if chosen != instance.material {
+            actions.push(InspectorAction::Edit(Edit {
+                command: Command::AssignMaterial {
+                    object,
+                    material: chosen,
+                },
+                gesture: None,
+            }));
+        }
+    });
     material_ui(ui, document, instance.material, actions);
 }
 

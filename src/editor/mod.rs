@@ -8,7 +8,10 @@
 //!   [`display`]'s GPU pass without read-back; [`navigation`] moves its view and [`pick`]
 //!   finds what a click hits;
 //! - [`outliner`] and [`inspector`]: views of the document that return commands;
-//! - [`files`]: open, import and save, with the file dialogs behind a trait;
+//! - [`files`]: open, import and save, with the file dialogs behind a trait; [`session`]:
+//!   recent files and the autosave that recovers work after a crash;
+//! - [`settings_panel`]: the Render and World tabs; [`final_render`]: Render Image (F12)
+//!   in the background, shown and exported through the exporter plugins;
 //! - [`app`]: the window that ties them together.
 //!
 //! Not here (yet): the node editor for material graphs, which builds on the same document.
@@ -17,13 +20,16 @@ pub mod app;
 pub mod display;
 pub mod document;
 pub mod files;
+pub mod final_render;
 pub mod inspector;
 pub mod navigation;
 pub mod outliner;
 pub mod pick;
+pub mod session;
+pub mod settings_panel;
 pub mod viewport;
 
-pub use app::{DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions};
+pub use app::{AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions};
 pub use document::{Command, Document, Selection};
 pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};
 

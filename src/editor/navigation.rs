@@ -34,6 +34,35 @@ pub fn orbit(camera: &Camera, dx: f32, dy: f32) -> Camera {
     }
 }
 
+/// Fly navigation (Blender's walk/fly modes): turns the view in place by `dx`, `dy` points
+/// of mouse movement (about the world up axis, then the view's right axis) and moves it by
+/// `movement` (right, up, forward) in world units in the turned view's frame. The pivot
+/// keeps its distance in front of the camera, so orbiting afterwards turns about what is
+/// ahead.
+pub fn fly(camera: &Camera, dx: f32, dy: f32, movement: Vec3) -> Camera {
+    let up = camera.up.normalize_or(Vec3::Y);
+    let offset = camera.look_at - camera.position;
+    let distance = offset.length().max(1e-3);
+    let yaw = Quat::from_axis_angle(up, -dx * ORBIT_RADIANS_PER_POINT);
+    let forward = yaw * offset.normalize_or(Vec3::NEG_Z);
+    let right = forward.cross(up).normalize_or(Vec3::X);
+    let angle_from_up = forward.dot(up).clamp(-1.0, 1.0).acos();
+    // Positive tilt looks down, away from up.
+    let tilt = (dy * ORBIT_RADIANS_PER_POINT).clamp(
+        POLE_MARGIN - angle_from_up,
+        std::f32::consts::PI - POLE_MARGIN - angle_from_up,
+    );
+    let forward = Quat::from_axis_angle(right, -tilt) * forward;
+    let view_up = right.cross(forward);
+    let position =
+        camera.position + right * movement.x + view_up * movement.y + forward * movement.z;
+    Camera {
+        position,
+        look_at: position + forward * distance,
+        ..*camera
+    }
+}
+
 /// Moves the view and its pivot in the view plane by `dx`, `dy` points, so that what is
 /// at the pivot follows the mouse in a viewport `viewport_height` points tall.
 pub fn pan(camera: &Camera, dx: f32, dy: f32, viewport_height: f32) -> Camera {
@@ -62,9 +91,8 @@ pub fn zoom(camera: &Camera, steps: f32) -> Camera {
     }
 }
 
-/// Keeps the view's direction and field of view and moves it back until every object
-/// fits, with the pivot at the centre of their bounds (Blender's Frame All, Home).
-pub fn frame_all(camera: &Camera, scene: &Scene) -> Camera {
+/// The world-space bounds of every object; None for a scene without geometry.
+fn scene_bounds(scene: &Scene) -> Option<(Vec3, Vec3)> {
     let mut lo = Vec3::splat(f32::INFINITY);
     let mut hi = Vec3::splat(f32::NEG_INFINITY);
     for instance in &scene.instances {
@@ -74,9 +102,21 @@ pub fn frame_all(camera: &Camera, scene: &Scene) -> Camera {
             hi = hi.max(w);
         }
     }
-    if lo.x > hi.x {
+    (lo.x <= hi.x).then_some((lo, hi))
+}
+
+/// The diagonal of the scene's bounds (1 for a scene without geometry): what fly speed
+/// scales with, so that a room and a city both take seconds to cross.
+pub fn scene_size(scene: &Scene) -> f32 {
+    scene_bounds(scene).map_or(1.0, |(lo, hi)| (hi - lo).length())
+}
+
+/// Keeps the view's direction and field of view and moves it back until every object
+/// fits, with the pivot at the centre of their bounds (Blender's Frame All, Home).
+pub fn frame_all(camera: &Camera, scene: &Scene) -> Camera {
+    let Some((lo, hi)) = scene_bounds(scene) else {
         return *camera;
-    }
+    };
     let centre = (lo + hi) * 0.5;
     let radius = ((hi - lo).length() * 0.5).max(1e-4);
     let (_, _, forward) = camera.frame();
@@ -129,6 +169,25 @@ mod tests {
         let c = zoom(&zoom(&camera(), 3.0), -3.0);
         assert!((c.position - camera().position).length() < 1e-4);
         assert!((zoom(&camera(), 1.0).position.z) < 10.0);
+    }
+
+    #[test]
+    fn fly_moves_along_the_view_and_turns_in_place() {
+        let before = camera();
+        let ahead = fly(&before, 0.0, 0.0, Vec3::new(0.0, 0.0, 2.0));
+        let direction = (before.look_at - before.position).normalize();
+        assert!((ahead.position - (before.position + direction * 2.0)).length() < 1e-4);
+        let turned = fly(&before, 120.0, 0.0, Vec3::ZERO);
+        assert_eq!(turned.position, before.position, "turning does not move");
+        let new_direction = (turned.look_at - turned.position).normalize();
+        assert!(new_direction.dot(direction) < 0.9, "{new_direction:?}");
+        let distance = (turned.look_at - turned.position).length();
+        assert!((distance - (before.look_at - before.position).length()).abs() < 1e-3);
+        // Dragging the mouse down looks down, and never past straight down.
+        let down = fly(&before, 0.0, 1e5, Vec3::ZERO);
+        let d = (down.look_at - down.position).normalize();
+        assert!(d.y < -0.99 && d.is_finite(), "{d:?}");
+        assert!(down.validate().is_ok());
     }
 
     #[test]

@@ -250,6 +250,41 @@ impl PluginHost {
         Ok(state.finish())
     }
 
+    /// Writes `film` to `path` with the exporter plugin for its extension, or else with
+    /// the host's own writer (PNG, JPEG, EXR).
+    pub fn write_image(&self, path: &Path, film: &ExportFilm, options: &str) -> Result<(), String> {
+        if self.handles(PluginKind::Exporter, path) {
+            self.export(path, film, options).map_err(|e| e.to_string())
+        } else {
+            crate::film::output::write_image(path, film, options).map_err(|e| e.to_string())
+        }
+    }
+
+    /// The extensions images can be written with: the exporter plugins' and the host's.
+    pub fn export_extensions(&self) -> Vec<String> {
+        let mut extensions: Vec<String> = ["png", "jpg", "exr"].map(String::from).into();
+        for plugin in self.plugins() {
+            if plugin.kind == PluginKind::Exporter {
+                extensions.extend(plugin.extensions.iter().cloned());
+            }
+        }
+        extensions.sort();
+        extensions.dedup();
+        extensions
+    }
+
+    /// The extensions the importer plugins read.
+    pub fn import_extensions(&self) -> Vec<String> {
+        let mut extensions: Vec<String> = self
+            .plugins()
+            .filter(|p| p.kind == PluginKind::Importer)
+            .flat_map(|p| p.extensions.iter().cloned())
+            .collect();
+        extensions.sort();
+        extensions.dedup();
+        extensions
+    }
+
     /// Writes `film` to `path` with the exporter for its extension.
     pub fn export(&self, path: &Path, film: &ExportFilm, options: &str) -> Result<(), PluginError> {
         let plugin = self.find(PluginKind::Exporter, path)?;

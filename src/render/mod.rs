@@ -9,6 +9,7 @@
 
 pub mod context;
 pub mod environment_cdf;
+mod export;
 mod film_pieces;
 pub mod gpu_scene;
 pub mod kernel;
@@ -20,6 +21,7 @@ mod renderer;
 pub mod tables;
 
 pub use context::{Backend, GpuContext, GpuError};
+pub use export::export_film;
 pub use film_pieces::memory_check;
 pub use renderer::{
     Aovs, Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer,

@@ -1,0 +1,317 @@
+//! The Render and World tabs of the properties editor, as Blender has them: the render
+//! settings the scene file carries (resolution with presets, samples, bounces), the
+//! editor's own (seed, view transform, exposure, the viewport's sample limit), the final
+//! render's button, progress and export; and the environment (colour, map, strength,
+//! rotation). Document settings change through commands, like every other edit.
+
+use egui::{DragValue, RichText, Ui};
+use glam::Vec3;
+
+use crate::film::tonemap::Tonemap;
+
+use super::document::{Command, Document, GestureId};
+use super::final_render::RenderState;
+use super::inspector::{Edit, float_row, gesture, section};
+
+/// Resolution presets (Blender's Format presets, in the order of the list).
+pub const RESOLUTION_PRESETS: [(&str, u32, u32); 5] = [
+    ("4K UHD", 3840, 2160),
+    ("Full HD", 1920, 1080),
+    ("HD 720p", 1280, 720),
+    ("Square 1080", 1080, 1080),
+    ("1080 × 720", 1080, 720),
+];
+
+/// The editor's settings that are not part of the document.
+pub struct ViewOptions {
+    pub seed: u32,
+    pub exposure_ev: f32,
+    pub tonemap: Tonemap,
+    /// Samples per pixel after which the viewport stops accumulating.
+    pub viewport_samples: u32,
+    /// Options for the image writer on export (`bits=16`, `quality=90`, …).
+    pub export_options: String,
+}
+
+/// What the Render tab asks of the app.
+pub enum RenderAction {
+    Edit(Edit),
+    StartRender,
+    CancelRender,
+    ShowResult,
+    Export,
+}
+
+/// The Render tab. `render` is the state of the last final render, if any.
+pub fn render_tab_ui(
+    ui: &mut Ui,
+    document: &Document,
+    options: &mut ViewOptions,
+    render: Option<RenderState>,
+) -> Vec<RenderAction> {
+    let mut actions = Vec::new();
+    let mut settings = document.scene().settings;
+    let before = settings;
+    let mut changed: Option<Option<GestureId>> = None;
+    section(ui, "Format", |ui| {
+        let label = ui.label("Preset");
+        let current = RESOLUTION_PRESETS
+            .iter()
+            .find(|(_, w, h)| (*w, *h) == (settings.width, settings.height))
+            .map_or("Custom", |(name, _, _)| *name);
+        egui::ComboBox::from_id_salt("resolution preset")
+            .selected_text(current)
+            .show_ui(ui, |ui| {
+                for (name, w, h) in RESOLUTION_PRESETS {
+                    let text = format!("{name}  ({w}×{h})");
+                    if ui
+                        .selectable_label((w, h) == (settings.width, settings.height), text)
+                        .clicked()
+                    {
+                        (settings.width, settings.height) = (w, h);
+                        changed = Some(None);
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
+        for (name, value) in [
+            ("Resolution X", &mut settings.width),
+            ("Resolution Y", &mut settings.height),
+        ] {
+            let label = ui.label(name);
+            let r = ui
+                .add(DragValue::new(value).range(1..=32768).suffix(" px"))
+                .labelled_by(label.id);
+            if r.changed() {
+                changed = Some(gesture(&r));
+            }
+            ui.end_row();
+        }
+    });
+    section(ui, "Sampling", |ui| {
+        let label = ui.label("Samples");
+        let r = ui
+            .add(DragValue::new(&mut settings.samples_per_pixel).range(1..=1 << 20))
+            .labelled_by(label.id);
+        if r.changed() {
+            changed = Some(gesture(&r));
+        }
+        ui.end_row();
+        let label = ui.label("Max Bounces");
+        let r = ui
+            .add(DragValue::new(&mut settings.max_bounces).range(0..=1024))
+            .labelled_by(label.id);
+        if r.changed() {
+            changed = Some(gesture(&r));
+        }
+        ui.end_row();
+        let label = ui
+            .label("Seed")
+            .on_hover_text("The same seed renders the same image; another gives other noise.");
+        ui.add(DragValue::new(&mut options.seed))
+            .labelled_by(label.id);
+        ui.end_row();
+        let label = ui
+            .label("Viewport Samples")
+            .on_hover_text("The viewport stops refining after this many samples per pixel.");
+        ui.add(DragValue::new(&mut options.viewport_samples).range(1..=65536))
+            .labelled_by(label.id);
+        ui.end_row();
+    });
+    if let Some(gesture) = changed.filter(|_| settings != before) {
+        actions.push(RenderAction::Edit(Edit {
+            command: Command::SetSettings(settings),
+            gesture,
+        }));
+    }
+    section(ui, "Color Management", |ui| {
+        let label = ui.label("View Transform");
+        egui::ComboBox::from_id_salt("view transform")
+            // The viewport's display pass has AgX and Standard (`display.rs`); the
+            // editor offers what it can show.
+            .selected_text(match options.tonemap {
+                Tonemap::Agx => "AgX",
+                _ => "Standard",
+            })
+            .show_ui(ui, |ui| {
+                ui.selectable_value(&mut options.tonemap, Tonemap::Agx, "AgX");
+                ui.selectable_value(&mut options.tonemap, Tonemap::None, "Standard");
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
+        float_row(
+            ui,
+            "Exposure",
+            &mut options.exposure_ev,
+            0.05,
+            -10.0..=10.0,
+            "Stops (EV) applied before the view transform.",
+        );
+    });
+    ui.add_space(8.0);
+    render_controls(ui, options, render, &mut actions);
+    actions
+}
+
+fn render_controls(
+    ui: &mut Ui,
+    options: &mut ViewOptions,
+    render: Option<RenderState>,
+    actions: &mut Vec<RenderAction>,
+) {
+    let running = matches!(
+        render,
+        Some(RenderState::Preparing | RenderState::Rendering { .. })
+    );
+    ui.horizontal(|ui| {
+        if ui
+            .add_enabled(!running, egui::Button::new("Render Image"))
+            .on_hover_text("F12")
+            .clicked()
+        {
+            actions.push(RenderAction::StartRender);
+        }
+        if running && ui.button("Cancel").clicked() {
+            actions.push(RenderAction::CancelRender);
+        }
+    });
+    match &render {
+        Some(RenderState::Preparing) => {
+            ui.add(egui::ProgressBar::new(0.0).text("Preparing the kernel…"));
+        }
+        Some(RenderState::Rendering { fraction, elapsed }) => {
+            let remaining = if *fraction > 0.0 {
+                let left = elapsed.as_secs_f64() * (1.0 - fraction) / fraction;
+                format!(", {left:.0} s left")
+            } else {
+                String::new()
+            };
+            ui.add(
+                egui::ProgressBar::new(*fraction as f32)
+                    .show_percentage()
+                    .text(format!(
+                        "{:.0} %  ·  {:.1} s{remaining}",
+                        fraction * 100.0,
+                        elapsed.as_secs_f64()
+                    )),
+            );
+        }
+        Some(RenderState::Finished(result)) => {
+            ui.label(format!(
+                "Rendered {}×{} at {:.1} spp in {:.2} s{}",
+                result.film.width,
+                result.film.height,
+                result.samples_per_pixel,
+                result.elapsed.as_secs_f64(),
+                if result.completed { "" } else { " (cancelled)" }
+            ));
+            ui.horizontal(|ui| {
+                if ui.button("Show Render").clicked() {
+                    actions.push(RenderAction::ShowResult);
+                }
+                if ui.button("Export…").clicked() {
+                    actions.push(RenderAction::Export);
+                }
+            });
+        }
+        Some(RenderState::Failed(message)) => {
+            ui.colored_label(
+                ui.visuals().error_fg_color,
+                format!("Render failed: {message}"),
+            );
+        }
+        None => {}
+    }
+    ui.horizontal(|ui| {
+        let label = ui
+            .label("Export options")
+            .on_hover_text("PNG: bits=16 · JPEG: quality=90 · EXR: compression=zip|piz|none");
+        ui.add(egui::TextEdit::singleline(&mut options.export_options).desired_width(160.0))
+            .labelled_by(label.id);
+    });
+}
+
+/// What the World tab asks of the app.
+pub enum WorldAction {
+    Edit(Edit),
+    LoadMap,
+}
+
+/// The World tab: the uniform environment, or the environment map that replaces it.
+pub fn world_tab_ui(ui: &mut Ui, document: &Document) -> Vec<WorldAction> {
+    let mut actions = Vec::new();
+    let scene = document.scene();
+    section(ui, "Surface", |ui| {
+        // Shown as a colour and a strength, as Blender's Background node has them.
+        let radiance = scene.environment;
+        let strength = radiance.max_element().max(1.0);
+        let mut color = (radiance / strength).to_array();
+        let mut new_strength = strength;
+        let label = ui
+            .label("Color")
+            .on_hover_text("Linear RGB; shown where no environment map is set.");
+        let r = ui.color_edit_button_rgb(&mut color).labelled_by(label.id);
+        ui.end_row();
+        let mut g = r.changed().then(|| gesture(&r));
+        if let Some(gs) = float_row(ui, "Strength", &mut new_strength, 0.01, 0.0..=1e6, "") {
+            g = Some(gs);
+        }
+        if let Some(gesture) = g {
+            let value = Vec3::from(color) * new_strength;
+            if value != radiance {
+                actions.push(WorldAction::Edit(Edit {
+                    command: Command::SetEnvironmentColor(value),
+                    gesture,
+                }));
+            }
+        }
+    });
+    section(ui, "Environment Map", |ui| match &scene.environment_map {
+        Some(map) => {
+            ui.label("Image");
+            ui.horizontal(|ui| {
+                ui.label(RichText::new(format!("{}×{}", map.width, map.height)).weak());
+                if ui.button("Replace…").clicked() {
+                    actions.push(WorldAction::LoadMap);
+                }
+                if ui.button("Remove").clicked() {
+                    actions.push(WorldAction::Edit(Edit {
+                        command: Command::SetEnvironmentMap(None),
+                        gesture: None,
+                    }));
+                }
+            });
+            ui.end_row();
+            let (mut strength, mut rotation) = (map.strength, map.rotation_degrees);
+            let a = float_row(ui, "Map Strength", &mut strength, 0.01, 0.0..=1e6, "");
+            let b = float_row(
+                ui,
+                "Rotation",
+                &mut rotation,
+                0.5,
+                -360.0..=360.0,
+                "Degrees about the up (+Y) axis.",
+            );
+            if let Some(gesture) = a.or(b) {
+                actions.push(WorldAction::Edit(Edit {
+                    command: Command::SetEnvironmentMapParams {
+                        strength,
+                        rotation_degrees: rotation,
+                    },
+                    gesture,
+                }));
+            }
+        }
+        None => {
+            ui.label("Image");
+            if ui.button("Load…").clicked() {
+                actions.push(WorldAction::LoadMap);
+            }
+            ui.end_row();
+        }
+    });
+    actions
+}
