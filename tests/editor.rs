@@ -10,6 +10,8 @@ use egui::accesskit::{self, Role};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use glam::Vec3;
+use kiln::editor::final_render::RenderState;
+use kiln::editor::session::SessionStore;
 use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs, Selection};
 use kiln::plugin::PluginHost;
 
@@ -22,6 +24,16 @@ fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
 }
 
 fn harness_with(dialogs: ScriptedDialogs, plugins: PluginHost) -> Harness<'static, EditorApp> {
+    harness_in(dialogs, plugins, None, kiln::editor::AUTOSAVE_EVERY)
+}
+
+/// The editor with a state folder (recent files, autosaves) and autosave interval.
+fn harness_in(
+    dialogs: ScriptedDialogs,
+    plugins: PluginHost,
+    state_dir: Option<PathBuf>,
+    autosave_every: Duration,
+) -> Harness<'static, EditorApp> {
     if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
         // SAFETY: set before any thread of this test starts a device.
         unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
@@ -37,8 +49,8 @@ fn harness_with(dialogs: ScriptedDialogs, plugins: PluginHost) -> Harness<'stati
                     dialogs: Box::new(dialogs),
                     plugins,
                     sample_limit: SAMPLE_LIMIT,
-                    state_dir: None,
-                    autosave_every: kiln::editor::AUTOSAVE_EVERY,
+                    state_dir,
+                    autosave_every,
                 },
             )
         })
@@ -66,11 +78,27 @@ fn samples_done(app: &EditorApp) -> bool {
 
 /// Sets the `axis`-th field (0 = X) of the inspector row `row` as a screen reader would.
 fn set_field(harness: &mut Harness<'_, EditorApp>, row: &str, axis: usize, value: f64) {
-    let fields: Vec<_> = harness
+    let count = harness
         .get_all_by_role_and_label(Role::SpinButton, row)
+        .count();
+    assert_eq!(count, 3, "the {row} row has X, Y and Z");
+    set_nth_field(harness, row, axis, value);
+}
+
+/// Sets the one numeric field labelled `label`.
+fn set_value(harness: &mut Harness<'_, EditorApp>, label: &str, value: f64) {
+    let count = harness
+        .get_all_by_role_and_label(Role::SpinButton, label)
+        .count();
+    assert_eq!(count, 1, "one field is labelled {label}");
+    set_nth_field(harness, label, 0, value);
+}
+
+fn set_nth_field(harness: &mut Harness<'_, EditorApp>, label: &str, index: usize, value: f64) {
+    let fields: Vec<_> = harness
+        .get_all_by_role_and_label(Role::SpinButton, label)
         .collect();
-    assert_eq!(fields.len(), 3, "the {row} row has X, Y and Z");
-    let (target_node, target_tree) = fields[axis].accesskit_node().locate();
+    let (target_node, target_tree) = fields[index].accesskit_node().locate();
     harness.event(egui::Event::AccessKitActionRequest(
         accesskit::ActionRequest {
             action: accesskit::Action::SetValue,
@@ -292,4 +320,178 @@ fn a_gltf_opens_through_the_importer_plugin_and_saves_as_a_kiln_scene() {
     harness.step();
     assert_eq!(harness.state().document().path(), Some(saved.as_path()));
     assert_eq!(kiln::scene::load_scene(&saved).unwrap(), imported);
+}
+
+#[test]
+fn render_image_runs_in_the_background_and_exports_the_result() {
+    let dir = tempfile::tempdir().unwrap();
+    let png = dir.path().join("render.png");
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.export.push_back(png.clone());
+    let mut harness = harness(dialogs);
+    harness.step();
+
+    // The Render tab sets the document's render settings, one undo step each.
+    harness.get_by_label("📷 Render").click();
+    harness.step();
+    set_value(&mut harness, "Resolution X", 48.0);
+    set_value(&mut harness, "Resolution Y", 32.0);
+    set_value(&mut harness, "Samples", 3.0);
+    let settings = harness.state().document().scene().settings;
+    assert_eq!(
+        (settings.width, settings.height, settings.samples_per_pixel),
+        (48, 32, 3)
+    );
+    assert!(harness.query_by_label("Render Image").is_some());
+
+    // F12 renders in the background; frames keep coming meanwhile.
+    harness.key_press(egui::Key::F12);
+    harness.step();
+    assert!(harness.state().render_state().is_some(), "a render started");
+    step_until(&mut harness, "the final render", |app| {
+        matches!(app.render_state(), Some(RenderState::Finished(_)))
+    });
+    let Some(RenderState::Finished(result)) = harness.state().render_state() else {
+        unreachable!()
+    };
+    assert_eq!((result.film.width, result.film.height), (48, 32));
+    assert!(result.completed);
+    assert!((result.samples_per_pixel - 3.0).abs() < 1e-9);
+    // The Cornell box is lit: the result is not black.
+    let mean = result.film.radiance.iter().sum::<f32>() / result.film.radiance.len() as f32;
+    assert!(mean > 0.01, "mean radiance {mean}");
+
+    // Export… writes it through the image writers.
+    harness
+        .query_all_by_label("Export…")
+        .next()
+        .expect("an Export button")
+        .click();
+    harness.step();
+    assert_eq!(harness.state().error(), None);
+    let image = image::open(&png).expect("a PNG was written");
+    assert_eq!((image.width(), image.height()), (48, 32));
+}
+
+#[test]
+fn duplicate_and_delete_are_undoable_and_a_duplicate_shares_its_mesh() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    let start = harness.state().document().scene().clone();
+    harness.get_by_label("block").click();
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::D);
+    harness.step();
+    let doc = harness.state().document();
+    let copy = doc.objects().len() - 1;
+    assert_eq!(doc.objects().len(), start.instances.len() + 1);
+    assert_eq!(doc.objects()[copy].name, "block.002");
+    assert_eq!(doc.scene().instances[copy], doc.scene().instances[6]);
+    assert_eq!(doc.scene().meshes.len(), start.meshes.len(), "no new mesh");
+    assert_eq!(doc.selection, Some(Selection::Object(copy)));
+    // X deletes the selection (the copy).
+    harness.key_press(egui::Key::X);
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().instances.len(),
+        start.instances.len()
+    );
+    assert_eq!(harness.state().document().selection, None);
+    for _ in 0..2 {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        harness.step();
+    }
+    assert_eq!(*harness.state().document().scene(), start);
+}
+
+#[test]
+fn an_import_adds_to_the_scene_as_one_undo_step() {
+    let exe = std::env::current_exe().unwrap();
+    let mut plugins = PluginHost::default();
+    plugins.load_dir(exe.parent().unwrap(), true);
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("quad.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.import.push_back(glb);
+    let mut harness = harness_with(dialogs, plugins);
+    harness.step();
+    let start = harness.state().document().scene().clone();
+    harness.get_by_label("File").click();
+    harness.step();
+    harness.get_by_label("Import…").click();
+    harness.step();
+    assert_eq!(harness.state().error(), None);
+    let scene = harness.state().document().scene().clone();
+    assert_eq!(scene.instances.len(), start.instances.len() + 1);
+    assert_eq!(scene.triangle_count(), start.triangle_count() + 2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(*harness.state().document().scene(), start);
+}
+
+#[test]
+fn an_autosave_left_by_a_crash_is_offered_and_recovered() {
+    let state = tempfile::tempdir().unwrap();
+    // What a crashed editor leaves: an autosave of an edited Cornell box in a folder
+    // named after a process that no longer runs.
+    let mut edited = kiln::scene::default_scene().unwrap();
+    edited.environment = Vec3::new(0.1, 0.2, 0.3);
+    let store = SessionStore::new(state.path().to_owned());
+    store.autosave(&edited, &[], None).unwrap();
+    let recovery = state.path().join("recovery");
+    std::fs::rename(
+        recovery.join(std::process::id().to_string()),
+        recovery.join(u32::MAX.to_string()),
+    )
+    .unwrap();
+
+    let mut harness = harness_in(
+        ScriptedDialogs::default(),
+        PluginHost::default(),
+        Some(state.path().to_owned()),
+        Duration::ZERO,
+    );
+    harness.step();
+    assert!(harness.state().offered_recovery().is_some());
+    assert!(harness.query_by_label("Recover unsaved work?").is_some());
+    harness.get_by_label("Recover").click();
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().environment,
+        edited.environment
+    );
+    assert!(
+        harness.state().document().is_dirty(),
+        "recovered work is unsaved"
+    );
+    assert!(store.recovery().is_none(), "the offered autosave is gone");
+
+    // This session autosaves its own unsaved work (every frame, as configured here).
+    step_until(&mut harness, "an autosave", |_| {
+        recovery
+            .join(std::process::id().to_string())
+            .join("autosave.kiln")
+            .is_file()
+    });
+}
+
+#[test]
+fn new_asks_about_unsaved_changes_and_starts_an_empty_scene() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    harness.get_by_label("block").click();
+    harness.step();
+    harness.key_press(egui::Key::X);
+    harness.step();
+    assert!(harness.state().document().is_dirty());
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::N);
+    harness.step();
+    assert!(harness.state().is_prompting());
+    harness.get_by_label("Don't Save").click();
+    harness.step();
+    let scene = harness.state().document().scene();
+    assert!(scene.instances.is_empty() && scene.lights.is_empty());
+    assert!(!harness.state().document().is_dirty());
+    assert_eq!(harness.state().document().path(), None);
 }

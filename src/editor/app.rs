@@ -765,9 +765,9 @@ impl EditorApp {
                 ui.separator();
                 ui.horizontal(|ui| {
                     for (tab, name) in [
-                        (Tab::Object, "Object"),
-                        (Tab::Render, "Render"),
-                        (Tab::World, "World"),
+                        (Tab::Object, "▣ Object"),
+                        (Tab::Render, "📷 Render"),
+                        (Tab::World, "🌐 World"),
                     ] {
                         ui.selectable_value(&mut self.tab, tab, RichText::new(name).strong());
                     }
