@@ -495,3 +495,27 @@ fn new_asks_about_unsaved_changes_and_starts_an_empty_scene() {
     assert!(!harness.state().document().is_dirty());
     assert_eq!(harness.state().document().path(), None);
 }
+
+/// Pixels that may differ from the snapshot beyond kittest's colour tolerance (0.6, in
+/// squared YIQ distance): none. The viewport shows a fixed sample count of a deterministic
+/// render, so the window is the same image on every run on the same adapter.
+const SNAPSHOT_FAILED_PIXELS: usize = 0;
+
+#[test]
+fn the_main_window_matches_its_snapshot() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.get_by_label("block").click();
+    step_until(&mut harness, "the first samples", samples_done);
+    let image = harness.render().expect("the window renders");
+    // The status line (samples per second, elapsed time) differs from run to run: the
+    // snapshot stops above it.
+    let ppp = harness.ctx.pixels_per_point();
+    let viewport = harness.state().viewport_rect().unwrap();
+    let height = (viewport.bottom() * ppp).floor() as u32;
+    let window = image::imageops::crop_imm(&image, 0, 0, image.width(), height).to_image();
+    egui_kittest::image_snapshot_options(
+        &window,
+        "editor_main_window",
+        &egui_kittest::SnapshotOptions::new().max_failed_pixels(SNAPSHOT_FAILED_PIXELS),
+    );
+}
