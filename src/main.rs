@@ -84,6 +84,10 @@ enum Command {
         #[arg(long, default_value_t = kiln::editor::DEFAULT_SAMPLE_LIMIT,
               value_parser = clap::value_parser!(u32).range(1..))]
         samples: u32,
+        /// Close the window once the viewport holds --samples samples and print what it
+        /// rendered (smoke tests, scripted screenshots); fails if the viewport failed.
+        #[arg(long)]
+        quit_when_done: bool,
     },
     /// List the GPU adapters and the one Kiln would use.
     Info,
@@ -236,21 +240,41 @@ fn ensure_runtime_dir() {
 
 /// Opens the editor's window; returns when it is closed. The editor picks its adapter as
 /// wgpu does for a window (`WGPU_BACKEND` chooses the API).
-fn edit(file: Option<PathBuf>, samples: u32, plugins: PluginHost) -> Result<()> {
+fn edit(
+    file: Option<PathBuf>,
+    samples: u32,
+    quit_when_done: bool,
+    plugins: PluginHost,
+) -> Result<()> {
     let import_extensions = plugins
         .plugins()
         .filter(|p| p.kind == PluginKind::Importer)
         .flat_map(|p| p.extensions.clone())
         .collect();
-    kiln::editor::run(kiln::editor::EditorOptions {
+    let report = kiln::editor::run(kiln::editor::EditorOptions {
         file,
         dialogs: Box::new(kiln::editor::NativeDialogs { import_extensions }),
         plugins,
         sample_limit: samples,
         state_dir: kiln::editor::session::SessionStore::default_dir(),
         autosave_every: kiln::editor::AUTOSAVE_EVERY,
+        quit_when_done,
     })
-    .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))
+    .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
+    if let Some(error) = report.error {
+        bail!("the viewport failed: {error}");
+    }
+    if quit_when_done {
+        eprintln!(
+            "viewport: {} spp at {}x{}, {:.0} k samples/s on {}",
+            report.samples,
+            report.size[0],
+            report.size[1],
+            report.samples_per_second / 1e3,
+            report.adapter
+        );
+    }
+    Ok(())
 }
 
 fn main() -> ExitCode {
@@ -274,7 +298,11 @@ fn main() -> ExitCode {
     let plugins = || PluginHost::discover(&cli.plugin_dirs);
     let result = match cli.command {
         Command::Render(args) => render(args, backend, &plugins()),
-        Command::Edit { file, samples } => edit(file, samples, plugins()),
+        Command::Edit {
+            file,
+            samples,
+            quit_when_done,
+        } => edit(file, samples, quit_when_done, plugins()),
         Command::Plugins => list_plugins(&plugins()),
         Command::Import { file, output } => import(&plugins(), &file, &output),
         Command::Info => info(backend),

@@ -51,6 +51,7 @@ fn harness_in(
                     sample_limit: SAMPLE_LIMIT,
                     state_dir,
                     autosave_every,
+                    quit_when_done: false,
                 },
             )
         })

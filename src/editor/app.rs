@@ -46,6 +46,21 @@ pub struct EditorOptions {
     pub state_dir: Option<PathBuf>,
     /// How often a changed document is autosaved for crash recovery.
     pub autosave_every: Duration,
+    /// Close the window once the viewport holds `sample_limit` samples (smoke tests,
+    /// scripted screenshots); [`RunReport`] says what it rendered.
+    pub quit_when_done: bool,
+}
+
+/// What an editor session rendered, for the caller of [`super::run`].
+#[derive(Clone, Debug, Default)]
+pub struct RunReport {
+    /// Samples per pixel in the viewport when the window closed.
+    pub samples: u32,
+    pub samples_per_second: f64,
+    pub size: [u32; 2],
+    pub adapter: String,
+    /// The viewport's error, if it had one when the window closed.
+    pub error: Option<String>,
 }
 
 /// Blender autosaves every two minutes; the issue asks for one.
@@ -112,6 +127,8 @@ pub struct EditorApp {
     autosave_job: Option<JoinHandle<Result<(), String>>>,
     /// An autosave from a crashed session, offered at start.
     recovery: Option<Recovery>,
+    quit_when_done: bool,
+    report: Option<Arc<std::sync::Mutex<RunReport>>>,
     error: Option<String>,
     pending: Option<Pending>,
     allow_close: bool,
@@ -212,6 +229,8 @@ impl EditorApp {
             last_autosave: Instant::now(),
             autosaved_revision: None,
             autosave_job: None,
+            quit_when_done: options.quit_when_done,
+            report: None,
             error,
             pending: None,
             allow_close: false,
@@ -254,6 +273,11 @@ impl EditorApp {
     /// Whether the unsaved-changes prompt is showing.
     pub fn is_prompting(&self) -> bool {
         self.pending.is_some()
+    }
+
+    /// Where the session's [`RunReport`] is written when the window closes.
+    pub fn report_to(&mut self, report: Arc<std::sync::Mutex<RunReport>>) {
+        self.report = Some(report);
     }
 
     /// The state of the last final render, if one was started.
@@ -1335,6 +1359,15 @@ impl eframe::App for EditorApp {
         self.dialogs_ui(&ctx);
         self.update_title(&ctx);
         self.autosave();
+        if self.quit_when_done {
+            let status = self.viewport_status();
+            let done = status
+                .is_none_or(|s| s.error.is_some() || s.samples >= self.options.viewport_samples);
+            if done && !self.document.is_dirty() {
+                self.allow_close = true;
+                ctx.send_viewport_cmd(egui::ViewportCommand::Close);
+            }
+        }
         if self.autosave_job.is_some() || self.document.is_dirty() {
             // Come back for the autosave even when nothing else asks for a frame.
             ctx.request_repaint_after(self.autosave_every.min(Duration::from_secs(5)));
@@ -1342,6 +1375,20 @@ impl eframe::App for EditorApp {
     }
 
     fn on_exit(&mut self) {
+        if let Some(report) = &self.report {
+            let status = self.viewport_status().unwrap_or_default();
+            *report.lock().unwrap_or_else(|e| e.into_inner()) = RunReport {
+                samples: status.samples,
+                samples_per_second: status.samples_per_second(),
+                size: status.size,
+                adapter: self.gpu.as_ref().map(|g| g.describe()).unwrap_or_default(),
+                error: status.error.or_else(|| {
+                    self.gpu
+                        .is_none()
+                        .then(|| "no GPU device for the viewport".to_owned())
+                }),
+            };
+        }
         // A normal close: the autosave is not needed for recovery.
         if let Some(job) = self.autosave_job.take() {
             let _ = job.join();

@@ -29,7 +29,7 @@ pub mod session;
 pub mod settings_panel;
 pub mod viewport;
 
-pub use app::{AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions};
+pub use app::{AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, RunReport};
 pub use document::{Command, Document, Selection};
 pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};
 
@@ -76,10 +76,18 @@ pub fn native_options() -> eframe::NativeOptions {
 }
 
 /// Opens the editor's window and returns when it is closed.
-pub fn run(options: EditorOptions) -> Result<(), eframe::Error> {
+pub fn run(options: EditorOptions) -> Result<RunReport, eframe::Error> {
+    let report = Arc::new(std::sync::Mutex::new(RunReport::default()));
+    let app_report = Arc::clone(&report);
     eframe::run_native(
         "Kiln",
         native_options(),
-        Box::new(|cc| Ok(Box::new(EditorApp::new(cc, options)))),
-    )
+        Box::new(|cc| {
+            let mut app = EditorApp::new(cc, options);
+            app.report_to(app_report);
+            Ok(Box::new(app))
+        }),
+    )?;
+    let report = report.lock().unwrap_or_else(|e| e.into_inner()).clone();
+    Ok(report)
 }
