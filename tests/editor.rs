@@ -520,3 +520,111 @@ fn the_main_window_matches_its_snapshot() {
         &egui_kittest::SnapshotOptions::new().max_failed_pixels(SNAPSHOT_FAILED_PIXELS),
     );
 }
+
+fn pointer(harness: &mut Harness<'_, EditorApp>, pos: egui::Pos2, button: Option<bool>) {
+    harness.event(egui::Event::PointerMoved(pos));
+    if let Some(pressed) = button {
+        harness.event(egui::Event::PointerButton {
+            pos,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        });
+    }
+    harness.step();
+}
+
+#[test]
+fn g_x_moves_the_selection_along_x_in_one_step_and_esc_cancels_a_rotation() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    harness.get_by_label("block").click();
+    harness.step();
+    let rect = harness.state().viewport_rect().unwrap();
+    let start = harness.state().document().scene().instances[6].transform;
+    let centre = rect.center();
+    pointer(&mut harness, centre, None);
+    harness.key_press(egui::Key::G);
+    harness.step();
+    harness.key_press(egui::Key::X);
+    harness.step();
+    for dx in [20.0, 40.0, 60.0] {
+        pointer(&mut harness, centre + egui::vec2(dx, 15.0), None);
+    }
+    let moved = harness.state().document().scene().instances[6].transform;
+    assert!(
+        (moved.translation.x - start.translation.x).abs() > 1.0,
+        "{moved:?}"
+    );
+    assert!((moved.translation.y - start.translation.y).abs() < 1e-3);
+    assert!((moved.translation.z - start.translation.z).abs() < 1e-3);
+    assert_eq!(moved.matrix3, start.matrix3);
+    // A click confirms; the whole move is one undo step.
+    pointer(&mut harness, centre + egui::vec2(60.0, 15.0), Some(true));
+    pointer(&mut harness, centre + egui::vec2(60.0, 15.0), Some(false));
+    assert_eq!(
+        harness.state().document().selection,
+        Some(Selection::Object(6)),
+        "the confirming click does not select"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().instances[6].transform,
+        start
+    );
+    assert!(!harness.state().document().can_undo());
+
+    // R turns the object with the mouse; Esc puts it back and leaves no history.
+    pointer(&mut harness, centre + egui::vec2(80.0, 0.0), None);
+    harness.key_press(egui::Key::R);
+    harness.step();
+    pointer(&mut harness, centre + egui::vec2(0.0, -80.0), None);
+    assert_ne!(
+        harness.state().document().scene().instances[6].transform,
+        start
+    );
+    harness.key_press(egui::Key::Escape);
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().instances[6].transform,
+        start
+    );
+    assert!(!harness.state().document().can_undo() && !harness.state().document().can_redo());
+}
+
+#[test]
+fn dragging_the_gizmos_y_arrow_moves_the_selection_up() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    harness.get_by_label("block").click();
+    harness.step();
+    let rect = harness.state().viewport_rect().unwrap();
+    let start = harness.state().document().scene().instances[6].transform;
+    let view = kiln::editor::gizmo::ViewProjection {
+        camera: *harness.state().view(),
+        rect,
+    };
+    let arrows =
+        kiln::editor::gizmo::arrows(&view, &start, kiln::editor::gizmo::Orientation::Global)
+            .expect("the block is in front of the camera");
+    let (a, b) = arrows[1];
+    let grab = a + (b - a) * 0.6;
+    pointer(&mut harness, grab, None);
+    pointer(&mut harness, grab, Some(true));
+    for dy in [-10.0, -25.0, -40.0] {
+        pointer(&mut harness, grab + egui::vec2(5.0, dy), None);
+    }
+    pointer(&mut harness, grab + egui::vec2(5.0, -40.0), Some(false));
+    let moved = harness.state().document().scene().instances[6].transform;
+    assert!(moved.translation.y > start.translation.y + 1.0, "{moved:?}");
+    assert!((moved.translation.x - start.translation.x).abs() < 1e-3);
+    assert!((moved.translation.z - start.translation.z).abs() < 1e-3);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().instances[6].transform,
+        start,
+        "one drag, one undo step"
+    );
+}

@@ -20,6 +20,7 @@ use crate::scene::{Camera, Scene};
 use super::document::{Command, Document, GestureId, Selection};
 use super::files::{FileDialogs, open_document, save_document};
 use super::final_render::{FinalRender, RenderState};
+use super::gizmo::{self, Constraint, Mode, Orientation, ViewProjection};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
 use super::outliner::{Outliner, OutlinerAction};
@@ -83,6 +84,25 @@ enum Tab {
     World,
 }
 
+/// A modal transform under way (G, R, S, or a drag of a gizmo arrow).
+#[derive(Clone, Copy, Debug)]
+struct TransformTool {
+    mode: Mode,
+    object: usize,
+    start: glam::Affine3A,
+    /// Where the pointer was when the tool started.
+    from: egui::Pos2,
+    constraint: Option<Constraint>,
+    gesture: GestureId,
+    /// Whether a command was applied (a cancel then undoes it).
+    applied: bool,
+    /// Started by dragging a gizmo arrow: releasing the button confirms.
+    dragging: bool,
+}
+
+/// Gesture ids of transform tools, apart from the widget ids the panels use.
+const TOOL_GESTURES: GestureId = 1 << 63;
+
 /// Metres (scene units) per second of fly navigation, as a share of the scene's size.
 const FLY_SPEED: f32 = 0.25;
 
@@ -129,6 +149,9 @@ pub struct EditorApp {
     recovery: Option<Recovery>,
     quit_when_done: bool,
     report: Option<Arc<std::sync::Mutex<RunReport>>>,
+    tool: Option<TransformTool>,
+    orientation: Orientation,
+    tools_started: u64,
     error: Option<String>,
     pending: Option<Pending>,
     allow_close: bool,
@@ -231,6 +254,9 @@ impl EditorApp {
             autosave_job: None,
             quit_when_done: options.quit_when_done,
             report: None,
+            tool: None,
+            orientation: Orientation::Global,
+            tools_started: 0,
             error,
             pending: None,
             allow_close: false,
@@ -581,9 +607,10 @@ impl EditorApp {
                 self.apply(command, None);
             }
         }
-        if ctx.input(|i| {
+        let delete = ctx.input(|i| {
             i.key_pressed(Key::Delete) || (i.key_pressed(Key::X) && i.modifiers.is_none())
-        }) {
+        });
+        if delete && self.tool.is_none() {
             if let Some(command) = self
                 .document
                 .selection
@@ -762,6 +789,11 @@ impl EditorApp {
                     self.view = self.document.scene().camera;
                 }
                 ui.separator();
+                ui.label("Transform orientation");
+                ui.radio_value(&mut self.orientation, Orientation::Global, "Global");
+                ui.radio_value(&mut self.orientation, Orientation::Local, "Local");
+                ui.separator();
+                ui.weak("G / R / S: move, rotate, scale the selection (X Y Z: axis)");
                 ui.weak("Fly: hold the right mouse button, move with W A S D, Q E");
             });
         });
@@ -908,7 +940,11 @@ impl EditorApp {
             ((rect.width() * ppp).round() as u32).max(1),
             ((rect.height() * ppp).round() as u32).max(1),
         ];
-        self.navigate(ui, &response, rect);
+        let tool_was_active = self.tool.is_some();
+        self.transform_tool(ui, &response, rect);
+        if !tool_was_active && self.tool.is_none() {
+            self.navigate(ui, &response, rect);
+        }
 
         let scene = self.render_scene();
         let key = self.scene_key();
@@ -954,6 +990,7 @@ impl EditorApp {
             );
         }
         self.selection_outline(&painter, rect);
+        self.draw_gizmo(&painter, rect);
         if let Some(error) = &status.error {
             painter.text(
                 rect.left_top() + egui::vec2(12.0, 12.0),
@@ -1011,6 +1048,210 @@ impl EditorApp {
                 self.pick(pos, rect);
             }
         }
+    }
+
+    fn projection(&self, rect: egui::Rect) -> ViewProjection {
+        ViewProjection {
+            camera: self.view,
+            rect,
+        }
+    }
+
+    /// The selected object, if it is a visible object.
+    fn selected_object(&self) -> Option<usize> {
+        match self.document.selection {
+            Some(Selection::Object(i)) if self.document.objects().get(i)?.visible => Some(i),
+            _ => None,
+        }
+    }
+
+    /// Starts, steers, confirms and cancels the modal transform tools (G, R, S with X, Y,
+    /// Z constraints; a drag of a gizmo arrow).
+    fn transform_tool(&mut self, ui: &Ui, response: &egui::Response, rect: egui::Rect) {
+        let pointer = ui.input(|i| i.pointer.hover_pos());
+        let typing = ui.ctx().egui_wants_keyboard_input();
+        if self.tool.is_none() {
+            let Some(object) = self.selected_object() else {
+                return;
+            };
+            let start = self.document.scene().instances[object].transform;
+            let mut started = None;
+            // A drag that begins on a gizmo arrow moves along its axis.
+            if response.drag_started_by(PointerButton::Primary) {
+                let press = ui.input(|i| i.pointer.press_origin());
+                let arrows = gizmo::arrows(&self.projection(rect), &start, self.orientation);
+                if let (Some(arrows), Some(press)) = (arrows, press) {
+                    if let Some(axis) = gizmo::arrow_at(&arrows, press, 8.0) {
+                        started = Some((Mode::Move, Some(axis), press, true));
+                    }
+                }
+            }
+            let over_viewport = pointer.is_some_and(|p| rect.contains(p));
+            let idle = !ui.input(|i| i.pointer.any_down() || i.modifiers.any());
+            if started.is_none() && over_viewport && idle && !typing {
+                let key = ui.input(|i| {
+                    [
+                        (Key::G, Mode::Move),
+                        (Key::R, Mode::Rotate),
+                        (Key::S, Mode::Scale),
+                    ]
+                    .into_iter()
+                    .find(|(k, _)| i.key_pressed(*k))
+                    .map(|(_, mode)| mode)
+                });
+                if let (Some(mode), Some(p)) = (key, pointer) {
+                    started = Some((mode, None, p, false));
+                }
+            }
+            if let Some((mode, axis, from, dragging)) = started {
+                self.tools_started += 1;
+                self.tool = Some(TransformTool {
+                    mode,
+                    object,
+                    start,
+                    from,
+                    constraint: axis.map(|axis| Constraint {
+                        axis,
+                        orientation: self.orientation,
+                    }),
+                    gesture: TOOL_GESTURES + self.tools_started,
+                    applied: false,
+                    dragging,
+                });
+            }
+            return;
+        }
+        let Some(mut tool) = self.tool else {
+            return;
+        };
+        // X, Y, Z: constrain to the global axis, again for the local one, again for none.
+        if !tool.dragging && !typing {
+            for (axis, key) in [Key::X, Key::Y, Key::Z].into_iter().enumerate() {
+                if ui.input(|i| i.key_pressed(key)) {
+                    tool.constraint = match tool.constraint {
+                        Some(c) if c.axis == axis && c.orientation == Orientation::Global => {
+                            Some(Constraint {
+                                axis,
+                                orientation: Orientation::Local,
+                            })
+                        }
+                        Some(c) if c.axis == axis => None,
+                        _ => Some(Constraint {
+                            axis,
+                            orientation: Orientation::Global,
+                        }),
+                    };
+                }
+            }
+        }
+        if let Some(to) = pointer {
+            let transform = gizmo::modal_transform(
+                tool.mode,
+                &tool.start,
+                tool.constraint,
+                &self.projection(rect),
+                tool.from,
+                to,
+            );
+            let current = self
+                .document
+                .scene()
+                .instances
+                .get(tool.object)
+                .map(|i| i.transform);
+            if current.is_some_and(|c| c != transform) {
+                let command = Command::SetTransform {
+                    object: tool.object,
+                    transform,
+                };
+                match self.document.apply(command, Some(tool.gesture)) {
+                    Ok(()) => tool.applied = true,
+                    // A degenerate transform (zero scale) is skipped, not reported: the
+                    // next mouse position will do.
+                    Err(e) => tracing::debug!("transform tool: {e}"),
+                }
+            }
+        }
+        let (confirm, cancel) = ui.input(|i| {
+            let confirm = if tool.dragging {
+                !i.pointer.primary_down()
+            } else {
+                // On release: the click that confirms is over when the tool ends, so it
+                // does not also select.
+                i.pointer.primary_released() || i.key_pressed(Key::Enter)
+            };
+            let cancel = i.key_pressed(Key::Escape) || i.pointer.secondary_pressed();
+            (confirm, cancel)
+        });
+        if cancel {
+            if tool.applied {
+                self.document.undo();
+                // The undone drag is not something to redo.
+                self.document.forget_redo();
+            }
+            self.tool = None;
+        } else if confirm {
+            self.document.end_gesture();
+            self.tool = None;
+        } else {
+            self.tool = Some(tool);
+            ui.ctx().request_repaint();
+        }
+    }
+
+    /// The move gizmo's arrows on the selected object, and the active tool's axis.
+    fn draw_gizmo(&self, painter: &egui::Painter, rect: egui::Rect) {
+        let Some(object) = self.selected_object() else {
+            return;
+        };
+        let transform = self.document.scene().instances[object].transform;
+        let view = self.projection(rect);
+        if let Some(tool) = self.tool {
+            if let Some(c) = tool.constraint {
+                // The constraint axis through the object, as Blender draws it.
+                let origin: Vec3 = transform.translation.into();
+                let direction = gizmo::axis_direction(&tool.start, c);
+                let far = 1e3 * view.world_per_point(origin);
+                if let (Some(a), Some(b)) = (
+                    view.project(origin - direction * far),
+                    view.project(origin + direction * far),
+                ) {
+                    painter
+                        .line_segment([a, b], egui::Stroke::new(1.0, gizmo::AXIS_COLORS[c.axis]));
+                }
+            }
+            let label = format!(
+                "{:?}{}   (X Y Z: axis · click/Enter: confirm · Esc/right click: cancel)",
+                tool.mode,
+                tool.constraint.map_or(String::new(), |c| format!(
+                    " along {} {}",
+                    match c.orientation {
+                        Orientation::Global => "global",
+                        Orientation::Local => "local",
+                    },
+                    ["X", "Y", "Z"][c.axis]
+                ))
+            );
+            painter.text(
+                rect.left_bottom() + egui::vec2(12.0, -12.0),
+                egui::Align2::LEFT_BOTTOM,
+                label,
+                egui::FontId::proportional(14.0),
+                Color32::WHITE,
+            );
+            return;
+        }
+        let Some(arrows) = gizmo::arrows(&view, &transform, self.orientation) else {
+            return;
+        };
+        for (axis, (a, b)) in arrows.iter().enumerate() {
+            if (*b - *a).length() < 4.0 {
+                continue;
+            }
+            let color = gizmo::AXIS_COLORS[axis];
+            painter.arrow(*a, *b - *a, egui::Stroke::new(2.5, color));
+        }
+        painter.circle_filled(arrows[0].0, 3.0, Color32::WHITE);
     }
 
     /// Fly navigation while the right mouse button is held: the mouse turns the view, W A
@@ -1082,22 +1323,8 @@ impl EditorApp {
         if lo.x > hi.x {
             return;
         }
-        let (right, up, forward) = self.view.frame();
-        let tan_half = (self.view.fov_y_degrees.to_radians() * 0.5).tan();
-        let aspect = rect.width() / rect.height();
-        let project = |p: Vec3| -> Option<egui::Pos2> {
-            let rel = instance.transform.transform_point3(p) - self.view.position;
-            let z = rel.dot(forward);
-            if z <= 1e-6 {
-                return None;
-            }
-            let x = rel.dot(right) / z / (tan_half * aspect);
-            let y = rel.dot(up) / z / tan_half;
-            Some(egui::pos2(
-                rect.left() + (x + 1.0) * 0.5 * rect.width(),
-                rect.top() + (1.0 - y) * 0.5 * rect.height(),
-            ))
-        };
+        let view = self.projection(rect);
+        let project = |p: Vec3| view.project(instance.transform.transform_point3(p));
         let corner = |c: usize| {
             Vec3::new(
                 if c & 1 == 0 { lo.x } else { hi.x },
@@ -1347,8 +1574,8 @@ impl eframe::App for EditorApp {
             ctx.send_viewport_cmd(egui::ViewportCommand::CancelClose);
             self.pending = Some(Pending::Close);
         }
-        // A gesture lasts while a button is held.
-        if !ctx.input(|i| i.pointer.any_down()) {
+        // A gesture lasts while a button is held (a modal tool's, until it ends).
+        if !ctx.input(|i| i.pointer.any_down()) && self.tool.is_none() {
             self.document.end_gesture();
         }
         self.shortcuts(&ctx);

@@ -501,6 +501,12 @@ impl Document {
         self.open_gesture = None;
     }
 
+    /// Drops the redo history (after undoing something that was never meant to stay, such
+    /// as a cancelled transform tool).
+    pub fn forget_redo(&mut self) {
+        self.redo.clear();
+    }
+
     /// Reverts the last step; false when there is none.
     pub fn undo(&mut self) -> bool {
         self.transfer(true)

@@ -5,8 +5,8 @@
 //! - [`document`]: the scene and the editor's state of it, changed only by commands, with
 //!   undo/redo;
 //! - [`viewport`]: the progressive render on a worker thread, shown through
-//!   [`display`]'s GPU pass without read-back; [`navigation`] moves its view and [`pick`]
-//!   finds what a click hits;
+//!   [`display`]'s GPU pass without read-back; [`navigation`] moves its view, [`pick`]
+//!   finds what a click hits and [`gizmo`] moves, turns and scales the selection;
 //! - [`outliner`] and [`inspector`]: views of the document that return commands;
 //! - [`files`]: open, import and save, with the file dialogs behind a trait; [`session`]:
 //!   recent files and the autosave that recovers work after a crash;
@@ -21,6 +21,7 @@ pub mod display;
 pub mod document;
 pub mod files;
 pub mod final_render;
+pub mod gizmo;
 pub mod inspector;
 pub mod navigation;
 pub mod outliner;
