@@ -387,7 +387,15 @@ fn duplicate_and_delete_are_undoable_and_a_duplicate_shares_its_mesh() {
     let copy = doc.objects().len() - 1;
     assert_eq!(doc.objects().len(), start.instances.len() + 1);
     assert_eq!(doc.objects()[copy].name, "block.002");
-    assert_eq!(doc.scene().instances[copy], doc.scene().instances[6]);
+    let (copy_instance, original) = (&doc.scene().instances[copy], &doc.scene().instances[6]);
+    assert_eq!(
+        (
+            copy_instance.mesh,
+            copy_instance.material,
+            copy_instance.transform
+        ),
+        (original.mesh, original.material, original.transform)
+    );
     assert_eq!(doc.scene().meshes.len(), start.meshes.len(), "no new mesh");
     assert_eq!(doc.selection, Some(Selection::Object(copy)));
     // X deletes the selection (the copy).

@@ -204,6 +204,10 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
     scene.add_instance(full, textured, transform);
     scene.add_instance(bare, glowing, transform.inverse());
     scene.add_instance(bare, plain, Affine3A::from_translation(Vec3::Y));
+    // Object names (quotes and all) and a hidden object.
+    scene.instances[1].name = "Teapot \"one\"".into();
+    scene.instances[3].name = "hidden".into();
+    scene.instances[3].visible = false;
     scene.lights = vec![
         Light::Point {
             position: Vec3::new(0.0, 4.0, 0.0),
@@ -574,7 +578,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 Just((materials, meshes, camera, lights, sky, settings)),
                 names(m),
                 names(n),
-                prop::collection::vec((0..n, 0..m, transform()), 0..5),
+                prop::collection::vec((0..n, 0..m, transform(), "\\PC{0,6}", any::<bool>()), 0..5),
             )
         })
         .prop_map(
@@ -600,8 +604,11 @@ fn scene() -> impl Strategy<Value = Scene> {
                 for (mesh, name) in meshes.into_iter().zip(mesh_names) {
                     scene.add_mesh(Mesh { name, ..mesh });
                 }
-                for (mesh, material, transform) in instances {
+                for (mesh, material, transform, name, visible) in instances {
                     scene.add_instance(mesh, material, transform);
+                    let added = scene.instances.last_mut().unwrap();
+                    added.name = name;
+                    added.visible = visible;
                 }
                 scene
             },

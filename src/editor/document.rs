@@ -72,7 +72,6 @@ pub enum Command {
     InsertObject {
         object: usize,
         instance: Instance,
-        state: ItemState,
     },
     DeleteLight {
         light: usize,
@@ -104,11 +103,11 @@ pub enum Command {
     Truncate(Counts),
 }
 
-/// What an [`Command::Append`] adds: a scene's contents with the editor's state of them.
+/// What an [`Command::Append`] adds: a scene's contents (its objects named) with the
+/// editor's state of its lights.
 #[derive(Clone, Debug, PartialEq)]
 pub struct Appended {
     pub scene: Scene,
-    pub objects: Vec<ItemState>,
     pub lights: Vec<ItemState>,
 }
 
@@ -200,8 +199,9 @@ impl Trs {
 
 /// The scene being edited with the editor's state of it and its undo history.
 pub struct Document {
+    /// The objects' names and visibility live in the scene's instances (saved with it);
+    /// the lights' here.
     scene: Scene,
-    objects: Vec<ItemState>,
     lights: Vec<ItemState>,
     /// Images an importer embedded, written beside the scene when it is saved.
     images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
@@ -220,34 +220,28 @@ pub struct Document {
 }
 
 impl Document {
-    /// A document on `scene`, as read from `path` (None: not saved yet). Objects are named
-    /// after their mesh, with Blender's `.001` suffixes where a mesh is placed more than
-    /// once.
+    /// A document on `scene`, as read from `path` (None: not saved yet). Objects the file
+    /// did not name are named after their mesh, with Blender's `.001` suffixes where a
+    /// mesh is placed more than once.
     pub fn new(
-        scene: Scene,
+        mut scene: Scene,
         path: Option<PathBuf>,
         images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
     ) -> Self {
-        let mut objects = Vec::with_capacity(scene.instances.len());
-        let mut seen = std::collections::HashMap::<String, usize>::new();
-        for instance in &scene.instances {
-            let base = scene.meshes[instance.mesh].name.clone();
-            let base = if base.is_empty() {
-                "object".to_owned()
-            } else {
-                base
-            };
-            let count = seen.entry(base.clone()).or_default();
-            let name = if *count == 0 {
-                base
-            } else {
-                format!("{base}.{count:03}")
-            };
-            *count += 1;
-            objects.push(ItemState {
-                name,
-                visible: true,
-            });
+        let mut taken: std::collections::HashSet<String> =
+            scene.instances.iter().map(|i| i.name.clone()).collect();
+        for i in 0..scene.instances.len() {
+            if !scene.instances[i].name.is_empty() {
+                continue;
+            }
+            let base = &scene.meshes[scene.instances[i].mesh].name;
+            let base = if base.is_empty() { "object" } else { base };
+            let name = std::iter::once(base.to_owned())
+                .chain((1..).map(|n| format!("{base}.{n:03}")))
+                .find(|n| !taken.contains(n))
+                .expect("some suffix is free");
+            taken.insert(name.clone());
+            scene.instances[i].name = name;
         }
         let lights = scene
             .lights
@@ -260,7 +254,6 @@ impl Document {
             .collect();
         Self {
             scene,
-            objects,
             lights,
             images,
             selection: None,
@@ -282,9 +275,7 @@ impl Document {
 
     /// The scene as rendered: hidden objects and lights left out.
     pub fn render_scene(&self) -> Scene {
-        let mut scene = self.scene.clone();
-        let mut visible = self.objects.iter().map(|o| o.visible);
-        scene.instances.retain(|_| visible.next().unwrap_or(true));
+        let mut scene = self.scene.without_hidden();
         let mut visible = self.lights.iter().map(|l| l.visible);
         scene.lights.retain(|_| visible.next().unwrap_or(true));
         scene
@@ -292,7 +283,8 @@ impl Document {
 
     /// Maps an instance index of [`Document::render_scene`] back to the document's.
     pub fn object_of_rendered_instance(&self, rendered: usize) -> Option<usize> {
-        self.objects
+        self.scene
+            .instances
             .iter()
             .enumerate()
             .filter(|(_, o)| o.visible)
@@ -300,8 +292,16 @@ impl Document {
             .map(|(i, _)| i)
     }
 
-    pub fn objects(&self) -> &[ItemState] {
-        &self.objects
+    /// The objects' names and visibility, in the scene's order.
+    pub fn objects(&self) -> Vec<ItemState> {
+        self.scene
+            .instances
+            .iter()
+            .map(|i| ItemState {
+                name: i.name.clone(),
+                visible: i.visible,
+            })
+            .collect()
     }
 
     pub fn lights(&self) -> &[ItemState] {
@@ -319,7 +319,7 @@ impl Document {
     /// The name shown for a selectable item.
     pub fn name(&self, target: Selection) -> &str {
         match target {
-            Selection::Object(i) => self.objects.get(i).map_or("", |o| o.name.as_str()),
+            Selection::Object(i) => self.scene.instances.get(i).map_or("", |o| o.name.as_str()),
             Selection::Light(i) => self.lights.get(i).map_or("", |l| l.name.as_str()),
             Selection::Camera => "Camera",
         }
@@ -330,7 +330,7 @@ impl Document {
         Counts {
             meshes: self.scene.meshes.len(),
             materials: self.scene.materials.len(),
-            objects: self.objects.len(),
+            objects: self.scene.instances.len(),
             lights: self.lights.len(),
         }
     }
@@ -339,10 +339,8 @@ impl Document {
     /// numeric suffixes (`block` → `block.001`, `block.001` → `block.002`).
     pub fn unique_name(&self, base: &str) -> String {
         let taken = |n: &str| {
-            self.objects
-                .iter()
-                .chain(&self.lights)
-                .any(|item| item.name == n)
+            self.scene.instances.iter().any(|i| i.name == n)
+                || self.lights.iter().any(|l| l.name == n)
         };
         let stem = match base.rsplit_once('.') {
             Some((stem, digits))
@@ -366,14 +364,16 @@ impl Document {
     /// shares its mesh with the original, as Blender's linked duplicate does.
     pub fn duplicate(&self, target: Selection) -> Option<Command> {
         match target {
-            Selection::Object(i) => Some(Command::InsertObject {
-                object: self.objects.len(),
-                instance: self.scene.instances.get(i)?.clone(),
-                state: ItemState {
-                    name: self.unique_name(&self.objects[i].name),
-                    visible: self.objects[i].visible,
-                },
-            }),
+            Selection::Object(i) => {
+                let original = self.scene.instances.get(i)?;
+                Some(Command::InsertObject {
+                    object: self.scene.instances.len(),
+                    instance: Instance {
+                        name: self.unique_name(&original.name),
+                        ..original.clone()
+                    },
+                })
+            }
             Selection::Light(i) => Some(Command::InsertLight {
                 light: self.lights.len(),
                 value: self.scene.lights.get(i)?.clone(),
@@ -389,7 +389,7 @@ impl Document {
     /// The command that deletes `target`; None for the camera.
     pub fn delete(&self, target: Selection) -> Option<Command> {
         match target {
-            Selection::Object(object) if object < self.objects.len() => {
+            Selection::Object(object) if object < self.scene.instances.len() => {
                 Some(Command::DeleteObject { object })
             }
             Selection::Light(light) if light < self.lights.len() => {
@@ -417,13 +417,16 @@ impl Document {
                 visible: item.visible,
             }
         };
-        let objects = fresh.objects.iter().map(&mut unique).collect();
+        let mut scene = fresh.scene;
+        for instance in &mut scene.instances {
+            instance.name = unique(&ItemState {
+                name: std::mem::take(&mut instance.name),
+                visible: true,
+            })
+            .name;
+        }
         let lights = fresh.lights.iter().map(&mut unique).collect();
-        Command::Append(Box::new(Appended {
-            scene: fresh.scene,
-            objects,
-            lights,
-        }))
+        Command::Append(Box::new(Appended { scene, lights }))
     }
 
     /// Bumped by every applied, undone or redone command.
@@ -574,7 +577,7 @@ impl Document {
                 if !transform.is_finite() || det == 0.0 || !det.is_finite() {
                     return err(format!(
                         "the transform of \"{}\" must be finite and invertible (no zero scale)",
-                        self.objects[object].name
+                        self.scene.instances[object].name
                     ));
                 }
                 let old = std::mem::replace(&mut instance.transform, transform);
@@ -625,7 +628,7 @@ impl Document {
             }
             Command::Rename { target, name } => {
                 let slot = match target {
-                    Selection::Object(i) => self.objects.get_mut(i).map(|o| &mut o.name),
+                    Selection::Object(i) => self.scene.instances.get_mut(i).map(|o| &mut o.name),
                     Selection::Light(i) => self.lights.get_mut(i).map(|l| &mut l.name),
                     Selection::Camera => return err("the camera cannot be renamed".into()),
                 };
@@ -640,36 +643,31 @@ impl Document {
             }
             Command::SetVisible { target, visible } => {
                 let slot = match target {
-                    Selection::Object(i) => self.objects.get_mut(i),
-                    Selection::Light(i) => self.lights.get_mut(i),
+                    Selection::Object(i) => self.scene.instances.get_mut(i).map(|o| &mut o.visible),
+                    Selection::Light(i) => self.lights.get_mut(i).map(|l| &mut l.visible),
                     Selection::Camera => return err("the camera cannot be hidden".into()),
                 };
                 let Some(slot) = slot else {
                     return err(format!("nothing to hide at {target:?}"));
                 };
-                let old = std::mem::replace(&mut slot.visible, visible);
+                let old = std::mem::replace(slot, visible);
                 Ok(Command::SetVisible {
                     target,
                     visible: old,
                 })
             }
             Command::DeleteObject { object } => {
-                if object >= self.objects.len() {
+                if object >= self.scene.instances.len() {
                     return err(format!("no object {object}"));
                 }
                 self.selection = shifted_selection(self.selection, Selection::Object(object));
                 Ok(Command::InsertObject {
                     object,
                     instance: self.scene.instances.remove(object),
-                    state: self.objects.remove(object),
                 })
             }
-            Command::InsertObject {
-                object,
-                instance,
-                state,
-            } => {
-                if object > self.objects.len() {
+            Command::InsertObject { object, instance } => {
+                if object > self.scene.instances.len() {
                     return err(format!("cannot insert an object at {object}"));
                 }
                 if instance.mesh >= self.scene.meshes.len()
@@ -677,11 +675,10 @@ impl Document {
                 {
                     return err(format!(
                         "\"{}\" refers to a mesh or material the scene lacks",
-                        state.name
+                        instance.name
                     ));
                 }
                 self.scene.instances.insert(object, instance);
-                self.objects.insert(object, state);
                 self.selection = Some(Selection::Object(object));
                 Ok(Command::DeleteObject { object })
             }
@@ -771,13 +768,9 @@ impl Document {
                 Ok(Command::SetEnvironmentMap(old.map(Box::new)))
             }
             Command::Append(appended) => {
-                let Appended {
-                    scene,
-                    objects,
-                    lights,
-                } = *appended;
-                if objects.len() != scene.instances.len() || lights.len() != scene.lights.len() {
-                    return err("an appended scene needs one name per object and light".into());
+                let Appended { scene, lights } = *appended;
+                if lights.len() != scene.lights.len() {
+                    return err("an appended scene needs one name per light".into());
                 }
                 scene.validate().map_err(CommandError)?;
                 let before = self.counts();
@@ -792,7 +785,6 @@ impl Document {
                         ..i
                     }));
                 self.scene.lights.extend(scene.lights);
-                self.objects.extend(objects);
                 self.lights.extend(lights);
                 Ok(Command::Truncate(before))
             }
@@ -829,7 +821,6 @@ impl Document {
                     })
                     .collect();
                 removed.lights = self.scene.lights.split_off(counts.lights);
-                let objects = self.objects.split_off(counts.objects);
                 let lights = self.lights.split_off(counts.lights);
                 if matches!(self.selection, Some(Selection::Object(i)) if i >= counts.objects)
                     || matches!(self.selection, Some(Selection::Light(i)) if i >= counts.lights)
@@ -838,7 +829,6 @@ impl Document {
                 }
                 Ok(Command::Append(Box::new(Appended {
                     scene: removed,
-                    objects,
                     lights,
                 })))
             }
@@ -889,7 +879,12 @@ mod tests {
     #[test]
     fn repeated_meshes_get_blender_suffixes() {
         let doc = document();
-        let names: Vec<&str> = doc.objects().iter().map(|o| o.name.as_str()).collect();
+        let names: Vec<&str> = doc
+            .scene()
+            .instances
+            .iter()
+            .map(|o| o.name.as_str())
+            .collect();
         assert!(
             names.contains(&"block") && names.contains(&"block.001"),
             "{names:?}"
@@ -1009,7 +1004,7 @@ mod tests {
         assert!(light.is_none() || doc.apply(light.unwrap(), None).is_ok());
         while doc.undo() {}
         assert_eq!(doc.scene(), &scene);
-        assert_eq!(doc.objects(), names.as_slice());
+        assert_eq!(doc.objects(), names);
         assert!(!doc.is_dirty());
     }
 
@@ -1036,8 +1031,12 @@ mod tests {
             first.material,
             before.materials.len() + other.instances[0].material
         );
-        let names: std::collections::HashSet<&str> =
-            doc.objects().iter().map(|o| o.name.as_str()).collect();
+        let names: std::collections::HashSet<&str> = doc
+            .scene()
+            .instances
+            .iter()
+            .map(|o| o.name.as_str())
+            .collect();
         assert_eq!(names.len(), doc.objects().len(), "names stay unique");
         assert!(doc.undo());
         assert_eq!(doc.scene(), &before);

@@ -266,6 +266,14 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         scene.validate().map_err(RenderError::Scene)?;
+        // Hidden objects stay in the scene (and its file) but are not rendered.
+        let shown;
+        let scene = if scene.instances.iter().all(|i| i.visible) {
+            scene
+        } else {
+            shown = scene.without_hidden();
+            &shown
+        };
         crate::scene::validate_image_size(settings.width, settings.height)
             .map_err(RenderError::Scene)?;
 

@@ -272,6 +272,9 @@ fn build_scene(
             .to_affine()
             .map_err(|e| invalid(format!("instance {i}: transform: {e}")))?;
         scene.add_instance(mesh, material, transform);
+        let added = scene.instances.last_mut().expect("just added");
+        added.name = inst.name.clone();
+        added.visible = inst.visible;
     }
     scene.lights = file.lights.iter().map(LightDesc::to_light).collect();
     Ok(scene)

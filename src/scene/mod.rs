@@ -48,6 +48,11 @@ pub struct Instance {
     /// Index into [`Scene::materials`].
     pub material: usize,
     pub transform: Affine3A,
+    /// The object's name (Blender's object name); empty when the file gave none.
+    pub name: String,
+    /// Hidden objects stay in the scene and its file but are not rendered
+    /// ([`Scene::without_hidden`]).
+    pub visible: bool,
 }
 
 /// Render settings a scene file carries as defaults; the command line overrides them.
@@ -115,7 +120,16 @@ impl Scene {
             mesh,
             material,
             transform,
+            name: String::new(),
+            visible: true,
         });
+    }
+
+    /// The scene as rendered: hidden objects left out.
+    pub fn without_hidden(&self) -> Scene {
+        let mut scene = self.clone();
+        scene.instances.retain(|i| i.visible);
+        scene
     }
 
     pub fn triangle_count(&self) -> u64 {

@@ -130,6 +130,8 @@ pub fn save_scene(
         .instances
         .iter()
         .map(|inst| InstanceDesc {
+            name: inst.name.clone(),
+            visible: inst.visible,
             mesh: mesh_names[inst.mesh].clone(),
             material: material_names[inst.material].clone(),
             transform: TransformDesc {

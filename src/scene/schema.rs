@@ -384,10 +384,20 @@ pub(super) fn yes() -> bool {
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) struct InstanceDesc {
+    /// The object's name; the editor names unnamed objects after their mesh.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub(super) name: String,
     pub(super) mesh: String,
     pub(super) material: String,
     #[serde(default)]
     pub(super) transform: TransformDesc,
+    /// Hidden objects are kept but not rendered.
+    #[serde(default = "yes", skip_serializing_if = "is_true")]
+    pub(super) visible: bool,
+}
+
+fn is_true(b: &bool) -> bool {
+    *b
 }
 
 /// Scale, then rotate (Euler angles in degrees, about X, then Y, then Z), then translate;
