@@ -636,3 +636,50 @@ fn dragging_the_gizmos_y_arrow_moves_the_selection_up() {
         "one drag, one undo step"
     );
 }
+
+#[test]
+fn a_new_scene_gets_objects_and_lights_from_the_add_menu() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::N);
+    harness.step();
+    assert!(harness.state().document().scene().instances.is_empty());
+    harness.get_by_label("Add").click();
+    harness.step();
+    harness.get_by_label("Cube").click();
+    harness.step();
+    harness.get_by_label("Add").click();
+    harness.step();
+    harness.get_by_label("Sun").click();
+    harness.step();
+    let scene = harness.state().document().scene().clone();
+    assert_eq!(scene.instances.len(), 1);
+    assert_eq!(scene.instances[0].name, "Cube");
+    assert_eq!(
+        scene.materials.len(),
+        1,
+        "the cube has a material of its own"
+    );
+    assert_eq!(scene.lights.len(), 1);
+    assert_eq!(harness.state().document().name(Selection::Light(0)), "Sun");
+    // The cube sits at the view's pivot, in front of the camera.
+    let view = *harness.state().view();
+    assert!((Vec3::from(scene.instances[0].transform.translation) - view.look_at).length() < 1e-4);
+
+    // Shift+A over the viewport opens the same menu at the pointer.
+    let rect = harness.state().viewport_rect().unwrap();
+    pointer(&mut harness, rect.center(), None);
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::A);
+    harness.step();
+    harness.get_by_label("UV Sphere").click();
+    harness.step();
+    assert_eq!(harness.state().document().scene().instances.len(), 2);
+
+    // Each addition is one undo step.
+    for _ in 0..3 {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        harness.step();
+    }
+    let scene = harness.state().document().scene();
+    assert!(scene.instances.is_empty() && scene.lights.is_empty() && scene.materials.is_empty());
+}

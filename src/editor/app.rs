@@ -152,6 +152,8 @@ pub struct EditorApp {
     tool: Option<TransformTool>,
     orientation: Orientation,
     tools_started: u64,
+    /// Where Shift+A opened the Add menu over the viewport.
+    add_menu_at: Option<egui::Pos2>,
     error: Option<String>,
     pending: Option<Pending>,
     allow_close: bool,
@@ -257,6 +259,7 @@ impl EditorApp {
             tool: None,
             orientation: Orientation::Global,
             tools_started: 0,
+            add_menu_at: None,
             error,
             pending: None,
             allow_close: false,
@@ -595,6 +598,16 @@ impl EditorApp {
         if ctx.input_mut(|i| i.consume_shortcut(&NEW)) {
             self.request(Pending::New, ctx);
         }
+        let add = KeyboardShortcut::new(Modifiers::SHIFT, Key::A);
+        let over_viewport = ctx
+            .pointer_hover_pos()
+            .zip(self.viewport_rect)
+            .filter(|(p, rect)| rect.contains(*p));
+        if let Some((pos, _)) = over_viewport {
+            if ctx.input_mut(|i| i.consume_shortcut(&add)) {
+                self.add_menu_at = Some(pos);
+            }
+        }
         if ctx.input(|i| i.key_pressed(Key::F12)) {
             self.start_render(ctx);
         }
@@ -746,6 +759,11 @@ impl EditorApp {
                     if let Some(command) = delete {
                         self.apply(command, None);
                     }
+                }
+            });
+            ui.menu_button("Add", |ui| {
+                if self.add_menu_items(ui) {
+                    ui.close();
                 }
             });
             ui.menu_button("Render", |ui| {
@@ -1047,6 +1065,105 @@ impl EditorApp {
             if let Some(pos) = response.interact_pointer_pos() {
                 self.pick(pos, rect);
             }
+        }
+    }
+
+    /// The Add menu's entries (the menu bar's and Shift+A's); true when one was chosen.
+    fn add_menu_items(&mut self, ui: &mut Ui) -> bool {
+        use crate::scene::{Light, shapes};
+        // New things go to the view's pivot, sized to what the view shows.
+        let pivot = self.view.look_at;
+        let distance = (self.view.look_at - self.view.position).length().max(1e-3);
+        let size = distance * 0.2;
+        let mut command = None;
+        ui.label(RichText::new("Mesh").weak());
+        for (label, mesh) in [
+            ("Plane", shapes::quad as fn() -> crate::scene::Mesh),
+            ("Cube", shapes::cube),
+            ("UV Sphere", || shapes::uv_sphere(32, 16, true)),
+        ] {
+            if ui.button(label).clicked() {
+                let mut mesh = mesh();
+                mesh.name = label.to_owned();
+                let transform = glam::Affine3A::from_scale_rotation_translation(
+                    Vec3::splat(size),
+                    glam::Quat::IDENTITY,
+                    pivot,
+                );
+                command = Some(self.document.add_object(mesh, transform));
+            }
+        }
+        ui.separator();
+        ui.label(RichText::new("Light").weak());
+        // Bright enough to light what is around the pivot: about unit irradiance at half
+        // the view's distance.
+        let intensity = Vec3::splat((0.5 * distance).powi(2));
+        let above = pivot + self.view.up.normalize_or(Vec3::Y) * size * 2.0;
+        let lights = [
+            (
+                "Point",
+                Light::Point {
+                    position: above,
+                    intensity,
+                    radius: size * 0.1,
+                },
+            ),
+            (
+                "Spot",
+                Light::Spot {
+                    position: above,
+                    direction: Vec3::NEG_Y,
+                    intensity,
+                    cone_angle: 30.0,
+                    blend: 0.15,
+                    radius: 0.0,
+                },
+            ),
+            (
+                "Sun",
+                Light::Distant {
+                    direction: Vec3::new(-0.3, -1.0, -0.2).normalize(),
+                    irradiance: Vec3::splat(3.0),
+                    angular_diameter: 0.53,
+                },
+            ),
+        ];
+        for (label, light) in lights {
+            if ui.button(label).clicked() {
+                command = Some(self.document.add_light(light));
+            }
+        }
+        match command {
+            Some(command) => {
+                self.apply(command, None);
+                true
+            }
+            None => false,
+        }
+    }
+
+    /// The Add menu at the pointer (Shift+A over the viewport).
+    fn add_menu_popup(&mut self, ctx: &egui::Context) {
+        let Some(at) = self.add_menu_at else {
+            return;
+        };
+        let mut chosen = false;
+        let area = egui::Area::new(egui::Id::new("add menu"))
+            .order(egui::Order::Foreground)
+            .fixed_pos(at)
+            .show(ctx, |ui| {
+                egui::Frame::menu(ui.style()).show(ui, |ui| {
+                    ui.label(RichText::new("Add").strong());
+                    ui.separator();
+                    chosen = self.add_menu_items(ui);
+                });
+            });
+        let clicked_elsewhere = ctx.input(|i| i.pointer.any_pressed())
+            && !ctx
+                .pointer_interact_pos()
+                .is_some_and(|p| area.response.rect.contains(p));
+        if chosen || clicked_elsewhere || ctx.input(|i| i.key_pressed(Key::Escape)) {
+            self.add_menu_at = None;
         }
     }
 
@@ -1394,6 +1511,7 @@ impl EditorApp {
         }
         self.recovery_ui(ctx);
         self.render_window_ui(ctx);
+        self.add_menu_popup(ctx);
         if let Some(message) = self.error.clone() {
             let mut close = false;
             egui::Modal::new(egui::Id::new("error")).show(ctx, |ui| {

@@ -429,6 +429,43 @@ impl Document {
         Command::Append(Box::new(Appended { scene, lights }))
     }
 
+    /// The command that adds a new object with `mesh` at `transform`, with a new default
+    /// material of its own (Blender gives a new object none; a grey principled material
+    /// renders the same and can be edited at once).
+    pub fn add_object(&self, mesh: crate::scene::Mesh, transform: Affine3A) -> Command {
+        let mut scene = Scene::empty(self.scene.camera);
+        let name = mesh.name.clone();
+        let mesh = scene.add_mesh(mesh);
+        let material = scene.add_material(crate::scene::Material::with(
+            &self.unique_material_name("Material"),
+            crate::shader::principled::Principled::default(),
+        ));
+        scene.add_instance(mesh, material, transform);
+        scene.instances[0].name = name;
+        self.append(scene)
+    }
+
+    /// A material name not yet taken, from `base` with Blender's numeric suffixes.
+    pub fn unique_material_name(&self, base: &str) -> String {
+        let taken = |n: &str| self.scene.materials.iter().any(|m| m.name == n);
+        std::iter::once(base.to_owned())
+            .chain((1..).map(|i| format!("{base}.{i:03}")))
+            .find(|n| !taken(n))
+            .expect("some suffix is free")
+    }
+
+    /// The command that adds `light` at the end of the lights, named after its kind.
+    pub fn add_light(&self, light: Light) -> Command {
+        Command::InsertLight {
+            light: self.lights.len(),
+            state: ItemState {
+                name: self.unique_name(light_kind(&light)),
+                visible: true,
+            },
+            value: light,
+        }
+    }
+
     /// Bumped by every applied, undone or redone command.
     pub fn revision(&self) -> u64 {
         self.revision

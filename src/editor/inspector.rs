@@ -314,11 +314,83 @@ fn material_ui(
     });
 }
 
+/// `light` as a light of another kind (`"Point"`, `"Spot"`, `"Sun"`), keeping what the
+/// two share: position, strength and size between point and spot lights; a sun shines
+/// the way a spot pointed, with unit irradiance.
+fn convert_light(light: &Light, kind: &str) -> Light {
+    let (position, direction, intensity, radius) = match *light {
+        Light::Point {
+            position,
+            intensity,
+            radius,
+        } => (position, Vec3::NEG_Y, intensity, radius),
+        Light::Spot {
+            position,
+            direction,
+            intensity,
+            radius,
+            ..
+        } => (position, direction, intensity, radius),
+        Light::Distant {
+            direction,
+            irradiance,
+            ..
+        } => (
+            Vec3::ZERO - direction * 10.0,
+            direction,
+            irradiance * 100.0,
+            0.0,
+        ),
+    };
+    match kind {
+        "Point" => Light::Point {
+            position,
+            intensity,
+            radius,
+        },
+        "Spot" => Light::Spot {
+            position,
+            direction,
+            intensity,
+            cone_angle: 30.0,
+            blend: 0.15,
+            radius,
+        },
+        _ => Light::Distant {
+            direction,
+            irradiance: Vec3::ONE,
+            angular_diameter: 0.53,
+        },
+    }
+}
+
 fn light_ui(ui: &mut Ui, document: &Document, index: usize, actions: &mut Vec<InspectorAction>) {
     let Some(light) = document.scene().lights.get(index) else {
         return;
     };
     ui.heading(document.name(Selection::Light(index)));
+    ui.horizontal(|ui| {
+        let label = ui.label("Type");
+        let mut kind = light_kind(light);
+        egui::ComboBox::from_id_salt(("light type", index))
+            .selected_text(kind)
+            .show_ui(ui, |ui| {
+                for k in ["Point", "Spot", "Sun"] {
+                    ui.selectable_value(&mut kind, k, k);
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        if kind != light_kind(light) {
+            actions.push(InspectorAction::Edit(Edit {
+                command: Command::SetLight {
+                    light: index,
+                    value: convert_light(light, kind),
+                },
+                gesture: None,
+            }));
+        }
+    });
     let mut value = light.clone();
     let mut changed: Option<Option<GestureId>> = None;
     section(ui, &format!("{} light", light_kind(light)), |ui| {
