@@ -398,6 +398,26 @@ fn duplicate_and_delete_are_undoable_and_a_duplicate_shares_its_mesh() {
     );
     assert_eq!(doc.scene().meshes.len(), start.meshes.len(), "no new mesh");
     assert_eq!(doc.selection, Some(Selection::Object(copy)));
+    // The outliner's context menu duplicates too.
+    harness.get_by_label("block.001").click_secondary();
+    harness.step();
+    harness.step();
+    harness.get_by_label("Duplicate").click();
+    harness.step();
+    harness.step();
+    let count = harness.state().document().objects().len();
+    assert_eq!(count, start.instances.len() + 2);
+    assert_eq!(
+        harness
+            .state()
+            .document()
+            .name(Selection::Object(count - 1)),
+        "block.003"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    harness.get_by_label("block.002").click();
+    harness.step();
     // X deletes the selection (the copy).
     harness.key_press(egui::Key::X);
     harness.step();

@@ -1,6 +1,7 @@
 //! The outliner: the camera, the objects and the lights of the document, as Blender lists
-//! them. Click selects, double-click renames, the eye hides and shows. Every change is a
-//! command on the document.
+//! them. Click selects, double-click renames, the eye hides and shows, the context menu
+//! (right click) renames, duplicates, hides and deletes. Every change is a command on the
+//! document.
 
 use egui::{RichText, Ui};
 
@@ -82,6 +83,33 @@ impl Outliner {
             }
             if label.double_clicked() && target != Selection::Camera {
                 self.renaming = Some((target, name.clone()));
+            }
+            if target != Selection::Camera {
+                label.context_menu(|ui| {
+                    if ui.button("Rename").clicked() {
+                        self.renaming = Some((target, name.clone()));
+                        ui.close();
+                    }
+                    if let Some(command) = document.duplicate(target) {
+                        if ui.button("Duplicate").clicked() {
+                            actions.push(OutlinerAction::Apply(command));
+                            ui.close();
+                        }
+                    }
+                    if ui.button(if visible { "Hide" } else { "Show" }).clicked() {
+                        actions.push(OutlinerAction::Apply(Command::SetVisible {
+                            target,
+                            visible: !visible,
+                        }));
+                        ui.close();
+                    }
+                    if let Some(command) = document.delete(target) {
+                        if ui.button("Delete").clicked() {
+                            actions.push(OutlinerAction::Apply(command));
+                            ui.close();
+                        }
+                    }
+                });
             }
             if target != Selection::Camera {
                 ui.with_layout(egui::Layout::right_to_left(egui::Align::Center), |ui| {
