@@ -58,9 +58,14 @@ fn edit(
     let posted = Instant::now();
     viewport.post(target(scene, revision, size));
     let status = wait_for(viewport, what, |s| {
-        s.shown_revision == Some(revision) && s.samples >= 1
+        s.shown_revision == Some(revision) && s.shown_restart == s.restarts
     });
     (status, posted.elapsed())
+}
+
+fn median(mut times: Vec<Duration>) -> Duration {
+    times.sort();
+    times[times.len() / 2]
 }
 
 #[test]
@@ -92,37 +97,76 @@ fn edits_at(size: [u32; 2]) {
     let (first, first_time) = edit(&mut viewport, scene.clone(), 1, size, "the first image");
     assert_eq!(first.renderer_builds, 1);
 
+    // Each kind of edit a few times over, for a median.
+    const REPEATS: u64 = 5;
+    let mut revision = 1;
+    let mut status = first.clone();
+
     // A transform: the instances are written, nothing is built.
-    scene.instances[7].transform =
-        Affine3A::from_translation(Vec3::new(-50.0, 0.0, 30.0)) * scene.instances[7].transform;
-    let (moved, transform_time) = edit(&mut viewport, scene.clone(), 2, size, "the moved block");
-    assert_eq!(moved.instance_uploads, first.instance_uploads + 1);
+    let mut transform_times = Vec::new();
+    for i in 0..REPEATS {
+        let step = if i % 2 == 0 { -50.0 } else { 40.0 };
+        scene.instances[7].transform =
+            Affine3A::from_translation(Vec3::new(step, 0.0, 30.0)) * scene.instances[7].transform;
+        revision += 1;
+        let (moved, time) = edit(
+            &mut viewport,
+            scene.clone(),
+            revision,
+            size,
+            "the moved block",
+        );
+        assert!(moved.restarts > status.restarts);
+        status = moved;
+        transform_times.push(time);
+    }
+    assert_eq!(status.instance_uploads, first.instance_uploads + REPEATS);
     assert_eq!(
-        (moved.renderer_builds, moved.kernel_builds),
-        (first.renderer_builds, first.kernel_builds)
+        (status.renderer_builds, status.kernel_builds),
+        (first.renderer_builds, first.kernel_builds),
+        "a transform edit built a renderer or a kernel"
     );
-    assert!(moved.restarts > first.restarts);
 
     // A light: its buffers are written, nothing is built.
-    scene.lights[0] = Light::Point {
-        position: Vec3::new(200.0, 350.0, 150.0),
-        intensity: Vec3::new(4.0e4, 2.0e4, 1.0e4),
-        radius: 10.0,
-    };
-    let (lit, light_time) = edit(&mut viewport, scene.clone(), 3, size, "the new light");
-    assert_eq!(lit.light_updates, moved.light_updates + 1);
-    assert_eq!(lit.renderer_builds, moved.renderer_builds);
+    let mut light_times = Vec::new();
+    let lit_before = status.clone();
+    for i in 0..REPEATS {
+        scene.lights[0] = Light::Point {
+            position: Vec3::new(200.0 + 10.0 * i as f32, 350.0, 150.0),
+            intensity: Vec3::new(4.0e4, 2.0e4, 1.0e4),
+            radius: 10.0,
+        };
+        revision += 1;
+        let (lit, time) = edit(
+            &mut viewport,
+            scene.clone(),
+            revision,
+            size,
+            "the new light",
+        );
+        status = lit;
+        light_times.push(time);
+    }
+    assert_eq!(status.light_updates, lit_before.light_updates + REPEATS);
+    assert_eq!(status.renderer_builds, first.renderer_builds);
 
     // A camera move: nothing is written but the camera.
-    let mut camera_target = target(scene.clone(), 3, size);
-    camera_target.camera.position += Vec3::new(20.0, 0.0, 0.0);
-    let posted = Instant::now();
-    viewport.post(camera_target);
-    let turned = wait_for(&viewport, "the moved camera", |s| {
-        s.restarts > lit.restarts && s.samples >= 1
-    });
-    let camera_time = posted.elapsed();
-    assert_eq!(turned.renderer_builds, lit.renderer_builds);
+    let mut camera_times = Vec::new();
+    let mut camera = scene.camera;
+    for _ in 0..REPEATS {
+        camera.position += Vec3::new(4.0, 0.0, 0.0);
+        let mut moved = target(scene.clone(), revision, size);
+        moved.camera = camera;
+        let restarts = status.restarts;
+        let posted = Instant::now();
+        viewport.post(moved);
+        status = wait_for(&viewport, "the moved camera", |s| {
+            s.restarts > restarts && s.shown_restart == s.restarts
+        });
+        camera_times.push(posted.elapsed());
+    }
+    assert_eq!(status.renderer_builds, first.renderer_builds);
+    let turned = status;
 
     // A graph material: a new kernel, built while the old image keeps accumulating.
     let marble = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials/marble.kmat");
@@ -130,16 +174,17 @@ fn edits_at(size: [u32; 2]) {
     scene.materials[0] = Material::from_graph(&name, graph).expect("a graph material");
     let before = viewport.status();
     let posted = Instant::now();
-    viewport.post(target(scene.clone(), 4, size));
+    revision += 1;
+    viewport.post(target(scene.clone(), revision, size));
     // Passes of the old image completed while the new renderer was being built.
     let mut passes_meanwhile = 0;
     let rebuilt = loop {
         let s = viewport.status();
         assert!(s.error.is_none(), "the kernel edit: {:?}", s.error);
-        if s.shown_revision == Some(4) && s.samples >= 1 {
+        if s.shown_revision == Some(revision) {
             break s;
         }
-        if s.building && s.shown_revision == Some(3) {
+        if s.building && s.shown_revision == Some(revision - 1) {
             passes_meanwhile = s.passes - before.passes;
         }
         assert!(
@@ -164,11 +209,14 @@ fn edits_at(size: [u32; 2]) {
     }
 
     println!(
-        "viewport {}x{} on {}: first image {first_time:?}, transform {transform_time:?}, \
-         light {light_time:?}, camera {camera_time:?}, new kernel {kernel_time:?} \
+        "viewport {}x{} on {}: first image {first_time:?}; edit to first image, median of \
+         {REPEATS}: transform {:?}, light {:?}, camera {:?}; new kernel {kernel_time:?} \
          ({passes_meanwhile} passes of the old image meanwhile)",
         size[0],
         size[1],
         ctx.describe(),
+        median(transform_times),
+        median(light_times),
+        median(camera_times),
     );
 }

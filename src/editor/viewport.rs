@@ -91,6 +91,9 @@ pub struct ViewportStatus {
     pub texture: Option<(u64, wgpu::TextureView)>,
     /// The scene revision and camera of the shown image.
     pub shown_revision: Option<u64>,
+    /// The value `restarts` had when the shown image was started: an image of the latest
+    /// change is on screen when it equals `restarts`.
+    pub shown_restart: u64,
     /// True while a renderer is being built in the background (the old image stays and
     /// keeps accumulating meanwhile).
     pub building: bool,
@@ -645,6 +648,7 @@ impl Worker {
                 self.publish(|s| {
                     s.samples = samples;
                     s.passes += 1;
+                    s.shown_restart = s.restarts;
                     s.elapsed = elapsed;
                     s.shown_revision = Some(revision);
                     s.tile_size = tile_size;
