@@ -81,8 +81,8 @@ pub struct ViewportStatus {
     pub instance_uploads: u64,
     pub light_updates: u64,
     pub material_updates: u64,
-    /// When the last edit was posted, and how long after it the first image of it was
-    /// shown (for the benchmarks; None until an edit has shown).
+    /// How long the last change took from being posted to its first image on screen
+    /// (None until one has shown).
     pub last_edit_latency: Option<Duration>,
     /// Set when the last renderer build or pass failed; the previous image stays.
     pub error: Option<String>,

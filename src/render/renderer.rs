@@ -1,8 +1,10 @@
 //! The progressive renderer: uploads a scene once, then renders any range of sample
 //! indices into its film in whole-image passes. A pass adds the same number of samples
-//! to every pixel, in dispatches short enough that none runs long (tiles of at most
-//! 256×256 pixels, with the samples per pass adapted to a time target); the film lives on
-//! the device in pieces that each fit a binding (`film_pieces.rs`).
+//! to every pixel, in dispatches short enough that none runs long ([`Pacing`]: tiles of
+//! 256×256 pixels with the samples per pass adapted to a time target for a final render,
+//! or small tiles sized to a budget of a few milliseconds for the editor); the film lives
+//! on the device in pieces that each fit a binding (`film_pieces.rs`). An edit of the
+//! scene can be written into a built renderer (`update.rs`).
 //!
 //! A render stops (cancel, deadline) only between dispatches and never before the film
 //! holds one whole pass, so a stopped render has a sample in every pixel and sample
