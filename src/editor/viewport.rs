@@ -379,7 +379,12 @@ impl Worker {
                         .wait(slot)
                         .unwrap_or_else(|e| e.into_inner());
                 }
-                slot.take()
+                let next = slot.take();
+                // Consumed here, not where a result is taken: a build thread sets it after
+                // sending, so a result taken early must not leave it set (the loop would
+                // spin) — at worst it costs one more turn of the loop.
+                self.shared.built.store(false, Ordering::Relaxed);
+                next
             };
             if self.shared.shutdown.load(Ordering::Relaxed) {
                 // A build in flight finishes on its own thread and is dropped there.
@@ -458,7 +463,6 @@ impl Worker {
         let Some(Build { target, posted, .. }) = self.build.take() else {
             return;
         };
-        self.shared.built.store(false, Ordering::Relaxed);
         match result {
             Ok(built) => {
                 let kernels = [Some(&built.full), built.coarse.as_ref()]
