@@ -150,6 +150,17 @@ fn a_transform_edit_restarts_accumulation_without_compiling_and_undo_restores_it
         compiled,
         "a transform edit must not compile a kernel"
     );
+    let edited = harness.state().viewport_status().unwrap();
+    assert!(
+        edited.instance_uploads > status.instance_uploads,
+        "the transform was not written into the instance buffer"
+    );
+    assert_eq!(
+        (edited.renderer_builds, edited.kernel_builds),
+        (status.renderer_builds, status.kernel_builds),
+        "a transform edit builds no renderer and no kernel"
+    );
+    assert_eq!(edited.material_updates, status.material_updates);
 
     // Ctrl+Z puts the block back.
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);

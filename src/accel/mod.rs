@@ -8,7 +8,7 @@ mod bvh;
 mod two_level;
 
 pub use bvh::{Bvh, build_bvh};
-pub use two_level::{AccelError, SceneAccel, build_scene_accel};
+pub use two_level::{AccelError, SceneAccel, build_scene_accel, build_tlas};
 
 /// Traversal stack sizes of `shaders/traverse.wgsl`; a deeper tree cannot be traversed.
 pub const BLAS_STACK_SIZE: u32 = 64;

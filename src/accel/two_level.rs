@@ -23,6 +23,8 @@ pub enum AccelError {
         depth: u32,
         limit: u32,
     },
+    #[error("instance {instance} uses mesh {mesh}, which has no BVH in this structure")]
+    MissingBlas { instance: usize, mesh: usize },
 }
 
 #[derive(Clone, Debug)]
@@ -63,48 +65,55 @@ pub fn build_scene_accel(scene: &Scene) -> Result<SceneAccel, AccelError> {
         blas.push(Some(bvh));
     }
 
-    let tlas = if scene.instances.is_empty() {
-        None
-    } else {
-        let boxes: Vec<(Vec3, Vec3)> = scene
-            .instances
-            .iter()
-            .map(|inst| {
-                let root = blas[inst.mesh]
-                    .as_ref()
-                    .expect("every instanced mesh has a BLAS")
-                    .nodes[0];
-                let (lo, hi) = root.bounds();
-                let mut wlo = Vec3::splat(f32::INFINITY);
-                let mut whi = Vec3::splat(f32::NEG_INFINITY);
-                for corner in 0..8 {
-                    let p = Vec3::new(
-                        if corner & 1 == 0 { lo.x } else { hi.x },
-                        if corner & 2 == 0 { lo.y } else { hi.y },
-                        if corner & 4 == 0 { lo.z } else { hi.z },
-                    );
-                    let w = inst.transform.transform_point3(p);
-                    wlo = wlo.min(w);
-                    whi = whi.max(w);
-                }
-                // Rounding in the transform may move a vertex past the exact corners.
-                let pad = (whi - wlo).max(wlo.abs().max(whi.abs())) * 1e-6;
-                (wlo - pad, whi + pad)
-            })
-            .collect();
-        let bvh = build_bvh(&boxes, TLAS_MAX_LEAF_SIZE);
-        if bvh.depth > TLAS_STACK_SIZE {
-            return Err(AccelError::TooDeep {
-                what: "the instances".into(),
-                depth: bvh.depth,
-                limit: TLAS_STACK_SIZE,
-            });
-        }
-        Some(bvh)
-    };
+    let tlas = build_tlas(scene, &blas)?;
     Ok(SceneAccel {
         blas,
         tlas,
         build_time: start.elapsed(),
     })
+}
+
+/// The BVH over `scene`'s instances in world space, given the BLAS of each mesh
+/// (`SceneAccel::blas`, which must hold one for every instanced mesh); `None` without
+/// instances. A transform edit rebuilds only this: the meshes' BVHs stay as they are.
+pub fn build_tlas(scene: &Scene, blas: &[Option<Bvh>]) -> Result<Option<Bvh>, AccelError> {
+    if scene.instances.is_empty() {
+        return Ok(None);
+    }
+    let mut boxes: Vec<(Vec3, Vec3)> = Vec::with_capacity(scene.instances.len());
+    for (i, inst) in scene.instances.iter().enumerate() {
+        let root = blas
+            .get(inst.mesh)
+            .and_then(Option::as_ref)
+            .ok_or(AccelError::MissingBlas {
+                instance: i,
+                mesh: inst.mesh,
+            })?
+            .nodes[0];
+        let (lo, hi) = root.bounds();
+        let mut wlo = Vec3::splat(f32::INFINITY);
+        let mut whi = Vec3::splat(f32::NEG_INFINITY);
+        for corner in 0..8 {
+            let p = Vec3::new(
+                if corner & 1 == 0 { lo.x } else { hi.x },
+                if corner & 2 == 0 { lo.y } else { hi.y },
+                if corner & 4 == 0 { lo.z } else { hi.z },
+            );
+            let w = inst.transform.transform_point3(p);
+            wlo = wlo.min(w);
+            whi = whi.max(w);
+        }
+        // Rounding in the transform may move a vertex past the exact corners.
+        let pad = (whi - wlo).max(wlo.abs().max(whi.abs())) * 1e-6;
+        boxes.push((wlo - pad, whi + pad));
+    }
+    let bvh = build_bvh(&boxes, TLAS_MAX_LEAF_SIZE);
+    if bvh.depth > TLAS_STACK_SIZE {
+        return Err(AccelError::TooDeep {
+            what: "the instances".into(),
+            depth: bvh.depth,
+            limit: TLAS_STACK_SIZE,
+        });
+    }
+    Ok(Some(bvh))
 }

@@ -5,22 +5,32 @@
 //! The UI thread posts the state it wants shown (the scene at a revision, the view's
 //! camera, the image size, a sample limit) as a [`Target`]; the worker keeps a
 //! [`Renderer`] for it, renders one whole sample pass at a time (the renderer cuts a pass
-//! into short dispatches, and a new target cancels the pass between two of them), and
-//! after each pass runs the display pass ([`super::display`]) into a texture egui draws
-//! directly. The texture only ever receives complete passes, so an edit never shows a
-//! half-cleared image.
+//! into dispatches of a few milliseconds, [`Pacing::Interactive`], and a new target
+//! cancels the pass between two of them), and after each pass runs the display pass
+//! ([`super::display`]) into a texture egui draws directly. The texture only ever receives
+//! complete passes, so an edit never shows a half-cleared image.
 //!
-//! A change of scene or size builds a new renderer on the worker; its kernel comes from the
-//! device's pipeline cache unless the kernel's contents changed. The editor renders with
-//! the unspecialised kernel (every lobe and light type), so that editing a material
-//! parameter or a light never changes the kernel. A camera move rebuilds nothing.
+//! A new scene revision is applied as cheaply as it can be: the worker compares the scene
+//! it renders with the new one ([`Renderer::update`]) and writes in place what changed
+//! (a transform: the instance BVH and instances; a light or material parameter: those
+//! buffers and the light distribution). Comparing scenes rather than listing the
+//! document's commands keeps one rule for every way a scene can change (commands, undo,
+//! a file reloaded, panels added later), and costs a comparison, far less than any
+//! upload. What cannot be written in place (a mesh, a new material graph, an image size)
+//! needs a new renderer, which is built on a thread of its own while the old renderer
+//! keeps accumulating its image; the new one replaces it when ready, so the UI never
+//! waits for a BVH build or a kernel compile. The editor renders with the unspecialised
+//! kernel (every lobe and light type), so that a material parameter or a light rarely
+//! changes the kernel. A camera move rebuilds nothing.
 
 use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
-use std::sync::{Arc, Condvar, Mutex};
+use std::sync::{Arc, Condvar, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
 use crate::film::tonemap::Tonemap;
-use crate::render::{GpuContext, RenderControl, RenderSettings, Renderer};
+use crate::render::{
+    GpuContext, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
+};
 use crate::scene::{Camera, Scene};
 
 use super::display::{DisplayPipeline, FilmDisplay};
@@ -54,14 +64,26 @@ impl Target {
 pub struct ViewportStatus {
     /// Samples per pixel in the shown image.
     pub samples: u32,
+    /// Sample passes completed over the viewport's life, of either film.
+    pub passes: u64,
     /// Since the last restart.
     pub elapsed: Duration,
     /// The size of the shown image in pixels.
     pub size: [u32; 2],
     /// How many times accumulation started over (a new scene, camera or size).
     pub restarts: u64,
-    /// Renderers built (scene or size changes); camera moves build none.
+    /// Renderers built (a first image, a size, or an edit that could not be written in
+    /// place); camera moves and in-place edits build none.
     pub renderer_builds: u64,
+    /// Kernels compiled for those renderers (the rest came from the pipeline cache).
+    pub kernel_builds: u64,
+    /// Edits written into the renderer in place, by what they wrote.
+    pub instance_uploads: u64,
+    pub light_updates: u64,
+    pub material_updates: u64,
+    /// How long the last change took from being posted to its first image on screen
+    /// (None until one has shown).
+    pub last_edit_latency: Option<Duration>,
     /// Set when the last renderer build or pass failed; the previous image stays.
     pub error: Option<String>,
     /// The texture holding the shown image, and a counter that changes when it is
@@ -69,8 +91,15 @@ pub struct ViewportStatus {
     pub texture: Option<(u64, wgpu::TextureView)>,
     /// The scene revision and camera of the shown image.
     pub shown_revision: Option<u64>,
-    /// True while the worker is building a renderer (the old image stays meanwhile).
+    /// The value `restarts` had when the shown image was started: an image of the latest
+    /// change is on screen when it equals `restarts`.
+    pub shown_restart: u64,
+    /// True while a renderer is being built in the background (the old image stays and
+    /// keeps accumulating meanwhile).
     pub building: bool,
+    /// Side in pixels of the tiles the full image's passes are cut into at present
+    /// (adapted so that one dispatch takes about [`DISPATCH_BUDGET_US`]).
+    pub tile_size: u32,
 }
 
 impl ViewportStatus {
@@ -85,11 +114,14 @@ impl ViewportStatus {
 }
 
 struct Shared {
-    target: Mutex<Option<Target>>,
+    /// The newest target not yet taken by the worker, and when it was posted.
+    target: Mutex<Option<(Target, Instant)>>,
     wake: Condvar,
     /// Set with a new target: the pass in progress stops at its next dispatch.
     cancel: AtomicBool,
     shutdown: AtomicBool,
+    /// Set (under the `target` lock) when a background build has finished.
+    built: AtomicBool,
     status: Mutex<ViewportStatus>,
     /// When the UI last drew a frame, in milliseconds since `epoch`.
     ui_frame_ms: AtomicU64,
@@ -101,7 +133,11 @@ struct Shared {
 /// software adapter the queue runs one submission at a time, and a worker that resubmits
 /// at once can keep a frame waiting for several dispatches.
 const UI_ACTIVE: Duration = Duration::from_millis(150);
-const UI_TURN: Duration = Duration::from_millis(12);
+const UI_TURN: Duration = Duration::from_millis(2);
+
+/// What one viewport dispatch should take, in microseconds: short enough that a UI frame
+/// queued behind it still makes 30 frames a second on a software adapter.
+pub const DISPATCH_BUDGET_US: u32 = 4_000;
 
 /// The worker thread and the channel to it.
 pub struct ViewportRenderer {
@@ -118,6 +154,7 @@ impl ViewportRenderer {
             wake: Condvar::new(),
             cancel: AtomicBool::new(false),
             shutdown: AtomicBool::new(false),
+            built: AtomicBool::new(false),
             status: Mutex::new(ViewportStatus::default()),
             ui_frame_ms: AtomicU64::new(0),
             epoch: Instant::now(),
@@ -149,7 +186,7 @@ impl ViewportRenderer {
                 self.shared.cancel.store(true, Ordering::Relaxed);
             }
         }
-        *lock(&self.shared.target) = Some(target.clone());
+        *lock(&self.shared.target) = Some((target.clone(), Instant::now()));
         self.posted = Some(target);
         self.shared.wake.notify_all();
     }
@@ -183,8 +220,8 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
     m.lock().unwrap_or_else(|e| e.into_inner())
 }
 
-/// A coarse film has at most this many pixels: one dispatch (a tile of the renderer) of
-/// it takes tens of milliseconds even on lavapipe, so the image follows a drag.
+/// A coarse film has at most this many pixels: one pass of it takes a few milliseconds
+/// even on lavapipe, so the image follows a drag.
 const COARSE_PIXELS: u32 = 160 * 120;
 /// The coarse film is shown until no change came for this long (Cycles' viewport
 /// behaves the same: coarse while you move, refining when you stop).
@@ -208,24 +245,99 @@ fn coarse_divisor(size: [u32; 2]) -> u32 {
     (pixels / COARSE_PIXELS as f64).sqrt().ceil().max(1.0) as u32
 }
 
+/// The renderers a background build made for a target: the full image's and, for large
+/// images, the coarse one's.
+struct Built {
+    full: Renderer,
+    coarse: Option<Renderer>,
+}
+
+/// A renderer build running on a thread of its own.
+struct Build {
+    target: Target,
+    /// When the target was posted.
+    posted: Instant,
+    result: mpsc::Receiver<Result<Built, String>>,
+}
+
+/// Builds the renderers for `target` (on the build thread).
+fn build_renderers(ctx: &Arc<GpuContext>, target: &Target) -> Result<Built, String> {
+    let divisor = coarse_divisor(target.size);
+    let coarse_size = target.size.map(|v| (v / divisor).max(1));
+    let full = build_renderer(ctx, target, target.size)?;
+    let coarse = if divisor > 1 {
+        Some(build_renderer(ctx, target, coarse_size)?)
+    } else {
+        None
+    };
+    Ok(Built { full, coarse })
+}
+
+fn build_renderer(
+    ctx: &Arc<GpuContext>,
+    target: &Target,
+    size: [u32; 2],
+) -> Result<Renderer, String> {
+    let scene = &target.scene;
+    let settings = RenderSettings {
+        width: size[0],
+        height: size[1],
+        samples_per_pixel: target.sample_limit,
+        max_bounces: scene.settings.max_bounces,
+        seed: 0,
+        light_sampling: true,
+        page_bytes: None,
+        specialize: false,
+        aovs: false,
+        film_piece_bytes: None,
+    };
+    let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)
+        .map_err(|e| format!("the viewport cannot render this scene: {e}"))?;
+    if renderer.film_buffers().is_none() {
+        return Err(format!(
+            "the viewport's {}×{} film is larger than one buffer binding of this adapter",
+            size[0], size[1]
+        ));
+    }
+    renderer.set_camera(&target.camera);
+    renderer.set_pacing(Pacing::Interactive {
+        budget_us: DISPATCH_BUDGET_US,
+    });
+    Ok(renderer)
+}
+
 struct Worker {
     ctx: Arc<GpuContext>,
     shared: Arc<Shared>,
-    repaint: Box<dyn Fn() + Send>,
+    repaint: Arc<dyn Fn() + Send + Sync>,
     display: DisplayPipeline,
     /// The image at full size, and (for large images) a coarse one shown while the
     /// user is changing things.
     full: Option<Layer>,
     coarse: Option<Layer>,
+    /// What the layers render: their scene, camera and size.
     current: Option<Target>,
+    /// The newest target, waiting while a build runs, and when it was posted.
+    waiting: Option<(Target, Instant)>,
+    build: Option<Build>,
+    /// A target whose build failed: not tried again until the scene or size changes.
+    failed: Option<(u64, [u32; 2])>,
     started: Instant,
     last_change: Instant,
+    /// When the edit the layers are restarting for was posted, until its first pass shows.
+    edit_posted: Option<Instant>,
     generations: u64,
 }
 
 impl Worker {
     fn new(ctx: Arc<GpuContext>, shared: Arc<Shared>, repaint: Box<dyn Fn() + Send>) -> Self {
         let display = DisplayPipeline::new(&ctx);
+        // Shared with build threads, which wake the UI when they finish.
+        let repaint = Mutex::new(repaint);
+        let repaint: Arc<dyn Fn() + Send + Sync> = Arc::new(move || {
+            let repaint = lock(&repaint);
+            (*repaint)()
+        });
         Self {
             ctx,
             shared,
@@ -234,12 +346,17 @@ impl Worker {
             full: None,
             coarse: None,
             current: None,
+            waiting: None,
+            build: None,
+            failed: None,
             started: Instant::now(),
             last_change: Instant::now(),
+            edit_posted: None,
             generations: 0,
         }
     }
 
+    /// Whether the layers have all the samples asked for (or there are none to render).
     fn done(&self) -> bool {
         match (&self.full, &self.current) {
             (Some(full), Some(t)) => full.samples >= t.sample_limit,
@@ -251,7 +368,10 @@ impl Worker {
         loop {
             let next = {
                 let mut slot = lock(&self.shared.target);
-                while slot.is_none() && self.done() && !self.shared.shutdown.load(Ordering::Relaxed)
+                while slot.is_none()
+                    && self.done()
+                    && !self.shared.built.load(Ordering::Relaxed)
+                    && !self.shared.shutdown.load(Ordering::Relaxed)
                 {
                     slot = self
                         .shared
@@ -259,14 +379,26 @@ impl Worker {
                         .wait(slot)
                         .unwrap_or_else(|e| e.into_inner());
                 }
-                slot.take()
+                let next = slot.take();
+                // Consumed here, not where a result is taken: a build thread sets it after
+                // sending, so a result taken early must not leave it set (the loop would
+                // spin) — at worst it costs one more turn of the loop.
+                self.shared.built.store(false, Ordering::Relaxed);
+                next
             };
             if self.shared.shutdown.load(Ordering::Relaxed) {
+                // A build in flight finishes on its own thread and is dropped there.
                 return;
             }
-            if let Some(target) = next {
+            if let Some(next) = next {
                 self.shared.cancel.store(false, Ordering::Relaxed);
-                self.retarget(target);
+                self.waiting = Some(next);
+            }
+            self.finish_build();
+            if self.build.is_none() {
+                if let Some((target, posted)) = self.waiting.take() {
+                    self.retarget(target, posted);
+                }
             }
             if !self.done() {
                 self.render_pass();
@@ -279,114 +411,182 @@ impl Worker {
         (self.repaint)();
     }
 
-    fn build_layer(
-        &mut self,
-        scene: &Scene,
-        target: &Target,
-        size: [u32; 2],
-    ) -> Result<Layer, String> {
-        let settings = RenderSettings {
-            width: size[0],
-            height: size[1],
-            samples_per_pixel: target.sample_limit,
-            max_bounces: scene.settings.max_bounces,
-            seed: 0,
-            light_sampling: true,
-            page_bytes: None,
-            specialize: false,
-            aovs: false,
-            film_piece_bytes: None,
+    /// Starts building renderers for `target` on a thread of its own; the layers keep
+    /// rendering what they render until it is done.
+    fn start_build(&mut self, target: Target, posted: Instant) {
+        let (tx, rx) = mpsc::channel();
+        let ctx = Arc::clone(&self.ctx);
+        let shared = Arc::clone(&self.shared);
+        let repaint = Arc::clone(&self.repaint);
+        let job = target.clone();
+        let spawned = std::thread::Builder::new()
+            .name("kiln viewport build".into())
+            .spawn(move || {
+                let built = build_renderers(&ctx, &job);
+                // The worker may have gone (the window closed): then nobody wants it.
+                let _ = tx.send(built);
+                let _slot = lock(&shared.target);
+                shared.built.store(true, Ordering::Relaxed);
+                shared.wake.notify_all();
+                drop(_slot);
+                repaint();
+            });
+        match spawned {
+            Ok(_) => {
+                self.build = Some(Build {
+                    target,
+                    posted,
+                    result: rx,
+                });
+                self.publish(|s| s.building = true);
+            }
+            Err(e) => {
+                let message =
+                    format!("could not start a thread to build the viewport's renderer: {e}");
+                self.publish(|s| s.error = Some(message));
+            }
+        }
+    }
+
+    /// Installs the renderers of a finished build, if one has finished.
+    fn finish_build(&mut self) {
+        let Some(build) = &self.build else {
+            return;
         };
-        let renderer = Renderer::new(Arc::clone(&self.ctx), scene, settings)
-            .map_err(|e| format!("the viewport cannot render this scene: {e}"))?;
-        let film = renderer.film_buffers().ok_or_else(|| {
-            format!(
-                "the viewport's {}×{} film is larger than one buffer binding of this adapter",
-                size[0], size[1]
-            )
-        })?;
+        let result = match build.result.try_recv() {
+            Ok(result) => result,
+            Err(mpsc::TryRecvError::Empty) => return,
+            Err(mpsc::TryRecvError::Disconnected) => {
+                Err("the viewport's build thread stopped without a renderer".into())
+            }
+        };
+        let Some(Build { target, posted, .. }) = self.build.take() else {
+            return;
+        };
+        match result {
+            Ok(built) => {
+                let kernels = [Some(&built.full), built.coarse.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .filter(|r| r.build_info.kernel_compiled)
+                    .count() as u64;
+                self.full = Some(self.layer(built.full));
+                self.coarse = built.coarse.map(|r| self.layer(r));
+                self.failed = None;
+                self.publish(|s| {
+                    s.renderer_builds += 1;
+                    s.kernel_builds += kernels;
+                    s.error = None;
+                    s.building = false;
+                });
+                self.current = Some(target);
+                self.restart(posted);
+            }
+            Err(message) => {
+                // The old layers (if any) keep showing the scene they render.
+                self.failed = Some((target.scene_revision, target.size));
+                self.publish(|s| {
+                    s.error = Some(message);
+                    s.building = false;
+                });
+            }
+        }
+    }
+
+    fn layer(&mut self, renderer: Renderer) -> Layer {
+        let size = [renderer.settings().width, renderer.settings().height];
+        let film = renderer
+            .film_buffers()
+            .expect("build_renderer refuses a film of several pieces");
         let display = self.display.bind(&self.ctx, film, size);
         self.generations += 1;
-        Ok(Layer {
+        Layer {
             renderer,
             display,
             samples: 0,
             texture_generation: self.generations,
-        })
+        }
     }
 
-    fn retarget(&mut self, target: Target) {
-        let rebuild = match &self.current {
-            Some(old) => {
-                old.scene_revision != target.scene_revision
-                    || old.size != target.size
-                    || self.full.is_none()
-            }
-            None => true,
+    /// Zeroes the layers' films: accumulation starts over for the current target.
+    fn restart(&mut self, posted: Instant) {
+        for layer in [&mut self.full, &mut self.coarse].into_iter().flatten() {
+            layer.renderer.clear_film();
+            layer.samples = 0;
+        }
+        self.started = Instant::now();
+        self.last_change = Instant::now();
+        self.edit_posted = Some(posted);
+        self.publish(|s| s.restarts += 1);
+    }
+
+    /// Moves the layers to `target` by the cheapest way there: nothing (a new sample
+    /// limit or view transform), the camera, an update in place, or a new renderer built
+    /// in the background.
+    fn retarget(&mut self, target: Target, posted: Instant) {
+        let Some(current) = self.current.clone().filter(|_| self.full.is_some()) else {
+            self.rebuild(target, posted);
+            return;
         };
-        let restart = rebuild
-            || self
-                .current
-                .as_ref()
-                .is_none_or(|old| old.restarts(&target));
-        if rebuild {
-            self.publish(|s| s.building = true);
-            let mut scene = (*target.scene).clone();
-            scene.camera = target.camera;
-            let divisor = coarse_divisor(target.size);
-            let coarse_size = target.size.map(|v| (v / divisor).max(1));
-            let built = self
-                .build_layer(&scene, &target, target.size)
-                .and_then(|full| {
-                    let coarse = if divisor > 1 {
-                        Some(self.build_layer(&scene, &target, coarse_size)?)
-                    } else {
-                        None
-                    };
-                    Ok((full, coarse))
+        if current.size != target.size {
+            self.rebuild(target, posted);
+            return;
+        }
+        let mut updated = Updated::default();
+        if current.scene_revision != target.scene_revision {
+            let result = [&mut self.full, &mut self.coarse]
+                .into_iter()
+                .flatten()
+                .try_for_each(|layer| {
+                    updated = layer.renderer.update(&current.scene, &target.scene)?;
+                    Ok::<_, UpdateError>(())
                 });
-            match built {
-                Ok((full, coarse)) => {
-                    self.full = Some(full);
-                    self.coarse = coarse;
-                    self.publish(|s| {
-                        s.renderer_builds += 1;
-                        s.error = None;
-                        s.building = false;
-                    });
+            match result {
+                Ok(()) => {}
+                Err(UpdateError::NeedsRebuild { .. }) => {
+                    self.rebuild(target, posted);
+                    return;
                 }
-                Err(message) => {
-                    self.full = None;
-                    self.coarse = None;
-                    self.current = Some(target);
-                    self.publish(|s| {
-                        s.error = Some(message);
-                        s.building = false;
-                    });
+                Err(UpdateError::Render(e)) => {
+                    let message = format!("the viewport cannot show this edit: {e}");
+                    self.publish(|s| s.error = Some(message));
                     return;
                 }
             }
         }
-        if restart {
+        let camera = current.camera != target.camera;
+        if camera || updated.any() {
             for layer in [&mut self.full, &mut self.coarse].into_iter().flatten() {
                 layer.renderer.set_camera(&target.camera);
-                layer.renderer.clear_film();
-                layer.samples = 0;
             }
-            self.started = Instant::now();
-            self.last_change = Instant::now();
-            self.publish(|s| s.restarts += 1);
-        } else if let Some(layer) = self.shown() {
+            self.publish(|s| {
+                s.instance_uploads += updated.instances as u64;
+                s.light_updates += updated.lights as u64;
+                s.material_updates += updated.materials as u64;
+                s.error = None;
+            });
+            self.current = Some(target);
+            self.restart(posted);
+        } else {
             // Only the view transform or the limit changed: show the same film anew.
-            self.display.run(
-                &self.ctx,
-                &layer.display,
-                target.exposure_ev,
-                target.tonemap,
-            );
-            (self.repaint)();
+            if let Some(layer) = self.shown() {
+                self.display.run(
+                    &self.ctx,
+                    &layer.display,
+                    target.exposure_ev,
+                    target.tonemap,
+                );
+                (self.repaint)();
+            }
+            self.current = Some(target);
         }
-        self.current = Some(target);
+    }
+
+    fn rebuild(&mut self, target: Target, posted: Instant) {
+        if self.failed == Some((target.scene_revision, target.size)) {
+            return;
+        }
+        self.start_build(target, posted);
     }
 
     /// The layer whose image is on screen: the full one once it has a sample.
@@ -446,23 +646,32 @@ impl Worker {
                     )
                 });
                 let samples = self.full.as_ref().map_or(0, |f| f.samples);
+                let tile_size = self.full.as_ref().map_or(0, |f| f.renderer.tile_size());
                 let elapsed = self.started.elapsed();
+                let latency = self.edit_posted.take().map(|t| t.elapsed());
                 self.publish(|s| {
                     s.samples = samples;
+                    s.passes += 1;
+                    s.shown_restart = s.restarts;
                     s.elapsed = elapsed;
                     s.shown_revision = Some(revision);
+                    s.tile_size = tile_size;
+                    if latency.is_some() {
+                        s.last_edit_latency = latency;
+                    }
                     if let Some((generation, view, size)) = shown {
                         s.size = size;
                         s.texture = Some((generation, view));
                     }
                 });
             }
-            // Cancelled: a new target is waiting and will clear the film.
+            // Cancelled: a new target is waiting.
             Ok(_) => {}
             Err(e) => {
                 let message = format!("rendering the viewport failed: {e}");
                 self.full = None;
                 self.coarse = None;
+                self.current = None;
                 self.publish(|s| s.error = Some(message));
             }
         }

@@ -73,6 +73,11 @@ pub struct GpuScene {
     /// Probability that next-event estimation samples the environment.
     pub environment_pick: f32,
     pub bytes: u64,
+    /// The root of the top-level BVH (what light selection weighs the environment by).
+    pub tlas_root: Option<BvhNode>,
+    /// Per mesh, as [`SceneArrays::blas_root`] and [`SceneArrays::mesh_flags`].
+    pub blas_root: Vec<u32>,
+    pub mesh_flags: Vec<u32>,
 }
 
 /// CPU-side arrays in upload order; separate from the upload so tests can inspect them.
@@ -97,6 +102,65 @@ pub struct SceneArrays {
     /// Pick probabilities of the environment and of the emissive triangles.
     pub environment_pick: f32,
     pub triangle_pick: f32,
+    /// Per mesh: the index of its BLAS root in `blas_nodes` (0 for meshes no instance
+    /// uses), and its `INSTANCE_HAS_*` flags. Kept so instances can be packed again
+    /// without the meshes.
+    pub blas_root: Vec<u32>,
+    pub mesh_flags: Vec<u32>,
+}
+
+/// What next-event estimation needs of a scene's lights, recomputed whenever a light, an
+/// emissive material or an instance's transform changes.
+#[derive(Clone, Debug, Default)]
+pub struct LightArrays {
+    pub light_triangles: Vec<GpuLightTriangle>,
+    pub light_cdf: Vec<f32>,
+    pub light_power: f32,
+    pub analytic_lights: Vec<GpuAnalyticLight>,
+    pub environment_pick: f32,
+    pub triangle_pick: f32,
+}
+
+/// The lights of `scene`, whose top-level BVH has root `scene_root` (the environment and
+/// distant lights are weighed by its bounding sphere).
+pub fn light_arrays(scene: &Scene, scene_root: Option<&BvhNode>) -> LightArrays {
+    let emissive = emissive_triangles(scene);
+    let selection = light_selection(scene, scene_root, emissive.power);
+    LightArrays {
+        light_triangles: emissive.triangles,
+        light_cdf: emissive.cdf,
+        light_power: emissive.power,
+        analytic_lights: selection.analytic_lights,
+        environment_pick: selection.environment_pick,
+        triangle_pick: selection.triangle_pick,
+    }
+}
+
+/// The instances of `scene` in the leaf order of `tlas`, given each mesh's BLAS root and
+/// flags (`SceneArrays::blas_root`, `SceneArrays::mesh_flags`).
+pub fn instance_arrays(
+    scene: &Scene,
+    tlas: Option<&crate::accel::Bvh>,
+    blas_root: &[u32],
+    mesh_flags: &[u32],
+) -> Vec<GpuInstance> {
+    let Some(tlas) = tlas else {
+        return Vec::new();
+    };
+    tlas.primitive_order
+        .iter()
+        .map(|&i| {
+            let inst = &scene.instances[i as usize];
+            GpuInstance {
+                to_world: rows(inst.transform),
+                to_object: rows(inst.transform.inverse()),
+                blas_root: blas_root[inst.mesh],
+                material: inst.material as u32,
+                flags: mesh_flags[inst.mesh],
+                _pad: 0,
+            }
+        })
+        .collect()
 }
 
 fn rows(m: glam::Affine3A) -> [[f32; 4]; 3] {
@@ -202,38 +266,34 @@ impl SceneArrays {
         // Instances in TLAS leaf order.
         if let Some(tlas) = &accel.tlas {
             a.tlas_nodes = tlas.nodes.clone();
-            a.instances = tlas
-                .primitive_order
-                .iter()
-                .map(|&i| {
-                    let inst = &scene.instances[i as usize];
-                    GpuInstance {
-                        to_world: rows(inst.transform),
-                        to_object: rows(inst.transform.inverse()),
-                        blas_root: blas_root[inst.mesh],
-                        material: inst.material as u32,
-                        flags: mesh_flags[inst.mesh],
-                        _pad: 0,
-                    }
-                })
-                .collect();
         }
+        a.instances = instance_arrays(scene, accel.tlas.as_ref(), &blas_root, &mesh_flags);
+        a.blas_root = blas_root;
+        a.mesh_flags = mesh_flags;
 
         a.materials = scene.materials.iter().map(pack_material).collect();
 
-        let emissive = emissive_triangles(scene);
-        let selection = light_selection(scene, a.tlas_nodes.first(), emissive.power);
-        a.light_triangles = emissive.triangles;
-        a.light_cdf = emissive.cdf;
-        a.light_power = emissive.power;
-        a.analytic_lights = selection.analytic_lights;
-        a.environment_pick = selection.environment_pick;
-        a.triangle_pick = selection.triangle_pick;
+        let lights = light_arrays(scene, a.tlas_nodes.first());
+        a.light_triangles = lights.light_triangles;
+        a.light_cdf = lights.light_cdf;
+        a.light_power = lights.light_power;
+        a.analytic_lights = lights.analytic_lights;
+        a.environment_pick = lights.environment_pick;
+        a.triangle_pick = lights.triangle_pick;
         if let Some(map) = &scene.environment_map {
             a.environment_data = environment_data(map);
         }
         a
     }
+}
+
+/// The principled lobes the materials of `scene`'s instances can reach.
+pub fn instanced_lobes(scene: &Scene) -> u32 {
+    scene
+        .instances
+        .iter()
+        .map(|i| scene.materials[i.material].lobes())
+        .fold(0, |all, l| all | l)
 }
 
 /// The largest storage binding the adapter allows.
@@ -272,7 +332,8 @@ fn storage_buffer<T: bytemuck::Pod + Default>(
         .create_buffer_init(&wgpu::util::BufferInitDescriptor {
             label: Some(name),
             contents: bytemuck::cast_slice(data),
-            usage: wgpu::BufferUsages::STORAGE,
+            // COPY_DST: edits write into the buffers in place (`Renderer::update`).
+            usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
         }))
 }
 
@@ -373,17 +434,16 @@ impl GpuScene {
                 &mut bytes,
             )?,
             texture_count: texture_table.images.len() as u32,
-            lobes: scene
-                .instances
-                .iter()
-                .map(|i| scene.materials[i.material].lobes())
-                .fold(0, |all, l| all | l),
+            lobes: instanced_lobes(scene),
             triangle_pick: a.triangle_pick,
             instance_count: a.instances.len() as u32,
             light_count: a.light_triangles.len() as u32,
             light_power: a.light_power,
             environment_pick: a.environment_pick,
             bytes,
+            tlas_root: a.tlas_nodes.first().copied(),
+            blas_root: a.blas_root,
+            mesh_flags: a.mesh_flags,
         })
     }
 }

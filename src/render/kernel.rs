@@ -126,6 +126,20 @@ impl KernelSource {
         Ok(module)
     }
 
+    fn cache_key(&self, layouts: usize, entry_point: &str) -> u64 {
+        use std::hash::{Hash, Hasher};
+        let mut hasher = std::collections::hash_map::DefaultHasher::new();
+        (&self.text, entry_point, layouts).hash(&mut hasher);
+        hasher.finish()
+    }
+
+    /// Whether [`KernelSource::create_pipeline`] would find this kernel in `ctx`'s
+    /// pipeline cache (and so compile nothing).
+    pub fn is_cached(&self, ctx: &GpuContext, layouts: usize, entry_point: &str) -> bool {
+        let key = self.cache_key(layouts, entry_point);
+        ctx.pipelines.lock().is_ok_and(|p| p.contains_key(&key))
+    }
+
     /// Validates, then creates the compute pipeline for `entry_point`.
     pub fn create_pipeline(
         &self,
@@ -133,10 +147,7 @@ impl KernelSource {
         layouts: &[&wgpu::BindGroupLayout],
         entry_point: &str,
     ) -> Result<wgpu::ComputePipeline, KernelError> {
-        use std::hash::{Hash, Hasher};
-        let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        (&self.text, entry_point, layouts.len()).hash(&mut hasher);
-        let key = hasher.finish();
+        let key = self.cache_key(layouts.len(), entry_point);
         let cached = ctx.pipelines.lock().ok().and_then(|p| p.get(&key).cloned());
         if let Some(pipeline) = cached {
             return Ok(pipeline);

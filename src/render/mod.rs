@@ -19,10 +19,13 @@ pub mod probe;
 mod readback;
 mod renderer;
 pub mod tables;
+mod update;
 
 pub use context::{Backend, GpuContext, GpuError};
 pub use export::export_film;
 pub use film_pieces::memory_check;
 pub use renderer::{
-    Aovs, Progress, RenderControl, RenderError, RenderSettings, RenderStats, Renderer,
+    Aovs, BuildInfo, Pacing, Progress, RenderControl, RenderError, RenderSettings, RenderStats,
+    Renderer,
 };
+pub use update::{UpdateError, Updated};

@@ -1,8 +1,10 @@
 //! The progressive renderer: uploads a scene once, then renders any range of sample
 //! indices into its film in whole-image passes. A pass adds the same number of samples
-//! to every pixel, in dispatches short enough that none runs long (tiles of at most
-//! 256×256 pixels, with the samples per pass adapted to a time target); the film lives on
-//! the device in pieces that each fit a binding (`film_pieces.rs`).
+//! to every pixel, in dispatches short enough that none runs long ([`Pacing`]: tiles of
+//! 256×256 pixels with the samples per pass adapted to a time target for a final render,
+//! or small tiles sized to a budget of a few milliseconds for the editor); the film lives
+//! on the device in pieces that each fit a binding (`film_pieces.rs`). An edit of the
+//! scene can be written into a built renderer (`update.rs`).
 //!
 //! A render stops (cancel, deadline) only between dispatches and never before the film
 //! holds one whole pass, so a stopped render has a sample in every pixel and sample
@@ -44,6 +46,26 @@ const TARGET_DISPATCH: Duration = Duration::from_millis(60);
 /// pixel of long paths (tests/determinism.rs checks every pixel's count); 64 is safe and
 /// already amortises the per-dispatch overhead.
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
+
+/// The first tile side of [`Pacing::Interactive`], and the range it adapts in: 16² pixels
+/// keep a dispatch's fixed cost small next to its work, 256² is the final render's tile.
+const INTERACTIVE_FIRST_TILE: u32 = 64;
+const INTERACTIVE_MIN_TILE: u32 = 16;
+
+/// The next tile side for a dispatch budget of `budget_us`, given that tiles of side
+/// `tile` took `mean` each: grows or shrinks the area by about 2× a step, in multiples of
+/// the workgroup size.
+fn adapt_tile(tile: u32, mean: Duration, budget_us: u32) -> u32 {
+    let budget = Duration::from_micros(budget_us as u64);
+    let next = if mean < budget / 2 {
+        tile * 3 / 2
+    } else if mean > budget * 3 / 2 {
+        tile * 2 / 3
+    } else {
+        tile
+    };
+    (next / WORKGROUP_SIZE * WORKGROUP_SIZE).clamp(INTERACTIVE_MIN_TILE, TILE_SIZE)
+}
 
 #[derive(Debug, Error)]
 pub enum RenderError {
@@ -198,12 +220,27 @@ pub struct BuildInfo {
     pub upload_bytes: u64,
     /// naga validation, pipeline creation and the driver's compile at first dispatch.
     pub kernel_build: Duration,
+    /// Whether the kernel was compiled for this renderer (false: the device's pipeline
+    /// cache had it).
+    pub kernel_compiled: bool,
 }
 
 pub struct Renderer {
-    ctx: Arc<GpuContext>,
+    pub(super) ctx: Arc<GpuContext>,
     pipeline: wgpu::ComputePipeline,
     params_buffer: wgpu::Buffer,
+    /// The scene's buffers, which edits write into (`update.rs`).
+    pub(super) gpu_scene: GpuScene,
+    /// The meshes' BVHs, kept so a transform edit rebuilds only the top level.
+    pub(super) blas: Vec<Option<crate::accel::Bvh>>,
+    /// What the kernel was built with: an edit that needs other features or other
+    /// material code needs a new renderer.
+    pub(super) features: KernelFeatures,
+    pub(super) materials_wgsl: Vec<(String, String)>,
+    /// How the passes are cut (see [`Pacing`]).
+    pacing: Pacing,
+    /// Side of the square tiles the interactive pacing dispatches; adapted to its budget.
+    tile_size: u32,
     /// The film, in bands of rows that each fit a binding.
     pieces: Vec<FilmPiece>,
     /// Whether every pixel of the film holds at least one whole pass: until it does,
@@ -211,10 +248,44 @@ pub struct Renderer {
     film_has_whole_pass: bool,
     stats_buffer: wgpu::Buffer,
     stats_staging: wgpu::Buffer,
-    base_params: GpuParams,
-    settings: RenderSettings,
+    pub(super) base_params: GpuParams,
+    pub(super) settings: RenderSettings,
     samples_per_dispatch: u32,
     pub build_info: BuildInfo,
+}
+
+/// The features of the kernel a renderer with `settings` builds for a scene needing
+/// `scene_features`.
+pub(super) fn kernel_features(
+    scene_features: KernelFeatures,
+    settings: &RenderSettings,
+) -> KernelFeatures {
+    let features = KernelFeatures {
+        aovs: settings.aovs,
+        ..scene_features
+    };
+    // `everything` keeps the bindings, so one layout serves both kernels.
+    if settings.specialize {
+        features
+    } else {
+        features.everything()
+    }
+}
+
+/// How a renderer cuts its passes into dispatches. Either way the film is the same bits
+/// (samples are functions of pixel and index alone); what differs is how long the device's
+/// queue is held at a time and what a render reports.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Pacing {
+    /// Tiles of 256×256 pixels with the samples per dispatch adapted to about 60 ms, the
+    /// statistics read back after each dispatch: throughput first (`kiln render`).
+    Final,
+    /// Square tiles adapted so that one dispatch takes about `budget_us` microseconds, and
+    /// statistics read once a pass, not after each dispatch: the queue is free between
+    /// dispatches for others (the editor's UI, on a software adapter that runs one
+    /// submission at a time). Progress reports come per dispatch but count rays only at
+    /// the end of a pass.
+    Interactive { budget_us: u32 },
 }
 
 /// The parts of `Params` fixed for a scene and settings.
@@ -284,23 +355,12 @@ impl Renderer {
 
         let kernel_start = Instant::now();
         let device = &ctx.device;
-        let scene_features = KernelFeatures {
-            aovs: settings.aovs,
-            ..gpu_scene.features()
-        };
-        // `everything` keeps the bindings, so one layout serves both kernels.
-        let features = if settings.specialize {
-            scene_features
-        } else {
-            scene_features.everything()
-        };
+        let features = kernel_features(gpu_scene.features(), &settings);
         let layout = scene_bind_group_layout(device, &features);
         let materials = super::materials::scene_materials_wgsl(scene)?;
-        let pipeline = path_tracing_kernel(&features, &materials).create_pipeline(
-            &ctx,
-            &[&layout],
-            "render",
-        )?;
+        let kernel = path_tracing_kernel(&features, &materials);
+        let kernel_compiled = !kernel.is_cached(&ctx, 1, "render");
+        let pipeline = kernel.create_pipeline(&ctx, &[&layout], "render")?;
 
         let (width, height) = (settings.width, settings.height);
         let film_bytes = width as u64 * height as u64 * SUM_BYTES;
@@ -358,10 +418,17 @@ impl Renderer {
                 upload,
                 upload_bytes: gpu_scene.bytes + 2 * film_bytes,
                 kernel_build: Duration::ZERO,
+                kernel_compiled,
             },
             ctx,
             pipeline,
             params_buffer,
+            gpu_scene,
+            blas: accel.blas,
+            features,
+            materials_wgsl: materials,
+            pacing: Pacing::Final,
+            tile_size: TILE_SIZE,
             pieces,
             film_has_whole_pass: false,
             stats_buffer,
@@ -373,7 +440,7 @@ impl Renderer {
         renderer.clear_film();
         // An empty dispatch makes drivers that compile lazily (lavapipe) do it now, so the
         // compile is counted here and not in the first samples.
-        renderer.dispatch(0, [0, 0], [0, 0], 0, 0)?;
+        renderer.dispatch(0, [0, 0], [0, 0], 0, 0, true)?;
         renderer.build_info.kernel_build = kernel_start.elapsed();
         Ok(renderer)
     }
@@ -412,14 +479,30 @@ impl Renderer {
         self.film_has_whole_pass = false;
     }
 
+    /// How passes are cut into dispatches from now on (see [`Pacing`]); the film is the
+    /// same either way.
+    pub fn set_pacing(&mut self, pacing: Pacing) {
+        self.pacing = pacing;
+        self.tile_size = match pacing {
+            Pacing::Final => TILE_SIZE,
+            Pacing::Interactive { .. } => INTERACTIVE_FIRST_TILE,
+        };
+    }
+
+    /// The side of the square tiles a pass is cut into at present.
+    pub fn tile_size(&self) -> u32 {
+        self.tile_size
+    }
+
     /// The tiles of a pass: (piece, origin, size), none straddling two pieces.
     fn tiles(&self) -> Vec<(usize, [u32; 2], [u32; 2])> {
         let width = self.settings.width;
+        let tile = self.tile_size;
         let mut tiles = Vec::new();
         for (i, piece) in self.pieces.iter().enumerate() {
-            for y in piece.rows.clone().step_by(TILE_SIZE as usize) {
-                for x in (0..width).step_by(TILE_SIZE as usize) {
-                    let size = [TILE_SIZE.min(width - x), TILE_SIZE.min(piece.rows.end - y)];
+            for y in piece.rows.clone().step_by(tile as usize) {
+                for x in (0..width).step_by(tile as usize) {
+                    let size = [tile.min(width - x), tile.min(piece.rows.end - y)];
                     tiles.push((i, [x, y], size));
                 }
             }
@@ -427,7 +510,11 @@ impl Renderer {
         tiles
     }
 
-    /// One dispatch over a tile of piece `piece`; returns the stats it produced.
+    /// One dispatch over a tile of piece `piece`. With `read_stats` it zeroes the
+    /// statistics first and returns what the dispatch produced, waiting for it; without,
+    /// the statistics keep adding up on the device (read by [`Renderer::take_stats`]) and
+    /// the call still waits for the dispatch to finish, so the caller's next submission
+    /// never queues behind more than one dispatch.
     fn dispatch(
         &mut self,
         piece: usize,
@@ -435,7 +522,8 @@ impl Renderer {
         size: [u32; 2],
         sample_start: u32,
         sample_count: u32,
-    ) -> Result<GpuStats, RenderError> {
+        read_stats: bool,
+    ) -> Result<Option<GpuStats>, RenderError> {
         let params = GpuParams {
             tile_origin: origin,
             tile_size: size,
@@ -446,11 +534,9 @@ impl Renderer {
         };
         let queue = &self.ctx.queue;
         queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
-        queue.write_buffer(
-            &self.stats_buffer,
-            0,
-            bytemuck::bytes_of(&GpuStats::default()),
-        );
+        if read_stats {
+            self.zero_stats();
+        }
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
@@ -466,6 +552,35 @@ impl Renderer {
                 1,
             );
         }
+        if !read_stats {
+            let index = queue.submit([encoder.finish()]);
+            self.ctx
+                .device
+                .poll(wgpu::PollType::Wait {
+                    submission_index: Some(index),
+                    timeout: None,
+                })
+                .map_err(|e| GpuError::Runtime {
+                    during: "a render dispatch".into(),
+                    message: e.to_string(),
+                })?;
+            return Ok(None);
+        }
+        queue.submit([encoder.finish()]);
+        self.take_stats().map(Some)
+    }
+
+    fn zero_stats(&self) {
+        self.ctx.queue.write_buffer(
+            &self.stats_buffer,
+            0,
+            bytemuck::bytes_of(&GpuStats::default()),
+        );
+    }
+
+    /// Reads the statistics the dispatches since they were last zeroed added up.
+    fn take_stats(&self) -> Result<GpuStats, RenderError> {
+        let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         encoder.copy_buffer_to_buffer(
             &self.stats_buffer,
             0,
@@ -473,7 +588,7 @@ impl Renderer {
             0,
             self.stats_staging.size(),
         );
-        queue.submit([encoder.finish()]);
+        self.ctx.queue.submit([encoder.finish()]);
         let bytes = map_and_read(&self.ctx, &self.stats_staging)?;
         Ok(*bytemuck::from_bytes::<GpuStats>(&bytes))
     }
@@ -509,6 +624,11 @@ impl Renderer {
             let pass_start = Instant::now();
             let mut pass_pixels = 0u64;
             let mut slowest = Duration::ZERO;
+            let mut pass_dispatch_time = Duration::ZERO;
+            let read_each = self.pacing == Pacing::Final;
+            if !read_each {
+                self.zero_stats();
+            }
             for &(piece, origin, size) in &tiles {
                 let stop = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
                     || control.deadline.is_some_and(|d| Instant::now() >= d);
@@ -517,15 +637,24 @@ impl Renderer {
                     break 'passes;
                 }
                 let t = Instant::now();
-                let s = self.dispatch(piece, origin, size, next, count)?;
+                let s = self.dispatch(piece, origin, size, next, count, read_each)?;
                 slowest = slowest.max(t.elapsed());
+                pass_dispatch_time += t.elapsed();
                 let tile_pixels = size[0] as u64 * size[1] as u64;
                 pass_pixels += tile_pixels;
                 stats.dispatches += 1;
-                stats.rays += s.rays as u64;
-                stats.non_finite += s.non_finite as u64;
+                if let Some(s) = s {
+                    stats.rays += s.rays as u64;
+                    stats.non_finite += s.non_finite as u64;
+                }
                 stats.pixel_samples += tile_pixels * count as u64;
                 let pass_done = pass_pixels == pixels;
+                if pass_done && !read_each {
+                    // One read-back a pass, not one per dispatch.
+                    let s = self.take_stats()?;
+                    stats.rays += s.rays as u64;
+                    stats.non_finite += s.non_finite as u64;
+                }
                 if pass_done {
                     if !self.film_has_whole_pass {
                         stats.first_pass = Some(pass_start.elapsed());
@@ -557,7 +686,11 @@ impl Renderer {
                 }
             }
             next += count;
-            // Batching changes only how work is cut, never the result.
+            // Batching and tiling change only how work is cut, never the result.
+            if let Pacing::Interactive { budget_us } = self.pacing {
+                let mean = pass_dispatch_time / tiles.len().max(1) as u32;
+                self.tile_size = adapt_tile(self.tile_size, mean, budget_us);
+            }
             if slowest < TARGET_DISPATCH / 2 {
                 self.samples_per_dispatch =
                     (self.samples_per_dispatch * 2).min(MAX_SAMPLES_PER_DISPATCH);

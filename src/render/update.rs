@@ -1,0 +1,344 @@
+//! Edits applied to a built [`Renderer`] in place: what a scene edit needs written, and
+//! only that. A transform edit rebuilds the top-level BVH and writes the instances (and
+//! the lights, whose world-space triangles and selection follow the instances); a light or
+//! material-parameter edit writes those buffers and recomputes the light distribution.
+//! None of them builds a mesh BVH or a kernel.
+//!
+//! An edit that cannot be written in place — a mesh changed, a buffer would have to grow,
+//! the kernel would need other features or other material code — is refused with
+//! [`UpdateError::NeedsRebuild`] saying why, and the renderer is left as it was; the
+//! caller builds a new renderer (`Renderer::new`), whose kernel comes from the device's
+//! pipeline cache unless its contents changed. Whatever the edit, clear the film
+//! ([`Renderer::clear_film`]) before rendering again.
+//!
+//! An updated renderer renders the same film, bit for bit, as one built afresh for the
+//! edited scene: both pack the same arrays with the same code (`gpu_scene.rs`), and
+//! `tests/incremental.rs` checks it.
+
+use thiserror::Error;
+
+use super::gpu_scene::{LightArrays, instance_arrays, instanced_lobes, light_arrays};
+use super::renderer::{RenderError, Renderer, kernel_features};
+use crate::accel::{Bvh, build_tlas};
+use crate::scene::Scene;
+use crate::shader::KernelFeatures;
+use crate::shader::gpu_types::{BvhNode, GpuInstance};
+
+/// Why an edit was not applied in place.
+#[derive(Debug, Error)]
+pub enum UpdateError {
+    /// The renderer cannot take the edit in place; build a new one. `kernel` says whether
+    /// the new one needs a kernel of other contents (a compile, unless cached).
+    #[error("the edit needs a new renderer: {reason}")]
+    NeedsRebuild { reason: String, kernel: bool },
+    #[error(transparent)]
+    Render(#[from] RenderError),
+}
+
+impl UpdateError {
+    fn rebuild(reason: impl Into<String>) -> Self {
+        Self::NeedsRebuild {
+            reason: reason.into(),
+            kernel: false,
+        }
+    }
+
+    fn kernel(reason: impl Into<String>) -> Self {
+        Self::NeedsRebuild {
+            reason: reason.into(),
+            kernel: true,
+        }
+    }
+}
+
+/// What [`Renderer::update`] wrote.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Updated {
+    pub camera: bool,
+    /// The top-level BVH and the instances (a transform or an instance's material).
+    pub instances: bool,
+    pub materials: bool,
+    /// The light distribution: analytic lights, emissive triangles, the environment's
+    /// colour and share.
+    pub lights: bool,
+    pub max_bounces: bool,
+}
+
+impl Updated {
+    /// Whether anything changed (and so the film must start over).
+    pub fn any(&self) -> bool {
+        self.camera || self.instances || self.materials || self.lights || self.max_bounces
+    }
+}
+
+impl Renderer {
+    /// Brings the renderer from `old` (the scene it renders) to `new` in place, writing
+    /// only what differs; refuses (changing nothing) what needs a new renderer.
+    pub fn update(&mut self, old: &Scene, new: &Scene) -> Result<Updated, UpdateError> {
+        if old.meshes != new.meshes {
+            return Err(UpdateError::rebuild("a mesh changed"));
+        }
+        if old.environment_map != new.environment_map {
+            return Err(UpdateError::rebuild("the environment map changed"));
+        }
+        if old.instances.len() != new.instances.len()
+            || old
+                .instances
+                .iter()
+                .zip(&new.instances)
+                .any(|(a, b)| a.mesh != b.mesh)
+        {
+            return Err(UpdateError::rebuild(
+                "instances were added, removed or remeshed",
+            ));
+        }
+        if old.materials.len() != new.materials.len() {
+            return Err(UpdateError::rebuild("materials were added or removed"));
+        }
+        if old.lights.len() != new.lights.len() {
+            return Err(UpdateError::rebuild("lights were added or removed"));
+        }
+        new.validate()
+            .map_err(|e| UpdateError::Render(RenderError::Scene(e)))?;
+        // Check everything that could refuse before writing anything, so that a refused
+        // edit leaves the renderer whole.
+        let materials = old.materials != new.materials;
+        let instances = old.instances != new.instances;
+        let lights = old.lights != new.lights || old.environment != new.environment;
+        self.check_features(new)?;
+        if materials {
+            self.check_materials(new)?;
+        }
+        let placed = if instances {
+            Some(self.place_instances(new)?)
+        } else {
+            None
+        };
+        let root = match &placed {
+            Some((tlas, _)) => tlas.as_ref().map(|t| t.nodes[0]),
+            None => self.gpu_scene.tlas_root,
+        };
+        let light_data = light_arrays(new, root.as_ref());
+        self.check_lights(&light_data)?;
+
+        let mut updated = Updated::default();
+        if materials {
+            self.write_materials(new)?;
+            updated.materials = true;
+        }
+        if let Some((tlas, packed)) = placed {
+            self.write_instances(tlas.as_ref(), &packed)?;
+            updated.instances = true;
+        }
+        // Emission is a material parameter and emissive triangles follow their instances,
+        // so any of the three moves light.
+        if instances || lights || materials {
+            self.write_lights(new, &light_data)?;
+            updated.lights = true;
+        }
+        if old.camera != new.camera {
+            self.set_camera(&new.camera);
+            updated.camera = true;
+        }
+        if old.settings.max_bounces != new.settings.max_bounces {
+            self.set_max_bounces(new.settings.max_bounces);
+            updated.max_bounces = true;
+        }
+        Ok(updated)
+    }
+
+    /// A transform (or an instance's material index) edit: rebuilds the top-level BVH over
+    /// the meshes' existing BVHs, writes it and the instances, then the lights. `scene`
+    /// must have the meshes and instance count the renderer was built with.
+    pub fn update_instances(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        self.check_features(scene)?;
+        let (tlas, packed) = self.place_instances(scene)?;
+        let lights = light_arrays(scene, tlas.as_ref().map(|t| &t.nodes[0]));
+        self.check_lights(&lights)?;
+        self.write_instances(tlas.as_ref(), &packed)?;
+        self.write_lights(scene, &lights)
+    }
+
+    /// The top-level BVH over the kept mesh BVHs and the instances packed in its order.
+    fn place_instances(
+        &self,
+        scene: &Scene,
+    ) -> Result<(Option<Bvh>, Vec<GpuInstance>), UpdateError> {
+        if scene.instances.len() as u32 != self.gpu_scene.instance_count {
+            return Err(UpdateError::rebuild(format!(
+                "the scene has {} instances, the renderer {}",
+                scene.instances.len(),
+                self.gpu_scene.instance_count
+            )));
+        }
+        let tlas = build_tlas(scene, &self.blas).map_err(RenderError::from)?;
+        let nodes = tlas.as_ref().map_or(0, |t| t.nodes.len());
+        if (nodes * std::mem::size_of::<BvhNode>()) as u64 > self.gpu_scene.tlas_nodes.size() {
+            return Err(UpdateError::rebuild(
+                "the instances' BVH outgrows its buffer",
+            ));
+        }
+        let packed = instance_arrays(
+            scene,
+            tlas.as_ref(),
+            &self.gpu_scene.blas_root,
+            &self.gpu_scene.mesh_flags,
+        );
+        Ok((tlas, packed))
+    }
+
+    fn write_instances(
+        &mut self,
+        tlas: Option<&Bvh>,
+        packed: &[GpuInstance],
+    ) -> Result<(), UpdateError> {
+        let nodes = tlas.map_or(&[][..], |t| &t.nodes[..]);
+        self.write("TLAS nodes", &self.gpu_scene.tlas_nodes, nodes)?;
+        self.write("instances", &self.gpu_scene.instances, packed)?;
+        self.gpu_scene.tlas_root = nodes.first().copied();
+        Ok(())
+    }
+
+    /// A light edit (an analytic light, the environment's colour): recomputes and writes
+    /// the light distribution. `scene` must have the renderer's light count.
+    pub fn update_lights(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        self.check_features(scene)?;
+        let lights = light_arrays(scene, self.gpu_scene.tlas_root.as_ref());
+        self.check_lights(&lights)?;
+        self.write_lights(scene, &lights)
+    }
+
+    /// A material-parameter edit: writes the materials, then the lights (an emission may
+    /// have changed). Refuses a change of a graph material's code or of the lobes the
+    /// kernel contains.
+    pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        self.check_materials(scene)?;
+        self.write_materials(scene)?;
+        self.update_lights(scene)
+    }
+
+    /// Changes the path length; a parameter, not a kernel change.
+    pub fn set_max_bounces(&mut self, max_bounces: u32) {
+        self.settings.max_bounces = max_bounces;
+        self.base_params.max_bounces = max_bounces;
+    }
+
+    fn check_materials(&self, scene: &Scene) -> Result<(), UpdateError> {
+        self.check_features(scene)?;
+        let packed = std::mem::size_of::<crate::shader::gpu_types::GpuMaterial>()
+            * scene.materials.len().max(1);
+        if packed as u64 != self.gpu_scene.materials.size() {
+            return Err(UpdateError::rebuild("the material count changed"));
+        }
+        let wgsl = super::materials::scene_materials_wgsl(scene).map_err(RenderError::from)?;
+        if wgsl != self.materials_wgsl {
+            return Err(UpdateError::kernel("a material graph's code changed"));
+        }
+        let textures = super::materials::scene_textures(scene);
+        let words = std::mem::size_of_val(&textures.gpu_words()[..]) as u64;
+        if textures.images.len() as u32 != self.gpu_scene.texture_count
+            || words > self.gpu_scene.textures.size()
+        {
+            return Err(UpdateError::kernel("the material graphs read other images"));
+        }
+        Ok(())
+    }
+
+    fn write_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        let packed: Vec<_> = scene
+            .materials
+            .iter()
+            .map(super::gpu_scene::pack_material)
+            .collect();
+        self.write("materials", &self.gpu_scene.materials, &packed)?;
+        let words = super::materials::scene_textures(scene).gpu_words();
+        if !words.is_empty() {
+            self.write("textures", &self.gpu_scene.textures, &words)?;
+        }
+        Ok(())
+    }
+
+    /// Refuses an edit after which the scene would need a kernel with other features
+    /// (a lobe, a light type the kernel left out).
+    fn check_features(&self, scene: &Scene) -> Result<(), UpdateError> {
+        let lights = light_arrays(scene, self.gpu_scene.tlas_root.as_ref());
+        let needed = kernel_features(
+            KernelFeatures {
+                lobes: instanced_lobes(scene),
+                analytic_lights: !lights.analytic_lights.is_empty(),
+                emissive_triangles: !lights.light_triangles.is_empty(),
+                ..self.gpu_scene.features()
+            },
+            &self.settings,
+        );
+        if needed != self.features {
+            return Err(UpdateError::kernel(
+                "the scene needs a kernel with other lobes or light types",
+            ));
+        }
+        Ok(())
+    }
+
+    fn check_lights(&self, lights: &LightArrays) -> Result<(), UpdateError> {
+        let fits = |bytes: usize, buffer: &wgpu::Buffer| bytes as u64 <= buffer.size();
+        let g = &self.gpu_scene;
+        if !fits(
+            std::mem::size_of_val(&lights.light_triangles[..]),
+            &g.light_triangles,
+        ) || !fits(std::mem::size_of_val(&lights.light_cdf[..]), &g.light_cdf)
+            || lights.analytic_lights.len() as u32 != g.analytic_light_count
+        {
+            return Err(UpdateError::rebuild(
+                "the emissive triangles or lights outgrow their buffers",
+            ));
+        }
+        Ok(())
+    }
+
+    fn write_lights(&mut self, scene: &Scene, lights: &LightArrays) -> Result<(), UpdateError> {
+        self.write(
+            "emissive triangles",
+            &self.gpu_scene.light_triangles,
+            &lights.light_triangles,
+        )?;
+        self.write("light CDF", &self.gpu_scene.light_cdf, &lights.light_cdf)?;
+        self.write(
+            "lights",
+            &self.gpu_scene.analytic_lights,
+            &lights.analytic_lights,
+        )?;
+        let g = &mut self.gpu_scene;
+        g.light_count = lights.light_triangles.len() as u32;
+        g.light_power = lights.light_power;
+        g.triangle_pick = lights.triangle_pick;
+        g.environment_pick = lights.environment_pick;
+        let p = &mut self.base_params;
+        p.light_count = g.light_count;
+        p.light_power = g.light_power;
+        p.triangle_pick = g.triangle_pick;
+        p.environment = scene.environment.extend(g.environment_pick).into();
+        Ok(())
+    }
+
+    /// Writes `data` at the start of `buffer`; nothing for empty data (the kernel reads no
+    /// element past the counts in its parameters).
+    fn write<T: bytemuck::Pod>(
+        &self,
+        name: &str,
+        buffer: &wgpu::Buffer,
+        data: &[T],
+    ) -> Result<(), UpdateError> {
+        let bytes: &[u8] = bytemuck::cast_slice(data);
+        if bytes.len() as u64 > buffer.size() {
+            return Err(UpdateError::rebuild(format!(
+                "the {name} outgrow their buffer ({} > {} bytes)",
+                bytes.len(),
+                buffer.size()
+            )));
+        }
+        if !bytes.is_empty() {
+            self.ctx.queue.write_buffer(buffer, 0, bytes);
+        }
+        Ok(())
+    }
+}

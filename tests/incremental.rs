@@ -1,0 +1,194 @@
+//! Edits written into a built renderer (`Renderer::update`) give the film, bit for bit,
+//! of a renderer built afresh for the edited scene, without building a kernel; what
+//! cannot be written in place is refused and leaves the renderer as it was. The
+//! interactive pacing (small tiles, statistics once a pass) renders the same bits as the
+//! final one.
+
+mod common;
+
+use std::sync::Arc;
+
+use common::{gpu, settings};
+use glam::{Affine3A, Quat, Vec3};
+use kiln::film::Film;
+use kiln::render::{
+    GpuContext, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
+};
+use kiln::scene::{self, Light, Scene};
+
+const SIZE: u32 = 48;
+const SAMPLES: u32 = 6;
+
+/// The Cornell box with a point light added, so that every kind of edit has a target.
+fn scene() -> Scene {
+    let mut s = scene::default_scene().expect("bundled scene");
+    s.lights.push(Light::Point {
+        position: Vec3::new(278.0, 400.0, 200.0),
+        intensity: Vec3::splat(2.0e4),
+        radius: 0.0,
+    });
+    s
+}
+
+fn render_settings(specialize: bool) -> RenderSettings {
+    RenderSettings {
+        specialize,
+        max_bounces: 4,
+        ..settings(SIZE, SIZE, SAMPLES)
+    }
+}
+
+fn film(renderer: &mut Renderer) -> Film {
+    let stats = renderer
+        .render(0..SAMPLES, RenderControl::default())
+        .expect("render");
+    assert!(stats.completed);
+    renderer.read_film().expect("film")
+}
+
+fn fresh(ctx: &Arc<GpuContext>, scene: &Scene, s: RenderSettings) -> Film {
+    film(&mut Renderer::new(Arc::clone(ctx), scene, s).expect("renderer"))
+}
+
+/// Builds a renderer for `old`, renders it, updates it to `new` and renders again;
+/// checks the result against a renderer built for `new` and that no kernel was
+/// compiled for the update. Returns what the update wrote.
+fn check_update(old: &Scene, new: &Scene, specialize: bool) -> Updated {
+    let ctx = gpu();
+    let s = render_settings(specialize);
+    let mut renderer = Renderer::new(Arc::clone(&ctx), old, s).expect("renderer");
+    let before = film(&mut renderer);
+    let compiled = ctx.pipelines_compiled();
+    let updated = renderer.update(old, new).expect("an in-place update");
+    renderer.clear_film();
+    let after = film(&mut renderer);
+    assert_eq!(
+        ctx.pipelines_compiled(),
+        compiled,
+        "an in-place update compiled a kernel"
+    );
+    assert!(after != before, "the edit did not change the image");
+    assert!(
+        after == fresh(&ctx, new, s),
+        "the updated renderer's film differs from a fresh renderer's ({updated:?})"
+    );
+    updated
+}
+
+#[test]
+fn a_transform_edit_rebuilds_only_the_instances() {
+    let old = scene();
+    let mut new = old.clone();
+    // The tall block, turned and moved.
+    let t = &mut new.instances[7].transform;
+    *t = Affine3A::from_translation(Vec3::new(-60.0, 0.0, 40.0))
+        * *t
+        * Affine3A::from_quat(Quat::from_rotation_y(0.4));
+    for specialize in [false, true] {
+        let updated = check_update(&old, &new, specialize);
+        assert!(updated.instances && !updated.materials, "{updated:?}");
+    }
+}
+
+#[test]
+fn moving_an_emitter_moves_its_light() {
+    let old = scene();
+    let mut new = old.clone();
+    // The ceiling light (instance 5) lowered and shifted: its emissive triangles and the
+    // light selection follow it.
+    new.instances[5].transform = Affine3A::from_translation(Vec3::new(60.0, -150.0, 0.0));
+    let updated = check_update(&old, &new, true);
+    assert!(updated.instances && updated.lights, "{updated:?}");
+}
+
+#[test]
+fn a_light_edit_writes_the_light_distribution() {
+    let old = scene();
+    let mut new = old.clone();
+    new.lights[0] = Light::Point {
+        position: Vec3::new(150.0, 300.0, 120.0),
+        intensity: Vec3::new(6.0e4, 2.0e4, 1.0e4),
+        radius: 20.0,
+    };
+    new.environment = Vec3::new(0.05, 0.06, 0.08);
+    let updated = check_update(&old, &new, false);
+    assert!(updated.lights && !updated.instances, "{updated:?}");
+}
+
+#[test]
+fn a_material_parameter_edit_writes_the_materials_and_emission() {
+    let old = scene();
+    let mut new = old.clone();
+    // The white walls turn blue; the light's emission changes colour and strength.
+    new.materials[0].principled.base_color = Vec3::new(0.2, 0.3, 0.7);
+    let light = new
+        .materials
+        .iter_mut()
+        .find(|m| m.is_emissive())
+        .expect("an emissive material");
+    light.principled.emission_strength *= 0.5;
+    light.principled.emission_color = Vec3::new(1.0, 0.5, 0.25);
+    for specialize in [false, true] {
+        let updated = check_update(&old, &new, specialize);
+        assert!(updated.materials && updated.lights, "{updated:?}");
+    }
+}
+
+#[test]
+fn edits_that_need_a_new_renderer_are_refused_and_change_nothing() {
+    let ctx = gpu();
+    let old = scene();
+    let s = render_settings(true);
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &old, s).expect("renderer");
+    let original = film(&mut renderer);
+
+    let mut added = old.clone();
+    added.instances.push(added.instances[6].clone());
+    let mut remeshed = old.clone();
+    remeshed.meshes[0].positions[0].y += 10.0;
+    let mut metal = old.clone();
+    // A metal lobe the specialised (matte) kernel leaves out: a new kernel.
+    metal.materials[0].principled.metallic = 1.0;
+    let mut invalid = old.clone();
+    invalid.instances[0].material = 99;
+
+    for (what, new, kernel) in [
+        ("an added instance", &added, Some(false)),
+        ("a changed mesh", &remeshed, Some(false)),
+        ("a new lobe", &metal, Some(true)),
+        ("an invalid scene", &invalid, None),
+    ] {
+        match (renderer.update(&old, new), kernel) {
+            (Err(UpdateError::NeedsRebuild { kernel: k, .. }), Some(expected)) => {
+                assert_eq!(k, expected, "{what}: whether a kernel is needed");
+            }
+            (Err(UpdateError::Render(_)), None) => {}
+            (other, _) => panic!("{what}: {other:?}"),
+        }
+    }
+    renderer.clear_film();
+    assert!(
+        film(&mut renderer) == original,
+        "a refused edit changed the renderer"
+    );
+}
+
+#[test]
+fn interactive_pacing_renders_the_same_bits() {
+    let ctx = gpu();
+    let s = render_settings(false);
+    let final_film = fresh(&ctx, &scene(), s);
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &scene(), s).expect("renderer");
+    // A budget far below any dispatch shrinks the tiles to the smallest size, which cuts
+    // the 48-pixel image unevenly.
+    renderer.set_pacing(Pacing::Interactive { budget_us: 1 });
+    for sample in 0..SAMPLES {
+        let stats = renderer
+            .render(sample..sample + 1, RenderControl::default())
+            .expect("render");
+        assert!(stats.completed);
+        assert!(stats.rays > 0, "the pass's statistics were read");
+    }
+    assert!(renderer.tile_size() < SIZE, "{}", renderer.tile_size());
+    assert!(renderer.read_film().expect("film") == final_film);
+}
