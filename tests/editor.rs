@@ -714,3 +714,36 @@ fn a_new_scene_gets_objects_and_lights_from_the_add_menu() {
     let scene = harness.state().document().scene();
     assert!(scene.instances.is_empty() && scene.lights.is_empty() && scene.materials.is_empty());
 }
+
+#[test]
+fn the_rotate_gizmo_turns_the_selection_about_the_grabbed_ring() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    harness.get_by_label("block").click();
+    harness.step();
+    harness.get_by_label("⟳ Rotate").click();
+    harness.step();
+    let rect = harness.state().viewport_rect().unwrap();
+    let start = harness.state().document().scene().instances[6].transform;
+    let view = kiln::editor::gizmo::ViewProjection {
+        camera: *harness.state().view(),
+        rect,
+    };
+    let rings = kiln::editor::gizmo::rings(&view, &start, kiln::editor::gizmo::Orientation::Global)
+        .unwrap();
+    // The Y ring's point farthest to the right of the origin, away from the others.
+    let grab = *rings[1].iter().max_by(|a, b| a.x.total_cmp(&b.x)).unwrap();
+    assert_eq!(kiln::editor::gizmo::ring_at(&rings, grab, 8.0), Some(1));
+    pointer(&mut harness, grab, None);
+    pointer(&mut harness, grab, Some(true));
+    for dy in [10.0, 25.0, 40.0] {
+        pointer(&mut harness, grab + egui::vec2(0.0, dy), None);
+    }
+    pointer(&mut harness, grab + egui::vec2(0.0, 40.0), Some(false));
+    let turned = harness.state().document().scene().instances[6].transform;
+    assert_eq!(turned.translation, start.translation);
+    assert_ne!(turned.matrix3, start.matrix3);
+    // About Y only: the object's up axis keeps its direction.
+    let up = |t: &glam::Affine3A| t.matrix3.y_axis.normalize();
+    assert!((up(&turned) - up(&start)).length() < 1e-4);
+}

@@ -154,6 +154,8 @@ pub struct EditorApp {
     tools_started: u64,
     /// Where Shift+A opened the Add menu over the viewport.
     add_menu_at: Option<egui::Pos2>,
+    /// The active tool, whose gizmo the selection shows (the viewport's toolbar).
+    gizmo_mode: Mode,
     error: Option<String>,
     pending: Option<Pending>,
     allow_close: bool,
@@ -260,6 +262,7 @@ impl EditorApp {
             orientation: Orientation::Global,
             tools_started: 0,
             add_menu_at: None,
+            gizmo_mode: Mode::Move,
             error,
             pending: None,
             allow_close: false,
@@ -1009,6 +1012,7 @@ impl EditorApp {
         }
         self.selection_outline(&painter, rect);
         self.draw_gizmo(&painter, rect);
+        self.toolbar(ui, rect);
         if let Some(error) = &status.error {
             painter.text(
                 rect.left_top() + egui::vec2(12.0, 12.0),
@@ -1193,13 +1197,18 @@ impl EditorApp {
             };
             let start = self.document.scene().instances[object].transform;
             let mut started = None;
-            // A drag that begins on a gizmo arrow moves along its axis.
+            // A drag that begins on a gizmo handle moves, turns or scales along its axis.
             if response.drag_started_by(PointerButton::Primary) {
-                let press = ui.input(|i| i.pointer.press_origin());
-                let arrows = gizmo::arrows(&self.projection(rect), &start, self.orientation);
-                if let (Some(arrows), Some(press)) = (arrows, press) {
-                    if let Some(axis) = gizmo::arrow_at(&arrows, press, 8.0) {
-                        started = Some((Mode::Move, Some(axis), press, true));
+                if let Some(press) = ui.input(|i| i.pointer.press_origin()) {
+                    let view = self.projection(rect);
+                    let axis = match self.gizmo_mode {
+                        Mode::Rotate => gizmo::rings(&view, &start, self.orientation)
+                            .and_then(|r| gizmo::ring_at(&r, press, 8.0)),
+                        _ => gizmo::arrows(&view, &start, self.orientation)
+                            .and_then(|a| gizmo::arrow_at(&a, press, 8.0)),
+                    };
+                    if let Some(axis) = axis {
+                        started = Some((self.gizmo_mode, Some(axis), press, true));
                     }
                 }
             }
@@ -1316,7 +1325,37 @@ impl EditorApp {
         }
     }
 
-    /// The move gizmo's arrows on the selected object, and the active tool's axis.
+    /// The tool buttons at the viewport's top left (Blender's toolbar): which gizmo the
+    /// selection shows.
+    fn toolbar(&mut self, ui: &Ui, rect: egui::Rect) {
+        egui::Area::new(egui::Id::new("viewport toolbar"))
+            .order(egui::Order::Foreground)
+            .fixed_pos(rect.left_top() + egui::vec2(8.0, 8.0))
+            .show(ui.ctx(), |ui| {
+                egui::Frame::menu(ui.style()).show(ui, |ui| {
+                    ui.horizontal(|ui| {
+                        for (mode, label, tip) in [
+                            (Mode::Move, "✥ Move", "Move gizmo (G moves by the mouse)"),
+                            (
+                                Mode::Rotate,
+                                "⟳ Rotate",
+                                "Rotate gizmo (R turns by the mouse)",
+                            ),
+                            (
+                                Mode::Scale,
+                                "⤢ Scale",
+                                "Scale gizmo (S scales by the mouse)",
+                            ),
+                        ] {
+                            ui.selectable_value(&mut self.gizmo_mode, mode, label)
+                                .on_hover_text(tip);
+                        }
+                    });
+                });
+            });
+    }
+
+    /// The active tool's gizmo on the selected object, and a modal tool's axis.
     fn draw_gizmo(&self, painter: &egui::Painter, rect: egui::Rect) {
         let Some(object) = self.selected_object() else {
             return;
@@ -1358,6 +1397,15 @@ impl EditorApp {
             );
             return;
         }
+        if self.gizmo_mode == Mode::Rotate {
+            if let Some(rings) = gizmo::rings(&view, &transform, self.orientation) {
+                for (axis, ring) in rings.into_iter().enumerate() {
+                    let stroke = egui::Stroke::new(2.0, gizmo::AXIS_COLORS[axis]);
+                    painter.add(egui::Shape::line(ring, stroke));
+                }
+            }
+            return;
+        }
         let Some(arrows) = gizmo::arrows(&view, &transform, self.orientation) else {
             return;
         };
@@ -1366,7 +1414,17 @@ impl EditorApp {
                 continue;
             }
             let color = gizmo::AXIS_COLORS[axis];
-            painter.arrow(*a, *b - *a, egui::Stroke::new(2.5, color));
+            if self.gizmo_mode == Mode::Scale {
+                // Scale handles: a line ending in a square, as Blender draws them.
+                painter.line_segment([*a, *b], egui::Stroke::new(2.5, color));
+                painter.rect_filled(
+                    egui::Rect::from_center_size(*b, egui::vec2(9.0, 9.0)),
+                    1.0,
+                    color,
+                );
+            } else {
+                painter.arrow(*a, *b - *a, egui::Stroke::new(2.5, color));
+            }
         }
         painter.circle_filled(arrows[0].0, 3.0, Color32::WHITE);
     }

@@ -1,8 +1,9 @@
 //! Transforming the selection in the viewport, as Blender does it: the modal tools G
 //! (move), R (rotate) and S (scale), each optionally constrained to an axis with X, Y or Z
 //! (pressed twice: the object's local axis), confirmed with a click or Enter and cancelled
-//! with Esc or a right click; and the move gizmo, three arrows at the object's origin that
-//! drag it along one axis.
+//! with Esc or a right click; and the gizmo of the active tool at the object's origin:
+//! arrows that move it along an axis, rings that turn it about one, handles that scale it
+//! along one.
 //!
 //! Pure geometry on a [`ViewProjection`]: which keys start a tool and how its frames
 //! become one undo step is the app's business (each frame is a `SetTransform` command of
@@ -215,6 +216,49 @@ pub fn arrow_at(arrows: &[(Pos2, Pos2); 3], pos: Pos2, radius: f32) -> Option<us
         .map(|(i, _)| i)
 }
 
+/// Points per ring of the rotate gizmo.
+const RING_POINTS: usize = 64;
+
+/// The rotate gizmo's rings for an object with `transform`: for each axis, the screen
+/// polyline of the circle about it (radius [`ARROW_POINTS`]); None when the origin is
+/// behind the view.
+pub fn rings(
+    view: &ViewProjection,
+    transform: &Affine3A,
+    orientation: Orientation,
+) -> Option<[Vec<Pos2>; 3]> {
+    let origin: Vec3 = transform.translation.into();
+    view.project(origin)?;
+    let radius = ARROW_POINTS * view.world_per_point(origin);
+    let ring = |axis| {
+        let normal = axis_direction(transform, Constraint { axis, orientation });
+        let (u, v) = normal.any_orthonormal_pair();
+        (0..=RING_POINTS)
+            .filter_map(|i| {
+                let t = i as f32 / RING_POINTS as f32 * std::f32::consts::TAU;
+                view.project(origin + (u * t.cos() + v * t.sin()) * radius)
+            })
+            .collect()
+    };
+    Some([ring(0), ring(1), ring(2)])
+}
+
+/// The ring of `rings` within `radius` points of `pos`, the nearest.
+pub fn ring_at(rings: &[Vec<Pos2>; 3], pos: Pos2, radius: f32) -> Option<usize> {
+    rings
+        .iter()
+        .enumerate()
+        .filter_map(|(i, ring)| {
+            ring.windows(2)
+                .map(|w| distance_to_segment(pos, w[0], w[1]))
+                .min_by(f32::total_cmp)
+                .map(|d| (i, d))
+        })
+        .filter(|(_, d)| *d <= radius)
+        .min_by(|x, y| x.1.total_cmp(&y.1))
+        .map(|(i, _)| i)
+}
+
 fn distance_to_segment(p: Pos2, a: Pos2, b: Pos2) -> f32 {
     let ab = b - a;
     let t = ((p - a).dot(ab) / ab.length_sq().max(1e-6)).clamp(0.0, 1.0);
@@ -300,6 +344,20 @@ mod tests {
         let scaled = modal_transform(Mode::Scale, &start, Some(y), &v, from, to);
         let (s, _, _) = scaled.to_scale_rotation_translation();
         assert!((s - Vec3::new(2.0, 6.0, 2.0)).length() < 1e-4, "{s:?}");
+    }
+
+    #[test]
+    fn a_ring_is_found_on_its_circle() {
+        let v = view();
+        let rings = rings(&v, &Affine3A::IDENTITY, Orientation::Global).unwrap();
+        // The Z ring faces the viewer: a circle of the arrow's length around the origin.
+        let centre = v.project(Vec3::ZERO).unwrap();
+        let on_circle = centre + egui::vec2(ARROW_POINTS, 0.0);
+        assert_eq!(
+            ring_at(&rings, on_circle + egui::vec2(0.0, -30.0), 6.0),
+            Some(2)
+        );
+        assert_eq!(ring_at(&rings, centre + egui::vec2(20.0, -30.0), 6.0), None);
     }
 
     #[test]
