@@ -80,6 +80,7 @@ pub struct EditorApp {
     frames_logged: u32,
     log_start: Instant,
     viewport_rect: Option<egui::Rect>,
+    node_editor: super::node_editor::NodeEditor,
 }
 
 impl EditorApp {
@@ -155,6 +156,7 @@ impl EditorApp {
             frames_logged: 0,
             log_start: Instant::now(),
             viewport_rect: None,
+            node_editor: Default::default(),
         }
     }
 
@@ -180,6 +182,11 @@ impl EditorApp {
     /// Where the viewport was laid out in the last frame (points).
     pub fn viewport_rect(&self) -> Option<egui::Rect> {
         self.viewport_rect
+    }
+
+    /// The node editor's state (the material it shows, where it drew its pins).
+    pub fn node_editor(&self) -> &super::node_editor::NodeEditor {
+        &self.node_editor
     }
 
     /// The error shown to the user, if any.
@@ -784,6 +791,14 @@ impl eframe::App for EditorApp {
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         self.status_bar(ui);
         self.side_panels(ui);
+        egui::Panel::bottom("node editor")
+            .resizable(true)
+            .default_size(340.0)
+            .show(ui, |ui| {
+                for (command, gesture) in self.node_editor.ui(ui, &self.document) {
+                    self.apply(command, gesture);
+                }
+            });
         egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));
         self.dialogs_ui(&ctx);
         self.update_title(&ctx);

@@ -9,16 +9,18 @@
 //!   finds what a click hits;
 //! - [`outliner`] and [`inspector`]: views of the document that return commands;
 //! - [`files`]: open, import and save, with the file dialogs behind a trait;
+//! - [`node_editor`]: the material list and the node editor of the shown material's
+//!   graph, whose edits are [`graph_edit::GraphEdit`]s applied as document commands;
 //! - [`app`]: the window that ties them together.
-//!
-//! Not here (yet): the node editor for material graphs, which builds on the same document.
 
 pub mod app;
 pub mod display;
 pub mod document;
 pub mod files;
+pub mod graph_edit;
 pub mod inspector;
 pub mod navigation;
+pub mod node_editor;
 pub mod outliner;
 pub mod pick;
 pub mod viewport;
