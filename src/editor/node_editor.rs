@@ -113,6 +113,9 @@ pub struct NodeEditor {
     to_global: TSTransform,
     pins: PinRects,
     rect: Option<egui::Rect>,
+    /// Set when the view should frame all nodes in the next frame (another material
+    /// shown, or Home).
+    frame_all: bool,
 }
 
 impl Default for NodeEditor {
@@ -131,6 +134,7 @@ impl Default for NodeEditor {
             to_global: TSTransform::IDENTITY,
             pins: PinRects::default(),
             rect: None,
+            frame_all: true,
         }
     }
 }
@@ -144,6 +148,9 @@ struct Viewer<'a> {
     search: &'a mut String,
     to_global: TSTransform,
     pins: PinRects,
+    /// The view to set this frame: the nodes' bounds in canvas coordinates and the
+    /// screen rectangle to fit them in.
+    frame: Option<(egui::Rect, egui::Rect)>,
 }
 
 impl NodeEditor {
@@ -213,14 +220,20 @@ impl NodeEditor {
             search: &mut self.search,
             to_global: self.to_global,
             pins: Rc::clone(&self.pins),
+            frame: None,
         };
         self.pins.borrow_mut().clear();
-        let response = SnarlWidget::new().id(canvas_id()).style(style()).show(
-            &mut self.snarl,
-            &mut viewer,
-            ui,
-        );
-        self.rect = Some(response.rect);
+        // The canvas fills what is left of the panel (snarl's response covers the whole
+        // plane it pans over, so it cannot tell where the canvas is).
+        let canvas = ui.available_rect_before_wrap();
+        if std::mem::take(&mut self.frame_all) {
+            viewer.frame = Some((bounds(&graph, &self.positions), canvas));
+        }
+        SnarlWidget::new()
+            .id(canvas_id())
+            .style(style())
+            .show(&mut self.snarl, &mut viewer, ui);
+        self.rect = Some(canvas);
         self.to_global = viewer.to_global;
         let mut edits = std::mem::take(&mut viewer.edits);
         if let Some(m) = viewer.message.take() {
@@ -232,7 +245,7 @@ impl NodeEditor {
         if let Some(moves) = self.moves(&graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
-        let hovered = ui.rect_contains_pointer(response.rect);
+        let hovered = ui.rect_contains_pointer(canvas);
         edits.extend(
             self.keyboard(ui, &graph, hovered)
                 .into_iter()
@@ -420,6 +433,9 @@ impl NodeEditor {
                 );
             }
         }
+        if self.shown.as_ref().is_none_or(|(m, _)| *m != material) {
+            self.frame_all = true;
+        }
         self.snarl = snarl;
         self.positions = laid;
         self.shown = Some((material, graph.clone()));
@@ -473,6 +489,9 @@ impl NodeEditor {
         let copy_event = ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Copy)));
         let paste_event =
             ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Paste(_))));
+        if pressed(Key::Home, Modifiers::NONE) {
+            self.frame_all = true;
+        }
         if pressed(Key::A, Modifiers::SHIFT) {
             self.add_menu = ctx.pointer_latest_pos();
             self.search.clear();
@@ -534,6 +553,46 @@ impl NodeEditor {
             .map(|kind| vec![new_node(graph, kind, graph_pos)])
             .unwrap_or_default()
     }
+}
+
+/// The bounds of the nodes at `positions` in canvas coordinates, with the layout's
+/// estimate of their sizes.
+fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
+    let mut bounds = egui::Rect::NOTHING;
+    for (id, p) in positions {
+        let Some(node) = graph.nodes.get(id) else {
+            continue;
+        };
+        let min = Pos2::new(p[0], p[1]);
+        bounds = bounds.union(egui::Rect::from_min_size(
+            min,
+            egui::vec2(
+                graph_edit::NODE_WIDTH,
+                graph_edit::estimated_height(graph, node),
+            ),
+        ));
+    }
+    if bounds.is_finite() {
+        bounds
+    } else {
+        egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 200.0))
+    }
+}
+
+/// The view that shows `bounds` in `canvas`: whole when it fits at a readable scale
+/// (at most 1, at least 0.4), else from its top, centred across.
+fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
+    let margin = 24.0;
+    let room = (canvas.size() - egui::vec2(2.0 * margin, 2.0 * margin)).max(egui::vec2(1.0, 1.0));
+    let fit = (room.x / bounds.width()).min(room.y / bounds.height());
+    let scale = fit.clamp(0.4, 1.0);
+    let x = canvas.center().x - bounds.center().x * scale;
+    let y = if bounds.height() * scale <= room.y {
+        canvas.center().y - bounds.center().y * scale
+    } else {
+        canvas.top() + margin - bounds.top() * scale
+    };
+    TSTransform::new(egui::vec2(x, y), scale)
 }
 
 /// A material name not in `materials`: `base`, or with Blender's `.001` suffixes.
@@ -1140,6 +1199,9 @@ impl SnarlViewer<String> for Viewer<'_> {
     }
 
     fn current_transform(&mut self, to_global: &mut TSTransform, _snarl: &mut Snarl<String>) {
+        if let Some((bounds, canvas)) = self.frame.take() {
+            *to_global = framing(bounds, canvas);
+        }
         self.to_global = *to_global;
     }
 }
