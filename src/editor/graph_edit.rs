@@ -433,8 +433,8 @@ pub fn layout(graph: &Graph) -> BTreeMap<String, [f32; 2]> {
     let top = out.values().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
     let bottom = graph
         .nodes
-        .iter()
-        .filter_map(|(_, n)| n.position.map(|p| p[1] + estimated_height(graph, n)))
+        .values()
+        .filter_map(|n| n.position.map(|p| p[1] + estimated_height(graph, n)))
         .fold(f32::NEG_INFINITY, f32::max);
     let start_y = if top.is_finite() {
         bottom + LAYOUT_GAP

@@ -497,15 +497,14 @@ impl NodeEditor {
             self.search.clear();
         }
         let selected = self.selected(ui);
-        if pressed(Key::X, Modifiers::NONE) || pressed(Key::Delete, Modifiers::NONE) {
-            if !selected.is_empty() {
-                edits.push(GraphEdit::Batch(
-                    selected
-                        .iter()
-                        .map(|id| GraphEdit::RemoveNode { id: id.clone() })
-                        .collect(),
-                ));
-            }
+        let delete = pressed(Key::X, Modifiers::NONE) || pressed(Key::Delete, Modifiers::NONE);
+        if delete && !selected.is_empty() {
+            edits.push(GraphEdit::Batch(
+                selected
+                    .iter()
+                    .map(|id| GraphEdit::RemoveNode { id: id.clone() })
+                    .collect(),
+            ));
         }
         let picked = |ids: &[String]| -> Vec<(String, Node)> {
             ids.iter()
@@ -662,7 +661,7 @@ fn add_menu(
         for category in categories {
             let defs: Vec<_> = nodes::library()
                 .iter()
-                .filter(|d| d.category == category && fits(*d))
+                .filter(|d| d.category == category && fits(d))
                 .collect();
             if defs.is_empty() {
                 continue;
@@ -680,7 +679,7 @@ fn add_menu(
             .max_height(300.0)
             .show(ui, |ui| {
                 for def in nodes::library().iter().filter(|d| {
-                    fits(*d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
+                    fits(d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
                 }) {
                     if ui
                         .button(def.label)
