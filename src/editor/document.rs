@@ -852,4 +852,91 @@ mod tests {
         );
         assert!((back.scale - trs.scale).abs().max_element() < 1e-4);
     }
+
+    #[test]
+    fn a_graph_edit_that_does_not_compile_keeps_the_last_material_and_undo_restores_it() {
+        let mut doc = document();
+        let before = doc.scene().materials[0].clone();
+        let start = doc.material_graph(0).unwrap();
+        // Removing the surface leaves the output without a shader: still compiles (the
+        // default surface); removing the output does not.
+        let output = start
+            .nodes
+            .iter()
+            .find(|(_, n)| n.kind == "material_output")
+            .map(|(id, _)| id.clone())
+            .unwrap();
+        doc.apply(
+            Command::EditGraph {
+                material: 0,
+                edit: GraphEdit::RemoveNode { id: output },
+            },
+            None,
+        )
+        .unwrap();
+        let error = doc.graph_error(0).expect("no output is a compile error");
+        assert!(!error.message.is_empty());
+        assert_eq!(
+            doc.scene().materials[0],
+            before,
+            "the last valid material renders"
+        );
+        assert_ne!(
+            doc.material_graph(0).unwrap(),
+            start,
+            "the edited graph is kept"
+        );
+        assert!(doc.undo());
+        assert!(doc.graph_error(0).is_none());
+        assert_eq!(doc.material_graph(0).unwrap(), start);
+        assert_eq!(doc.scene().materials[0], before);
+    }
+
+    #[test]
+    fn materials_are_added_assigned_renamed_and_removed_with_undo() {
+        let mut doc = document();
+        let count = doc.scene().materials.len();
+        let used = doc.scene().instances[6].material;
+        doc.apply(
+            Command::AddMaterial {
+                index: 0,
+                material: Box::new(Material::diffuse("new", Vec3::ONE)),
+                pending: None,
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.scene().materials[0].name, "new");
+        assert_eq!(
+            doc.scene().instances[6].material,
+            used + 1,
+            "objects keep their material when one is inserted before it"
+        );
+        let err = doc
+            .apply(Command::RemoveMaterial { index: used + 1 }, None)
+            .unwrap_err();
+        assert!(err.0.contains("used by"), "{err}");
+        doc.apply(
+            Command::AssignMaterial {
+                object: 6,
+                material: 0,
+            },
+            None,
+        )
+        .unwrap();
+        doc.apply(
+            Command::RenameMaterial {
+                material: 0,
+                name: "renamed".into(),
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.scene().materials[0].name, "renamed");
+        assert_eq!(doc.scene().instances[6].material, 0);
+        while doc.undo() {}
+        assert_eq!(doc.scene().materials.len(), count);
+        assert_eq!(doc.scene().instances[6].material, used);
+        assert!(!doc.is_dirty());
+    }
 }
