@@ -269,4 +269,59 @@ fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
     steps(&mut harness, 2);
     assert_eq!(std::fs::read(&saved).unwrap(), first);
+
+    // Keyboard over the canvas: Shift+click the noise node's header to select it, Shift+D
+    // duplicates it, Ctrl+C / Ctrl+V paste another copy, X deletes the selected node.
+    let header = {
+        let node_editor = harness.state().node_editor();
+        let top = node_editor.node_position("noise_texture").unwrap();
+        let left = pin(&harness, "noise_texture", "vector", true);
+        let right = pin(&harness, "noise_texture", "color", false);
+        egui::pos2((left.x + right.x) / 2.0, top.y + (right.y - top.y) * 0.3)
+    };
+    harness.event(egui::Event::PointerMoved(header));
+    harness.step();
+    // Snarl selects with Shift+click (a plain click only raises the node).
+    for pressed in [true, false] {
+        harness.event_modifiers(
+            egui::Event::PointerButton {
+                pos: header,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: egui::Modifiers::SHIFT,
+            },
+            egui::Modifiers::SHIFT,
+        );
+        harness.step();
+    }
+    steps(&mut harness, 2);
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::D);
+    steps(&mut harness, 3);
+    let duplicated = graph(harness.state());
+    assert_eq!(duplicated.nodes["noise_texture_2"].kind, "noise_texture");
+    assert_eq!(
+        duplicated.nodes["noise_texture_2"].inputs["scale"],
+        Input::from(12.5),
+        "a duplicate keeps its values"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::C);
+    steps(&mut harness, 2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::V);
+    steps(&mut harness, 3);
+    assert!(graph(harness.state()).nodes.contains_key("noise_texture_3"));
+    harness.key_press(egui::Key::X);
+    steps(&mut harness, 3);
+    let deleted = graph(harness.state());
+    assert!(!deleted.nodes.contains_key("noise_texture"));
+    assert!(
+        !deleted.nodes["surface"].inputs.contains_key("base_color"),
+        "deleting a node removes its wires"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 2);
+    assert_eq!(
+        graph(harness.state()).nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("noise_texture", "color")),
+        "undo restores the node and its wires"
+    );
 }

@@ -245,7 +245,12 @@ impl NodeEditor {
         if let Some(moves) = self.moves(&graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
-        let hovered = ui.rect_contains_pointer(canvas);
+        // The pointer over the canvas, whichever of snarl's layers it is over (its nodes
+        // sit on a layer of their own).
+        let hovered = ui
+            .ctx()
+            .pointer_hover_pos()
+            .is_some_and(|p| canvas.contains(p));
         edits.extend(
             self.keyboard(ui, &graph, hovered)
                 .into_iter()
@@ -968,6 +973,9 @@ impl SnarlViewer<String> for Viewer<'_> {
         snarl: &mut Snarl<String>,
     ) {
         let id = snarl[node].clone();
+        // Node text is not selectable, so a click anywhere on a node reaches the node
+        // (to select or drag it), as in Blender.
+        ui.style_mut().interaction.selectable_labels = false;
         ui.label(self.title(&id));
         if self.error_on(&id).is_some() {
             ui.label(RichText::new("⚠").color(Color32::LIGHT_RED));
@@ -995,6 +1003,7 @@ impl SnarlViewer<String> for Viewer<'_> {
             .get(pin.id.input)
             .cloned()
             .unwrap_or(("?".into(), SocketType::Float));
+        ui.style_mut().interaction.selectable_labels = false;
         let label = ui.label(&name);
         if pin.remotes.is_empty() && ty != SocketType::Bsdf {
             self.value_ui(ui, &id, &name, ty, label.id);
@@ -1015,6 +1024,7 @@ impl SnarlViewer<String> for Viewer<'_> {
             .get(pin.id.output)
             .cloned()
             .unwrap_or(("?".into(), SocketType::Float));
+        ui.style_mut().interaction.selectable_labels = false;
         ui.label(&name);
         self.pin(&id, Side::Output, &name, ty)
     }
