@@ -413,7 +413,18 @@ fn duplicate_and_delete_are_undoable_and_a_duplicate_shares_its_mesh() {
     harness.get_by_label("block.001").click_secondary();
     harness.step();
     harness.step();
-    harness.get_by_label("Duplicate").click();
+    // The context menu's entry, beside the outliner (the node editor's material list
+    // has a Duplicate button too).
+    let panel_left = harness.state().viewport_rect().unwrap().right();
+    harness
+        .query_all_by_label("Duplicate")
+        .find(|n| {
+            n.accesskit_node()
+                .bounding_box()
+                .is_some_and(|b| b.x0 as f32 > panel_left)
+        })
+        .expect("the outliner's context menu")
+        .click();
     harness.step();
     harness.step();
     let count = harness.state().document().objects().len();
@@ -546,12 +557,16 @@ fn the_main_window_matches_its_snapshot() {
     let mut harness = harness(ScriptedDialogs::default());
     harness.get_by_label("block").click();
     step_until(&mut harness, "the first samples", samples_done);
+    // Let the node editor's framing and the last texture update settle.
+    for _ in 0..10 {
+        harness.step();
+    }
     let image = harness.render().expect("the window renders");
     // The status line (samples per second, elapsed time) differs from run to run: the
-    // snapshot stops above it.
+    // snapshot (menu, viewport, properties, node editor) stops above it.
     let ppp = harness.ctx.pixels_per_point();
-    let viewport = harness.state().viewport_rect().unwrap();
-    let height = (viewport.bottom() * ppp).floor() as u32;
+    let status = harness.state().status_rect().unwrap();
+    let height = (status.top() * ppp).floor() as u32;
     let window = image::imageops::crop_imm(&image, 0, 0, image.width(), height).to_image();
     egui_kittest::image_snapshot_options(
         &window,

@@ -164,6 +164,8 @@ pub struct EditorApp {
     frames_logged: u32,
     log_start: Instant,
     viewport_rect: Option<egui::Rect>,
+    status_rect: Option<egui::Rect>,
+    node_editor: super::node_editor::NodeEditor,
 }
 
 impl EditorApp {
@@ -270,6 +272,8 @@ impl EditorApp {
             frames_logged: 0,
             log_start: Instant::now(),
             viewport_rect: None,
+            status_rect: None,
+            node_editor: Default::default(),
         }
     }
 
@@ -297,9 +301,19 @@ impl EditorApp {
         self.viewport_rect
     }
 
+    /// The node editor's state (the material it shows, where it drew its pins).
+    pub fn node_editor(&self) -> &super::node_editor::NodeEditor {
+        &self.node_editor
+    }
+
     /// The error shown to the user, if any.
     pub fn error(&self) -> Option<&str> {
         self.error.as_deref()
+    }
+
+    /// Where the status line was laid out in the last frame (points).
+    pub fn status_rect(&self) -> Option<egui::Rect> {
+        self.status_rect
     }
 
     /// Whether the unsaved-changes prompt is showing.
@@ -614,7 +628,12 @@ impl EditorApp {
         if ctx.input(|i| i.key_pressed(Key::F12)) {
             self.start_render(ctx);
         }
-        if ctx.input_mut(|i| i.consume_shortcut(&DUPLICATE)) {
+        // Over the node editor, these keys are the node editor's (its nodes, not objects).
+        let over_nodes = ctx
+            .pointer_hover_pos()
+            .zip(self.node_editor.canvas_rect())
+            .is_some_and(|(p, rect)| rect.contains(p));
+        if !over_nodes && ctx.input_mut(|i| i.consume_shortcut(&DUPLICATE)) {
             if let Some(command) = self
                 .document
                 .selection
@@ -626,7 +645,7 @@ impl EditorApp {
         let delete = ctx.input(|i| {
             i.key_pressed(Key::Delete) || (i.key_pressed(Key::X) && i.modifiers.is_none())
         });
-        if delete && self.tool.is_none() {
+        if delete && self.tool.is_none() && !over_nodes {
             if let Some(command) = self
                 .document
                 .selection
@@ -635,10 +654,10 @@ impl EditorApp {
                 self.apply(command, None);
             }
         }
-        if ctx.input(|i| i.key_pressed(Key::Home)) {
+        if !over_nodes && ctx.input(|i| i.key_pressed(Key::Home)) {
             self.view = navigation::frame_all(&self.view, self.document.scene());
         }
-        if ctx.input(|i| i.key_pressed(Key::F)) {
+        if !over_nodes && ctx.input(|i| i.key_pressed(Key::F)) {
             self.frame_selected();
         }
     }
@@ -921,7 +940,7 @@ impl EditorApp {
     }
 
     fn status_bar(&mut self, ui: &mut Ui) {
-        egui::Panel::bottom("status").show(ui, |ui| {
+        let panel = egui::Panel::bottom("status").show(ui, |ui| {
             ui.horizontal(|ui| {
                 if let Some(status) = self.viewport_status() {
                     let rate = status.samples_per_second();
@@ -950,6 +969,7 @@ impl EditorApp {
                 }
             });
         });
+        self.status_rect = Some(panel.response.rect);
     }
 
     fn viewport_ui(&mut self, ui: &mut Ui) {
@@ -1335,7 +1355,7 @@ impl EditorApp {
                 egui::Frame::menu(ui.style()).show(ui, |ui| {
                     ui.horizontal(|ui| {
                         for (mode, label, tip) in [
-                            (Mode::Move, "✥ Move", "Move gizmo (G moves by the mouse)"),
+                            (Mode::Move, "✚ Move", "Move gizmo (G moves by the mouse)"),
                             (
                                 Mode::Rotate,
                                 "⟳ Rotate",
@@ -1343,7 +1363,7 @@ impl EditorApp {
                             ),
                             (
                                 Mode::Scale,
-                                "⤢ Scale",
+                                "⛶ Scale",
                                 "Scale gizmo (S scales by the mouse)",
                             ),
                         ] {
@@ -1758,6 +1778,14 @@ impl eframe::App for EditorApp {
         egui::Panel::top("menu").show(ui, |ui| self.menu_bar(ui));
         self.status_bar(ui);
         self.side_panels(ui);
+        egui::Panel::bottom("node editor")
+            .resizable(true)
+            .default_size(340.0)
+            .show(ui, |ui| {
+                for (command, gesture) in self.node_editor.ui(ui, &self.document) {
+                    self.apply(command, gesture);
+                }
+            });
         egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));
         self.dialogs_ui(&ctx);
         self.update_title(&ctx);

@@ -15,7 +15,10 @@ use std::path::{Path, PathBuf};
 
 use glam::{Affine3A, EulerRot, Quat, Vec3};
 
-use crate::scene::{Camera, EnvironmentMap, Instance, Light, Scene, SceneSettings};
+use super::graph_edit::GraphEdit;
+use crate::material::texture::load_texture;
+use crate::material::{Graph, GraphError};
+use crate::scene::{Camera, EnvironmentMap, Instance, Light, Material, Scene, SceneSettings};
 use crate::shader::principled::ParamValue;
 
 /// What can be selected.
@@ -81,6 +84,36 @@ pub enum Command {
         value: Light,
         state: ItemState,
     },
+    /// An edit of a material's node graph ([`GraphEdit`]). A graph that no longer
+    /// compiles is kept as the edited graph with its error, and the material renders as
+    /// it last compiled.
+    EditGraph {
+        material: usize,
+        edit: GraphEdit,
+    },
+    /// Inserts a material at `index` (later materials move up one); `pending` is an
+    /// edited graph that did not compile, restored with it.
+    AddMaterial {
+        index: usize,
+        material: Box<Material>,
+        pending: Option<Box<(Graph, GraphError)>>,
+    },
+    /// Replaces a material whole, with the edited graph that did not compile, if any
+    /// (what undoes a graph edit of a material that had no graph).
+    SetMaterial {
+        material: usize,
+        value: Box<Material>,
+        pending: Option<Box<(Graph, GraphError)>>,
+    },
+    /// Removes a material no object uses.
+    RemoveMaterial {
+        index: usize,
+    },
+    RenameMaterial {
+        material: usize,
+        name: String,
+    },
+    /// Gives an object another material.
     AssignMaterial {
         object: usize,
         material: usize,
@@ -135,9 +168,17 @@ impl Command {
             Command::SetCamera(_) => (3, 0, ""),
             Command::Rename { .. } => (4, 0, ""),
             Command::SetVisible { .. } => (5, 0, ""),
-            Command::SetSettings(_) => (6, 0, ""),
-            Command::SetEnvironmentColor(_) => (7, 0, ""),
-            Command::SetEnvironmentMapParams { .. } => (8, 0, ""),
+            Command::SetSettings(_) => (12, 0, ""),
+            Command::SetEnvironmentColor(_) => (13, 0, ""),
+            Command::SetEnvironmentMapParams { .. } => (14, 0, ""),
+            Command::EditGraph { material, edit } => {
+                (6, *material, if edit.only_moves() { "move" } else { "" })
+            }
+            Command::AddMaterial { .. } => (7, 0, ""),
+            Command::SetMaterial { material, .. } => (11, *material, ""),
+            Command::RemoveMaterial { .. } => (8, 0, ""),
+            Command::RenameMaterial { material, .. } => (9, *material, ""),
+            Command::AssignMaterial { object, .. } => (10, *object, ""),
             // Structural edits never merge: each is its own step.
             _ => (u8::MAX, usize::MAX, ""),
         }
@@ -145,7 +186,11 @@ impl Command {
 
     /// Whether the command changes what is rendered (a rename does not).
     pub fn changes_image(&self) -> bool {
-        !matches!(self, Command::Rename { .. })
+        match self {
+            Command::Rename { .. } | Command::RenameMaterial { .. } => false,
+            Command::EditGraph { edit, .. } => !edit.only_moves(),
+            _ => true,
+        }
     }
 }
 
@@ -206,6 +251,9 @@ pub struct Document {
     /// Images an importer embedded, written beside the scene when it is saved.
     images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
     pub selection: Option<Selection>,
+    /// Edited graphs that do not compile, by material, with the compiler's error; the
+    /// scene keeps such a material as it last compiled.
+    pending_graphs: std::collections::BTreeMap<usize, (Graph, GraphError)>,
     path: Option<PathBuf>,
     undo: Vec<Step>,
     redo: Vec<Step>,
@@ -257,6 +305,7 @@ impl Document {
             lights,
             images,
             selection: None,
+            pending_graphs: std::collections::BTreeMap::new(),
             path,
             undo: Vec::new(),
             redo: Vec::new(),
@@ -464,6 +513,25 @@ impl Document {
             },
             value: light,
         }
+    }
+
+    /// The graph of material `material` as edited: a graph that does not compile, the
+    /// material's graph, or for a material of fixed parameters the one-node graph holding
+    /// them. `None` when there is no such material.
+    pub fn material_graph(&self, material: usize) -> Option<Graph> {
+        if let Some((graph, _)) = self.pending_graphs.get(&material) {
+            return Some(graph.clone());
+        }
+        let m = self.scene.materials.get(material)?;
+        Some(match &m.graph {
+            Some(g) => g.graph.clone(),
+            None => crate::scene::graph_from_principled(m),
+        })
+    }
+
+    /// Why material `material`'s edited graph does not compile, if it does not.
+    pub fn graph_error(&self, material: usize) -> Option<&GraphError> {
+        self.pending_graphs.get(&material).map(|(_, e)| e)
     }
 
     /// Bumped by every applied, undone or redone command.
@@ -678,6 +746,109 @@ impl Document {
                 let old = std::mem::replace(slot, name);
                 Ok(Command::Rename { target, name: old })
             }
+            Command::EditGraph { material, edit } => self.edit_graph(material, edit),
+            Command::AddMaterial {
+                index,
+                material,
+                pending,
+            } => {
+                if index > self.scene.materials.len() {
+                    return err(format!("no material slot {index}"));
+                }
+                material.validate().map_err(CommandError)?;
+                self.scene.materials.insert(index, *material);
+                for instance in &mut self.scene.instances {
+                    if instance.material >= index {
+                        instance.material += 1;
+                    }
+                }
+                self.pending_graphs = std::mem::take(&mut self.pending_graphs)
+                    .into_iter()
+                    .map(|(i, p)| (if i >= index { i + 1 } else { i }, p))
+                    .collect();
+                if let Some(pending) = pending {
+                    self.pending_graphs.insert(index, *pending);
+                }
+                Ok(Command::RemoveMaterial { index })
+            }
+            Command::SetMaterial {
+                material,
+                value,
+                pending,
+            } => {
+                let Some(slot) = self.scene.materials.get_mut(material) else {
+                    return err(format!("no material {material}"));
+                };
+                value.validate().map_err(CommandError)?;
+                let old = std::mem::replace(slot, *value);
+                let old_pending = match pending {
+                    Some(p) => self.pending_graphs.insert(material, *p),
+                    None => self.pending_graphs.remove(&material),
+                };
+                Ok(Command::SetMaterial {
+                    material,
+                    value: Box::new(old),
+                    pending: old_pending.map(Box::new),
+                })
+            }
+            Command::RemoveMaterial { index } => {
+                let Some(m) = self.scene.materials.get(index) else {
+                    return err(format!("no material {index}"));
+                };
+                if let Some(user) = self
+                    .scene
+                    .instances
+                    .iter()
+                    .position(|i| i.material == index)
+                {
+                    return err(format!(
+                        "material \"{}\" is used by \"{}\": assign another material first",
+                        m.name, self.scene.instances[user].name
+                    ));
+                }
+                let material = self.scene.materials.remove(index);
+                for instance in &mut self.scene.instances {
+                    if instance.material > index {
+                        instance.material -= 1;
+                    }
+                }
+                let pending = self.pending_graphs.remove(&index).map(Box::new);
+                self.pending_graphs = std::mem::take(&mut self.pending_graphs)
+                    .into_iter()
+                    .map(|(i, p)| (if i > index { i - 1 } else { i }, p))
+                    .collect();
+                Ok(Command::AddMaterial {
+                    index,
+                    material: Box::new(material),
+                    pending,
+                })
+            }
+            Command::RenameMaterial { material, name } => {
+                let Some(m) = self.scene.materials.get_mut(material) else {
+                    return err(format!("no material {material}"));
+                };
+                if name.trim().is_empty() {
+                    return err("a name cannot be empty".into());
+                }
+                let old = std::mem::replace(&mut m.name, name);
+                Ok(Command::RenameMaterial {
+                    material,
+                    name: old,
+                })
+            }
+            Command::AssignMaterial { object, material } => {
+                if material >= self.scene.materials.len() {
+                    return err(format!("no material {material}"));
+                }
+                let Some(instance) = self.scene.instances.get_mut(object) else {
+                    return err(format!("no object {object}"));
+                };
+                let old = std::mem::replace(&mut instance.material, material);
+                Ok(Command::AssignMaterial {
+                    object,
+                    material: old,
+                })
+            }
             Command::SetVisible { target, visible } => {
                 let slot = match target {
                     Selection::Object(i) => self.scene.instances.get_mut(i).map(|o| &mut o.visible),
@@ -745,19 +916,6 @@ impl Document {
                 self.lights.insert(light, state);
                 self.selection = Some(Selection::Light(light));
                 Ok(Command::DeleteLight { light })
-            }
-            Command::AssignMaterial { object, material } => {
-                if material >= self.scene.materials.len() {
-                    return err(format!("no material {material}"));
-                }
-                let Some(instance) = self.scene.instances.get_mut(object) else {
-                    return err(format!("no object {object}"));
-                };
-                let old = std::mem::replace(&mut instance.material, material);
-                Ok(Command::AssignMaterial {
-                    object,
-                    material: old,
-                })
             }
             Command::SetSettings(settings) => {
                 crate::scene::validate_image_size(settings.width, settings.height)
@@ -846,6 +1004,8 @@ impl Document {
                 let mut removed = Scene::empty(self.scene.camera);
                 removed.meshes = self.scene.meshes.split_off(counts.meshes);
                 removed.materials = self.scene.materials.split_off(counts.materials);
+                // Edited graphs of the removed materials go with them.
+                self.pending_graphs.retain(|&m, _| m < counts.materials);
                 removed.instances = self
                     .scene
                     .instances
@@ -883,6 +1043,58 @@ fn shifted_selection(selection: Option<Selection>, removed: Selection) -> Option
         }
         (Some(Selection::Light(i)), Selection::Light(r)) if i > r => Some(Selection::Light(i - 1)),
         (s, _) => s,
+    }
+}
+
+impl Document {
+    /// Applies a graph edit to material `material`'s edited graph and recompiles it: a
+    /// graph that compiles replaces the material; one that does not is kept with its
+    /// error beside the material as it last compiled.
+    fn edit_graph(&mut self, material: usize, edit: GraphEdit) -> Result<Command, CommandError> {
+        let Some(mut graph) = self.material_graph(material) else {
+            return Err(CommandError(format!("no material {material}")));
+        };
+        let name = self.scene.materials[material].name.clone();
+        // A material of fixed parameters becomes a graph material with its first graph
+        // edit; undoing that edit gives back the material it was.
+        let before = self.scene.materials[material]
+            .graph
+            .is_none()
+            .then(|| Box::new(self.scene.materials[material].clone()));
+        let inverse = edit
+            .apply(&mut graph)
+            .map_err(|e| CommandError(format!("material \"{name}\": {e}")))?;
+        // Images the material already holds (an importer's embedded ones among them) are
+        // reused rather than read again.
+        let known = self.scene.materials[material]
+            .graph
+            .as_ref()
+            .map(|g| g.images.clone())
+            .unwrap_or_default();
+        let load = |file: &str| match known.get(file) {
+            Some(image) => Ok((**image).clone()),
+            None => load_texture(Path::new(file)),
+        };
+        match Material::from_graph_with(&name, graph.clone(), &load) {
+            Ok(compiled) => {
+                self.scene.materials[material] = compiled;
+                self.pending_graphs.remove(&material);
+            }
+            Err(error) => {
+                self.pending_graphs.insert(material, (graph, error));
+            }
+        }
+        Ok(match before {
+            Some(value) => Command::SetMaterial {
+                material,
+                value,
+                pending: None,
+            },
+            None => Command::EditGraph {
+                material,
+                edit: inverse,
+            },
+        })
     }
 }
 
@@ -1145,5 +1357,92 @@ mod tests {
                 < 1e-3
         );
         assert!((back.scale - trs.scale).abs().max_element() < 1e-4);
+    }
+
+    #[test]
+    fn a_graph_edit_that_does_not_compile_keeps_the_last_material_and_undo_restores_it() {
+        let mut doc = document();
+        let before = doc.scene().materials[0].clone();
+        let start = doc.material_graph(0).unwrap();
+        // Removing the surface leaves the output without a shader: still compiles (the
+        // default surface); removing the output does not.
+        let output = start
+            .nodes
+            .iter()
+            .find(|(_, n)| n.kind == "material_output")
+            .map(|(id, _)| id.clone())
+            .unwrap();
+        doc.apply(
+            Command::EditGraph {
+                material: 0,
+                edit: GraphEdit::RemoveNode { id: output },
+            },
+            None,
+        )
+        .unwrap();
+        let error = doc.graph_error(0).expect("no output is a compile error");
+        assert!(!error.message.is_empty());
+        assert_eq!(
+            doc.scene().materials[0],
+            before,
+            "the last valid material renders"
+        );
+        assert_ne!(
+            doc.material_graph(0).unwrap(),
+            start,
+            "the edited graph is kept"
+        );
+        assert!(doc.undo());
+        assert!(doc.graph_error(0).is_none());
+        assert_eq!(doc.material_graph(0).unwrap(), start);
+        assert_eq!(doc.scene().materials[0], before);
+    }
+
+    #[test]
+    fn materials_are_added_assigned_renamed_and_removed_with_undo() {
+        let mut doc = document();
+        let count = doc.scene().materials.len();
+        let used = doc.scene().instances[6].material;
+        doc.apply(
+            Command::AddMaterial {
+                index: 0,
+                material: Box::new(Material::diffuse("new", Vec3::ONE)),
+                pending: None,
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.scene().materials[0].name, "new");
+        assert_eq!(
+            doc.scene().instances[6].material,
+            used + 1,
+            "objects keep their material when one is inserted before it"
+        );
+        let err = doc
+            .apply(Command::RemoveMaterial { index: used + 1 }, None)
+            .unwrap_err();
+        assert!(err.0.contains("used by"), "{err}");
+        doc.apply(
+            Command::AssignMaterial {
+                object: 6,
+                material: 0,
+            },
+            None,
+        )
+        .unwrap();
+        doc.apply(
+            Command::RenameMaterial {
+                material: 0,
+                name: "renamed".into(),
+            },
+            None,
+        )
+        .unwrap();
+        assert_eq!(doc.scene().materials[0].name, "renamed");
+        assert_eq!(doc.scene().instances[6].material, 0);
+        while doc.undo() {}
+        assert_eq!(doc.scene().materials.len(), count);
+        assert_eq!(doc.scene().instances[6].material, used);
+        assert!(!doc.is_dirty());
     }
 }

@@ -12,9 +12,9 @@
 //!   recent files and the autosave that recovers work after a crash;
 //! - [`settings_panel`]: the Render and World tabs; [`final_render`]: Render Image (F12)
 //!   in the background, shown and exported through the exporter plugins;
+//! - [`node_editor`]: the material list and the node editor of the shown material's
+//!   graph, whose edits are [`graph_edit::GraphEdit`]s applied as document commands;
 //! - [`app`]: the window that ties them together.
-//!
-//! Not here (yet): the node editor for material graphs, which builds on the same document.
 
 pub mod app;
 pub mod display;
@@ -22,8 +22,10 @@ pub mod document;
 pub mod files;
 pub mod final_render;
 pub mod gizmo;
+pub mod graph_edit;
 pub mod inspector;
 pub mod navigation;
+pub mod node_editor;
 pub mod outliner;
 pub mod pick;
 pub mod session;

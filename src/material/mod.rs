@@ -38,6 +38,8 @@ pub enum MaterialFileError {
     },
     #[error("{path}: {message}")]
     Version { path: String, message: String },
+    #[error("cannot save {path}: {message}")]
+    Save { path: String, message: String },
 }
 
 /// A `.kmat` file: a versioned, named graph (docs/NODES.md describes the format).
@@ -126,6 +128,38 @@ pub fn parse_material(text: &str, path: &str) -> Result<(String, Graph), Materia
         Path::new(path).parent().unwrap_or(Path::new("")),
     );
     Ok((name, graph))
+}
+
+/// The `.kmat` text of material `name` with `graph`. Deterministic: nodes, inputs,
+/// parameters and groups are written in id order and links as `"node.socket"` strings, so
+/// an unchanged graph always gives the same bytes (node positions included).
+pub fn material_text(name: &str, graph: &Graph) -> Result<String, MaterialFileError> {
+    let file = MaterialFile {
+        version: MATERIAL_FORMAT_VERSION,
+        name: Some(name.to_owned()),
+        nodes: graph.nodes.clone(),
+        groups: graph.groups.clone(),
+        output: graph.output.clone(),
+    };
+    ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default()).map_err(|e| {
+        MaterialFileError::Save {
+            path: name.to_owned(),
+            message: e.to_string(),
+        }
+    })
+}
+
+/// Writes material `name` with `graph` as a `.kmat` file at `path`, atomically.
+pub fn save_material(path: &Path, name: &str, graph: &Graph) -> Result<(), MaterialFileError> {
+    use std::io::Write as _;
+    let text = material_text(name, graph)?;
+    kiln_plugin_api::atomic::write_atomically(path, |w| {
+        w.write_all(text.as_bytes()).map_err(|e| e.to_string())
+    })
+    .map_err(|message| MaterialFileError::Save {
+        path: path.display().to_string(),
+        message,
+    })
 }
 
 pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> {

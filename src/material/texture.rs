@@ -10,7 +10,7 @@ use std::sync::Arc;
 pub const MAX_TEXTURE_SIZE: u32 = 16384;
 
 /// A decoded image in the GPU's texel layout.
-#[derive(Debug, PartialEq)]
+#[derive(Clone, Debug, PartialEq)]
 pub struct TextureImage {
     pub width: u32,
     pub height: u32,

@@ -1,0 +1,896 @@
+//! Edits of a material graph as invertible operations, and the graph facts the node editor
+//! needs: each node's sockets with their types, which connections the compiler's type rules
+//! accept, fresh node ids, and the automatic layout of nodes that have no position yet.
+//!
+//! A [`GraphEdit`] applied to a [`Graph`] returns the edit that reverts it, so the document
+//! ([`super::document`]) wraps every graph edit in one command with undo/redo for free. An
+//! edit that would leave the graph malformed (an unknown node type, a link to a missing
+//! socket, a connection between types that do not convert, a cycle) is refused with a
+//! message and leaves the graph untouched. Whether the whole graph compiles is the
+//! compiler's to say; an edit may leave a graph that does not (a required input left
+//! unconnected is still a graph the user is building).
+//!
+//! Nothing here knows about egui.
+
+use std::collections::{BTreeMap, BTreeSet};
+
+use crate::material::graph::{GROUP, GROUP_PARAM};
+use crate::material::nodes::{self, ParamKind};
+use crate::material::{Graph, Input, Link, Node, Param, SocketType};
+
+/// One edit of a material graph.
+#[derive(Clone, Debug, PartialEq)]
+pub enum GraphEdit {
+    /// Adds a node under a new id.
+    AddNode { id: String, node: Node },
+    /// Removes a node and every link to it.
+    RemoveNode { id: String },
+    /// Sets what feeds an input: a link (connect), a value, or `None` (the declared
+    /// default; disconnect).
+    SetInput {
+        node: String,
+        input: String,
+        value: Option<Input>,
+    },
+    /// Sets a parameter (an enum's option, a flag, ramp stops, a file), or `None` for the
+    /// declared default.
+    SetParam {
+        node: String,
+        param: String,
+        value: Option<Param>,
+    },
+    /// Sets where nodes are drawn.
+    MoveNodes(Vec<(String, Option<[f32; 2]>)>),
+    /// Sets which node is the material's output (`None`: the only `material_output`).
+    SetOutput(Option<String>),
+    /// Several edits as one: all are applied or none.
+    Batch(Vec<GraphEdit>),
+}
+
+impl GraphEdit {
+    /// A wire from output `output` of node `from` to input `input` of node `to`.
+    pub fn connect(from: &str, output: &str, to: &str, input: &str) -> Self {
+        GraphEdit::SetInput {
+            node: to.to_owned(),
+            input: input.to_owned(),
+            value: Some(Input::Link(Link::new(from, output))),
+        }
+    }
+
+    /// Whether the edit only moves nodes (which changes nothing rendered).
+    pub fn only_moves(&self) -> bool {
+        match self {
+            GraphEdit::MoveNodes(_) => true,
+            GraphEdit::Batch(edits) => edits.iter().all(GraphEdit::only_moves),
+            _ => false,
+        }
+    }
+
+    /// Applies the edit to `graph`; returns the edit that reverts it. A refused edit
+    /// leaves `graph` unchanged.
+    pub fn apply(self, graph: &mut Graph) -> Result<GraphEdit, String> {
+        match self {
+            GraphEdit::AddNode { id, node } => {
+                if id.is_empty() || id.contains(char::is_whitespace) {
+                    return Err(format!("\"{id}\" is not a node id (non-empty, no spaces)"));
+                }
+                if graph.nodes.contains_key(&id) {
+                    return Err(format!("there is already a node \"{id}\""));
+                }
+                sockets_of(graph, &node)?;
+                graph.nodes.insert(id.clone(), node);
+                Ok(GraphEdit::RemoveNode { id })
+            }
+            GraphEdit::RemoveNode { id } => {
+                let Some(node) = graph.nodes.remove(&id) else {
+                    return Err(format!("no node \"{id}\""));
+                };
+                let mut inverse = vec![GraphEdit::AddNode {
+                    id: id.clone(),
+                    node,
+                }];
+                for (other, n) in &mut graph.nodes {
+                    let linked: Vec<String> = n
+                        .inputs
+                        .iter()
+                        .filter(|(_, i)| matches!(i, Input::Link(l) if l.node == id))
+                        .map(|(name, _)| name.clone())
+                        .collect();
+                    for input in linked {
+                        let value = n.inputs.remove(&input);
+                        inverse.push(GraphEdit::SetInput {
+                            node: other.clone(),
+                            input,
+                            value,
+                        });
+                    }
+                }
+                if graph.output.as_deref() == Some(id.as_str()) {
+                    graph.output = None;
+                    inverse.push(GraphEdit::SetOutput(Some(id)));
+                }
+                Ok(if inverse.len() == 1 {
+                    inverse.pop().expect("one edit")
+                } else {
+                    GraphEdit::Batch(inverse)
+                })
+            }
+            GraphEdit::SetInput { node, input, value } => {
+                let Some(target) = graph.nodes.get(&node) else {
+                    return Err(format!("no node \"{node}\""));
+                };
+                let sockets = sockets_of(graph, target)?;
+                let Some(&(_, to_ty)) = sockets.inputs.iter().find(|(n, _)| *n == input) else {
+                    return Err(format!("node \"{node}\" has no input \"{input}\""));
+                };
+                match &value {
+                    Some(Input::Link(link)) => check_link(graph, link, &node, &input, to_ty)?,
+                    Some(Input::Value(v)) => {
+                        let finite = match v {
+                            crate::material::Value::Float(x) => x.is_finite(),
+                            crate::material::Value::Vec2(a) => a.iter().all(|x| x.is_finite()),
+                            crate::material::Value::Vec3(a) => a.iter().all(|x| x.is_finite()),
+                        };
+                        if !finite {
+                            return Err(format!("input \"{input}\" of \"{node}\" must be finite"));
+                        }
+                        if to_ty == SocketType::Bsdf {
+                            return Err(format!(
+                                "input \"{input}\" of \"{node}\" takes a shader, not a value"
+                            ));
+                        }
+                    }
+                    None => {}
+                }
+                let inputs = &mut graph.nodes.get_mut(&node).expect("checked").inputs;
+                let old = match value {
+                    Some(v) => inputs.insert(input.clone(), v),
+                    None => inputs.remove(&input),
+                };
+                Ok(GraphEdit::SetInput {
+                    node,
+                    input,
+                    value: old,
+                })
+            }
+            GraphEdit::SetParam { node, param, value } => {
+                let Some(target) = graph.nodes.get(&node) else {
+                    return Err(format!("no node \"{node}\""));
+                };
+                check_param(target, &node, &param, value.as_ref())?;
+                let params = &mut graph.nodes.get_mut(&node).expect("checked").params;
+                let old = match value {
+                    Some(v) => params.insert(param.clone(), v),
+                    None => params.remove(&param),
+                };
+                Ok(GraphEdit::SetParam {
+                    node,
+                    param,
+                    value: old,
+                })
+            }
+            GraphEdit::MoveNodes(moves) => {
+                if let Some((id, _)) = moves.iter().find(|(id, _)| !graph.nodes.contains_key(id)) {
+                    return Err(format!("no node \"{id}\""));
+                }
+                if let Some((id, _)) = moves
+                    .iter()
+                    .find(|(_, p)| p.is_some_and(|p| !p.iter().all(|x| x.is_finite())))
+                {
+                    return Err(format!("the position of \"{id}\" must be finite"));
+                }
+                let mut old = Vec::with_capacity(moves.len());
+                for (id, pos) in moves {
+                    let node = graph.nodes.get_mut(&id).expect("checked");
+                    old.push((id, std::mem::replace(&mut node.position, pos)));
+                }
+                // Reverting in reverse order restores a node listed twice correctly.
+                old.reverse();
+                Ok(GraphEdit::MoveNodes(old))
+            }
+            GraphEdit::SetOutput(output) => {
+                if let Some(id) = &output {
+                    if !graph.nodes.contains_key(id) {
+                        return Err(format!("no node \"{id}\""));
+                    }
+                }
+                Ok(GraphEdit::SetOutput(std::mem::replace(
+                    &mut graph.output,
+                    output,
+                )))
+            }
+            GraphEdit::Batch(edits) => {
+                let mut inverses = Vec::with_capacity(edits.len());
+                for edit in edits {
+                    match edit.apply(graph) {
+                        Ok(inverse) => inverses.push(inverse),
+                        Err(e) => {
+                            // Undo what was applied, so a refused batch changes nothing.
+                            for inverse in inverses.into_iter().rev() {
+                                inverse
+                                    .apply(graph)
+                                    .expect("an inverse restores a state the graph was in");
+                            }
+                            return Err(e);
+                        }
+                    }
+                }
+                inverses.reverse();
+                Ok(GraphEdit::Batch(inverses))
+            }
+        }
+    }
+}
+
+/// A node's sockets by name and type, in declaration order.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct Sockets {
+    pub inputs: Vec<(String, SocketType)>,
+    pub outputs: Vec<(String, SocketType)>,
+}
+
+/// The sockets of `node` in `graph`: its library declaration's, or for a group node its
+/// group's interface. An unknown type or group is an error naming it.
+pub fn sockets_of(graph: &Graph, node: &Node) -> Result<Sockets, String> {
+    if node.kind == GROUP {
+        let Some(Param::Text(name)) = node.params.get(GROUP_PARAM) else {
+            return Err("a group node needs its \"group\" parameter".into());
+        };
+        let Some(group) = graph.groups.get(name) else {
+            return Err(format!("no group \"{name}\""));
+        };
+        return Ok(Sockets {
+            inputs: named(group.inputs.iter().map(|s| (s.name.as_str(), s.ty))),
+            outputs: named(group.outputs.iter().map(|s| (s.name.as_str(), s.ty))),
+        });
+    }
+    let Some(def) = nodes::find(&node.kind) else {
+        return Err(format!("unknown node type \"{}\"", node.kind));
+    };
+    Ok(Sockets {
+        inputs: named(def.inputs.iter().map(|s| (s.name, s.ty))),
+        outputs: named(def.outputs.iter().map(|s| (s.name, s.ty))),
+    })
+}
+
+fn named<'a>(sockets: impl Iterator<Item = (&'a str, SocketType)>) -> Vec<(String, SocketType)> {
+    sockets.map(|(n, t)| (n.to_owned(), t)).collect()
+}
+
+/// Why a wire from `link` into input `input` (of type `to_ty`) of node `node` is refused,
+/// if it is: a missing node or socket, types the compiler does not convert, or a cycle.
+fn check_link(
+    graph: &Graph,
+    link: &Link,
+    node: &str,
+    input: &str,
+    to_ty: SocketType,
+) -> Result<(), String> {
+    let Some(source) = graph.nodes.get(&link.node) else {
+        return Err(format!("no node \"{}\"", link.node));
+    };
+    let from_ty = sockets_of(graph, source)?
+        .outputs
+        .iter()
+        .find(|(n, _)| *n == link.socket)
+        .map(|&(_, t)| t)
+        .ok_or_else(|| format!("node \"{}\" has no output \"{}\"", link.node, link.socket))?;
+    if from_ty.converts_to(to_ty).is_none() {
+        return Err(format!(
+            "cannot connect {} output \"{}\" of \"{}\" to {} input \"{input}\" of \"{node}\": a {} does not convert to a {}",
+            from_ty.name(),
+            link.socket,
+            link.node,
+            to_ty.name(),
+            from_ty.name(),
+            to_ty.name(),
+        ));
+    }
+    if link.node == node || depends_on(graph, &link.node, node) {
+        return Err(format!(
+            "connecting \"{}\" to \"{node}\" would make a cycle",
+            link.node
+        ));
+    }
+    Ok(())
+}
+
+/// Whether node `from` reads (through any chain of links) the output of node `on`.
+pub fn depends_on(graph: &Graph, from: &str, on: &str) -> bool {
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![from];
+    while let Some(id) = stack.pop() {
+        if id == on {
+            return true;
+        }
+        if !seen.insert(id) {
+            continue;
+        }
+        if let Some(node) = graph.nodes.get(id) {
+            for input in node.inputs.values() {
+                if let Input::Link(l) = input {
+                    stack.push(l.node.as_str());
+                }
+            }
+        }
+    }
+    false
+}
+
+/// Whether `value` fits parameter `param` of `node` (id `id`) as declared.
+fn check_param(node: &Node, id: &str, param: &str, value: Option<&Param>) -> Result<(), String> {
+    if node.kind == GROUP {
+        return match value {
+            Some(Param::Text(_)) | None if param == GROUP_PARAM => Ok(()),
+            _ => Err(format!("group node \"{id}\" has no parameter \"{param}\"")),
+        };
+    }
+    let Some(def) = nodes::find(&node.kind) else {
+        return Err(format!("unknown node type \"{}\"", node.kind));
+    };
+    let Some(decl) = def.param(param) else {
+        return Err(format!("node \"{id}\" has no parameter \"{param}\""));
+    };
+    let Some(value) = value else {
+        return Ok(());
+    };
+    let fits = match (&decl.kind, value) {
+        (ParamKind::Enum(options), Param::Text(t)) => options.contains(&t.as_str()),
+        (ParamKind::Bool(_), Param::Bool(_)) => true,
+        (ParamKind::Ramp, Param::Ramp(stops)) => !stops.is_empty(),
+        (ParamKind::File, Param::Text(_)) => true,
+        _ => false,
+    };
+    if fits {
+        Ok(())
+    } else {
+        Err(format!(
+            "parameter \"{param}\" of \"{id}\" cannot be {value:?}{}",
+            match &decl.kind {
+                ParamKind::Enum(options) => format!(" (one of {})", options.join(", ")),
+                _ => String::new(),
+            }
+        ))
+    }
+}
+
+/// An id for a new node of type `kind` not used in `graph`: the type's name, then with
+/// `_2`, `_3`… (ids are what links name, so they stay plain words).
+pub fn fresh_id(graph: &Graph, kind: &str) -> String {
+    let base = kind.replace(|c: char| !c.is_ascii_alphanumeric() && c != '_', "_");
+    if !graph.nodes.contains_key(&base) {
+        return base;
+    }
+    (2..)
+        .map(|n| format!("{base}_{n}"))
+        .find(|id| !graph.nodes.contains_key(id))
+        .expect("a free id exists")
+}
+
+/// The width the layout gives every node (snarl sizes nodes to their contents; the layout
+/// only needs an upper bound of common nodes).
+pub const NODE_WIDTH: f32 = 220.0;
+/// The gap between layout columns and between nodes of a column.
+pub const LAYOUT_GAP: f32 = 60.0;
+
+/// The height the layout reserves for a node: its header, one row per socket and
+/// parameter.
+pub fn estimated_height(graph: &Graph, node: &Node) -> f32 {
+    let sockets = sockets_of(graph, node).unwrap_or_default();
+    let rows = sockets.inputs.len().max(sockets.outputs.len()) + node_param_rows(node);
+    36.0 + 26.0 * rows as f32
+}
+
+/// The width the layout reserves for a node: the widest of its title and its rows (an
+/// input's label and inline value beside an output's label). Snarl sizes nodes to their
+/// contents; this errs wide so that laid-out columns never overlap.
+pub fn estimated_width(graph: &Graph, node: &Node) -> f32 {
+    const CHAR: f32 = 8.0;
+    // An inline value (a number field, a colour swatch) and the pin's margins.
+    const WIDGET: f32 = 90.0;
+    let sockets = sockets_of(graph, node).unwrap_or_default();
+    let label = |names: &[(String, SocketType)]| {
+        names
+            .iter()
+            .map(|(n, _)| n.chars().count())
+            .max()
+            .unwrap_or(0) as f32
+            * CHAR
+    };
+    let title = (node.kind.chars().count() + 12) as f32 * CHAR;
+    let rows = label(&sockets.inputs) + WIDGET + label(&sockets.outputs) + 40.0;
+    title.max(rows).max(NODE_WIDTH)
+}
+
+fn node_param_rows(node: &Node) -> usize {
+    nodes::find(&node.kind).map_or(node.params.len(), |d| d.params.len())
+}
+
+/// Where every node of `graph` is drawn: its saved position, or for nodes without one an
+/// automatic layout that reads left to right (each node a column left of the nodes that
+/// read it, the output rightmost), stacked without overlaps below any positioned nodes.
+/// Deterministic: the same graph always gets the same layout.
+pub fn layout(graph: &Graph) -> BTreeMap<String, [f32; 2]> {
+    let mut out: BTreeMap<String, [f32; 2]> = graph
+        .nodes
+        .iter()
+        .filter_map(|(id, n)| n.position.map(|p| (id.clone(), p)))
+        .collect();
+    let unplaced: Vec<&String> = graph
+        .nodes
+        .iter()
+        .filter(|(_, n)| n.position.is_none())
+        .map(|(id, _)| id)
+        .collect();
+    if unplaced.is_empty() {
+        return out;
+    }
+    // Column of a node: the longest chain of links from it to a node nothing reads. At
+    // most one pass per node, so a cycle (which the compiler reports) cannot loop.
+    let mut readers: BTreeMap<&str, Vec<&str>> = BTreeMap::new();
+    for (id, node) in &graph.nodes {
+        for input in node.inputs.values() {
+            if let Input::Link(l) = input {
+                if graph.nodes.contains_key(&l.node) {
+                    readers.entry(l.node.as_str()).or_default().push(id);
+                }
+            }
+        }
+    }
+    let mut column: BTreeMap<&str, usize> = graph.nodes.keys().map(|k| (k.as_str(), 0)).collect();
+    for _ in 0..graph.nodes.len() {
+        let mut changed = false;
+        for (id, rs) in &readers {
+            let depth = rs.iter().map(|r| column[r] + 1).max().unwrap_or(0);
+            if depth > column[id] && depth < graph.nodes.len() {
+                column.insert(*id, depth);
+                changed = true;
+            }
+        }
+        if !changed {
+            break;
+        }
+    }
+    let top = out.values().map(|p| p[1]).fold(f32::NEG_INFINITY, f32::max);
+    let bottom = graph
+        .nodes
+        .values()
+        .filter_map(|n| n.position.map(|p| p[1] + estimated_height(graph, n)))
+        .fold(f32::NEG_INFINITY, f32::max);
+    let start_y = if top.is_finite() {
+        bottom + LAYOUT_GAP
+    } else {
+        0.0
+    };
+    let columns = unplaced
+        .iter()
+        .map(|id| column[id.as_str()])
+        .max()
+        .unwrap_or(0);
+    // Each column as wide as its widest node; column `columns` is the leftmost.
+    let widths: Vec<f32> = (0..=columns)
+        .map(|c| {
+            unplaced
+                .iter()
+                .filter(|id| column[id.as_str()] == c)
+                .map(|id| estimated_width(graph, &graph.nodes[id.as_str()]))
+                .fold(NODE_WIDTH, f32::max)
+        })
+        .collect();
+    let column_x = |c: usize| -> f32 { widths[c + 1..].iter().map(|w| w + LAYOUT_GAP).sum() };
+    // Within a column, nodes follow the order of the first node that reads them, so wires
+    // cross less; ties by id.
+    let mut rank: BTreeMap<&str, usize> = BTreeMap::new();
+    for c in 0..=columns {
+        let mut ids: Vec<&str> = unplaced
+            .iter()
+            .map(|s| s.as_str())
+            .filter(|id| column[id] == c)
+            .collect();
+        ids.sort_by_key(|id| {
+            let reader = readers
+                .get(id)
+                .and_then(|rs| rs.iter().filter_map(|r| rank.get(r)).min().copied())
+                .unwrap_or(usize::MAX);
+            (reader, id.to_string())
+        });
+        let mut y = start_y;
+        for (i, id) in ids.iter().enumerate() {
+            rank.insert(*id, i);
+            let x = column_x(c);
+            out.insert(id.to_string(), [x, y]);
+            y += estimated_height(graph, &graph.nodes[*id]) + LAYOUT_GAP / 2.0;
+        }
+    }
+    out
+}
+
+/// The edit that gives every node without a position its [`layout`] position, so that a
+/// graph once laid out keeps that layout when saved.
+pub fn fix_layout(graph: &Graph) -> Vec<(String, Option<[f32; 2]>)> {
+    let laid = layout(graph);
+    graph
+        .nodes
+        .iter()
+        .filter(|(_, n)| n.position.is_none())
+        .map(|(id, _)| (id.clone(), laid.get(id).copied()))
+        .collect()
+}
+
+/// The nodes `ids` of `graph` copied under fresh ids, offset by `offset`, with the links
+/// among them kept and links to nodes outside dropped. What paste and duplicate add.
+pub fn copies(
+    graph: &Graph,
+    nodes: &[(String, Node)],
+    offset: [f32; 2],
+) -> (Vec<GraphEdit>, Vec<String>) {
+    let mut scratch = graph.clone();
+    let mut renamed = BTreeMap::new();
+    for (id, node) in nodes {
+        let new = fresh_id(&scratch, &node.kind);
+        scratch.nodes.insert(new.clone(), node.clone());
+        renamed.insert(id.clone(), new);
+    }
+    let laid = layout(graph);
+    let mut edits = Vec::new();
+    let mut ids = Vec::new();
+    for (id, node) in nodes {
+        let mut node = node.clone();
+        node.inputs.retain(|_, input| match input {
+            Input::Link(l) => renamed.contains_key(&l.node),
+            Input::Value(_) => true,
+        });
+        for input in node.inputs.values_mut() {
+            if let Input::Link(l) = input {
+                l.node = renamed[&l.node].clone();
+            }
+        }
+        let base = node
+            .position
+            .or_else(|| laid.get(id).copied())
+            .unwrap_or([0.0, 0.0]);
+        node.position = Some([base[0] + offset[0], base[1] + offset[1]]);
+        ids.push(renamed[id].clone());
+        edits.push(GraphEdit::AddNode {
+            id: renamed[id].clone(),
+            node,
+        });
+    }
+    (edits, ids)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Value;
+
+    fn marble() -> Graph {
+        crate::material::parse_material(
+            include_str!("../../assets/materials/marble.kmat"),
+            "marble.kmat",
+        )
+        .expect("the bundled marble parses")
+        .1
+    }
+
+    #[test]
+    fn every_edit_reverts_to_the_graph_it_started_from() {
+        let start = marble();
+        let mut g = start.clone();
+        let edits = vec![
+            GraphEdit::AddNode {
+                id: "noise".into(),
+                node: Node::new("noise_texture"),
+            },
+            GraphEdit::connect("noise", "color", "surface", "base_color"),
+            GraphEdit::SetInput {
+                node: "noise".into(),
+                input: "scale".into(),
+                value: Some(Input::Value(Value::Float(12.0))),
+            },
+            GraphEdit::SetParam {
+                node: "veins".into(),
+                param: "direction".into(),
+                value: Some(Param::Text("x".into())),
+            },
+            GraphEdit::MoveNodes(vec![("noise".into(), Some([10.0, 20.0]))]),
+            GraphEdit::RemoveNode { id: "ramp".into() },
+        ];
+        let mut inverses = Vec::new();
+        for edit in edits {
+            inverses.push(
+                edit.clone()
+                    .apply(&mut g)
+                    .unwrap_or_else(|e| panic!("{edit:?}: {e}")),
+            );
+        }
+        assert!(!g.nodes.contains_key("ramp"));
+        assert!(
+            !g.nodes["surface"].inputs.contains_key("base_color")
+                || {
+                    matches!(&g.nodes["surface"].inputs["base_color"], Input::Link(l) if l.node == "noise")
+                }
+        );
+        for inverse in inverses.into_iter().rev() {
+            inverse.apply(&mut g).unwrap();
+        }
+        assert_eq!(g, start);
+    }
+
+    #[test]
+    fn a_colour_into_a_shader_input_is_refused_with_the_types_named() {
+        let mut g = marble();
+        let before = g.clone();
+        let err = GraphEdit::connect("ramp", "color", "out", "surface")
+            .apply(&mut g)
+            .unwrap_err();
+        assert!(err.contains("color") && err.contains("bsdf"), "{err}");
+        assert_eq!(g, before);
+    }
+
+    #[test]
+    fn implicit_conversions_are_accepted_and_cycles_refused() {
+        let mut g = marble();
+        // colour → float (luminance), as the compiler converts it.
+        GraphEdit::connect("ramp", "color", "surface", "roughness")
+            .apply(&mut g)
+            .unwrap();
+        let err = GraphEdit::connect("ramp", "alpha", "veins", "scale")
+            .apply(&mut g)
+            .unwrap_err();
+        assert!(err.contains("cycle"), "{err}");
+    }
+
+    #[test]
+    fn a_refused_batch_changes_nothing() {
+        let mut g = marble();
+        let before = g.clone();
+        let err = GraphEdit::Batch(vec![
+            GraphEdit::RemoveNode { id: "ramp".into() },
+            GraphEdit::RemoveNode { id: "ramp".into() },
+        ])
+        .apply(&mut g)
+        .unwrap_err();
+        assert!(err.contains("ramp"), "{err}");
+        assert_eq!(g, before);
+    }
+
+    #[test]
+    fn bad_parameters_and_unknown_nodes_are_refused() {
+        let mut g = marble();
+        let e = GraphEdit::SetParam {
+            node: "veins".into(),
+            param: "direction".into(),
+            value: Some(Param::Text("sideways".into())),
+        }
+        .apply(&mut g)
+        .unwrap_err();
+        assert!(e.contains("one of"), "{e}");
+        let e = GraphEdit::AddNode {
+            id: "x".into(),
+            node: Node::new("no_such_node"),
+        }
+        .apply(&mut g)
+        .unwrap_err();
+        assert!(e.contains("no_such_node"), "{e}");
+    }
+
+    #[test]
+    fn fresh_ids_do_not_collide() {
+        let mut g = marble();
+        assert_eq!(fresh_id(&g, "noise_texture"), "noise_texture");
+        g.add("noise_texture", Node::new("noise_texture"));
+        assert_eq!(fresh_id(&g, "noise_texture"), "noise_texture_2");
+    }
+
+    #[test]
+    fn the_layout_reads_left_to_right_without_overlaps() {
+        let g = marble();
+        let laid = layout(&g);
+        assert_eq!(laid.len(), g.nodes.len());
+        assert!(laid["coords"][0] < laid["veins"][0]);
+        assert!(laid["veins"][0] < laid["ramp"][0]);
+        assert!(laid["surface"][0] < laid["out"][0]);
+        assert!(overlaps(&g, &laid).is_none());
+        assert_eq!(layout(&g), laid, "deterministic");
+    }
+
+    /// Two nodes whose layout boxes overlap, if any.
+    pub(crate) fn overlaps(
+        g: &Graph,
+        laid: &BTreeMap<String, [f32; 2]>,
+    ) -> Option<(String, String)> {
+        let boxes: Vec<(&String, [f32; 4])> = laid
+            .iter()
+            .map(|(id, p)| {
+                let h = estimated_height(g, &g.nodes[id]);
+                let w = estimated_width(g, &g.nodes[id]);
+                (id, [p[0], p[1], p[0] + w, p[1] + h])
+            })
+            .collect();
+        for (i, (a, ra)) in boxes.iter().enumerate() {
+            for (b, rb) in &boxes[i + 1..] {
+                if ra[0] < rb[2] && rb[0] < ra[2] && ra[1] < rb[3] && rb[1] < ra[3] {
+                    return Some(((*a).clone(), (*b).clone()));
+                }
+            }
+        }
+        None
+    }
+
+    #[test]
+    fn every_bundled_material_lays_out_without_overlaps() {
+        for entry in
+            std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/materials")).unwrap()
+        {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "kmat") {
+                continue;
+            }
+            let (_, g) = crate::material::load_material(&path).unwrap();
+            let laid = layout(&g);
+            assert_eq!(laid.len(), g.nodes.len(), "{}", path.display());
+            assert_eq!(overlaps(&g, &laid), None, "{}", path.display());
+        }
+    }
+
+    #[test]
+    fn copies_keep_links_among_themselves_only() {
+        let g = marble();
+        let picked: Vec<(String, Node)> = ["veins", "ramp"]
+            .iter()
+            .map(|id| (id.to_string(), g.nodes[*id].clone()))
+            .collect();
+        let (edits, ids) = copies(&g, &picked, [30.0, 30.0]);
+        assert_eq!(ids, ["wave_texture", "color_ramp"]);
+        let mut h = g.clone();
+        GraphEdit::Batch(edits).apply(&mut h).unwrap();
+        let ramp = &h.nodes["color_ramp"];
+        assert_eq!(
+            ramp.inputs["fac"],
+            Input::Link(Link::new("wave_texture", "fac"))
+        );
+        assert!(!h.nodes["wave_texture"].inputs.contains_key("vector"));
+    }
+
+    #[test]
+    fn every_bundled_material_saves_byte_identical_after_a_layout() {
+        let dir = tempfile::tempdir().unwrap();
+        for entry in
+            std::fs::read_dir(concat!(env!("CARGO_MANIFEST_DIR"), "/assets/materials")).unwrap()
+        {
+            let path = entry.unwrap().path();
+            if path.extension().is_none_or(|e| e != "kmat") {
+                continue;
+            }
+            let (name, mut g) = crate::material::load_material(&path).unwrap();
+            // What the editor saves once the user moved a node: every position laid out.
+            GraphEdit::MoveNodes(fix_layout(&g)).apply(&mut g).unwrap();
+            let out = dir.path().join(path.file_name().unwrap());
+            crate::material::save_material(&out, &name, &g).unwrap();
+            let first = std::fs::read(&out).unwrap();
+            let (name2, g2) = crate::material::load_material(&out).unwrap();
+            assert_eq!((&name2, &g2), (&name, &g), "{}", path.display());
+            crate::material::save_material(&out, &name2, &g2).unwrap();
+            assert_eq!(std::fs::read(&out).unwrap(), first, "{}", path.display());
+        }
+    }
+
+    mod random_edits {
+        use super::*;
+        use crate::editor::document::{Command, Document};
+        use proptest::prelude::*;
+
+        /// One user action, with numbers picking what it applies to in the graph of the
+        /// moment.
+        #[derive(Clone, Debug)]
+        enum Action {
+            Add(usize),
+            Remove(usize),
+            Connect(usize, usize, usize, usize),
+            Disconnect(usize, usize),
+            SetValue(usize, usize, f32),
+            Move(usize, f32, f32),
+            Undo,
+            Redo,
+        }
+
+        fn action() -> impl Strategy<Value = Action> {
+            let n = 0usize..64;
+            prop_oneof![
+                n.clone().prop_map(Action::Add),
+                n.clone().prop_map(Action::Remove),
+                (n.clone(), n.clone(), n.clone(), n.clone())
+                    .prop_map(|(a, b, c, d)| Action::Connect(a, b, c, d)),
+                (n.clone(), n.clone()).prop_map(|(a, b)| Action::Disconnect(a, b)),
+                (n.clone(), n.clone(), -10.0f32..10.0)
+                    .prop_map(|(a, b, v)| Action::SetValue(a, b, v)),
+                (n.clone(), -500.0f32..500.0, -500.0f32..500.0)
+                    .prop_map(|(a, x, y)| Action::Move(a, x, y)),
+                Just(Action::Undo),
+                Just(Action::Redo),
+            ]
+        }
+
+        fn pick<T: Clone>(items: &[T], i: usize) -> Option<T> {
+            (!items.is_empty()).then(|| items[i % items.len()].clone())
+        }
+
+        fn edit_for(g: &Graph, action: &Action) -> Option<GraphEdit> {
+            let ids: Vec<String> = g.nodes.keys().cloned().collect();
+            let sockets = |id: &str| sockets_of(g, &g.nodes[id]).unwrap_or_default();
+            Some(match *action {
+                Action::Add(k) => {
+                    let def = pick(nodes::library(), k)?;
+                    GraphEdit::AddNode {
+                        id: fresh_id(g, def.kind),
+                        node: Node::new(def.kind),
+                    }
+                }
+                Action::Remove(a) => GraphEdit::RemoveNode { id: pick(&ids, a)? },
+                Action::Connect(a, b, c, d) => {
+                    let from = pick(&ids, a)?;
+                    let to = pick(&ids, c)?;
+                    let (output, _) = pick(&sockets(&from).outputs, b)?;
+                    let (input, _) = pick(&sockets(&to).inputs, d)?;
+                    GraphEdit::connect(&from, &output, &to, &input)
+                }
+                Action::Disconnect(a, b) => {
+                    let node = pick(&ids, a)?;
+                    let (input, _) = pick(&sockets(&node).inputs, b)?;
+                    GraphEdit::SetInput {
+                        node,
+                        input,
+                        value: None,
+                    }
+                }
+                Action::SetValue(a, b, v) => {
+                    let node = pick(&ids, a)?;
+                    let (input, _) = pick(&sockets(&node).inputs, b)?;
+                    GraphEdit::SetInput {
+                        node,
+                        input,
+                        value: Some(Input::Value(Value::Float(v))),
+                    }
+                }
+                Action::Move(a, x, y) => GraphEdit::MoveNodes(vec![(pick(&ids, a)?, Some([x, y]))]),
+                Action::Undo | Action::Redo => return None,
+            })
+        }
+
+        proptest! {
+            #![proptest_config(ProptestConfig { cases: 24, ..ProptestConfig::default() })]
+
+            /// Random edits through the document never panic; a graph that does not
+            /// compile always carries its error for the node editor to show; undoing
+            /// everything returns the starting graph.
+            #[test]
+            fn random_graph_edits_keep_the_document_consistent(
+                actions in proptest::collection::vec(action(), 1..24)
+            ) {
+                let scene = crate::scene::default_scene().expect("the bundled scene loads");
+                let mut doc = Document::new(scene, None, Vec::new());
+                let material = 0;
+                let start = doc.material_graph(material).unwrap();
+                for action in &actions {
+                    match action {
+                        Action::Undo => { doc.undo(); }
+                        Action::Redo => { doc.redo(); }
+                        _ => {
+                            let g = doc.material_graph(material).unwrap();
+                            if let Some(edit) = edit_for(&g, action) {
+                                let _ = doc.apply(Command::EditGraph { material, edit }, None);
+                            }
+                        }
+                    }
+                    let g = doc.material_graph(material).unwrap();
+                    let compiles = crate::material::compile("m", &g, "m").is_ok();
+                    prop_assert!(compiles || doc.graph_error(material).is_some(),
+                        "a graph that does not compile shows its error");
+                }
+                while doc.undo() {}
+                prop_assert_eq!(doc.material_graph(material).unwrap(), start);
+            }
+        }
+    }
+}

@@ -1,0 +1,1217 @@
+//! The node editor: a view of one material's graph on an egui-snarl canvas, and the
+//! material list above it.
+//!
+//! The document stays the single source of truth. Each frame the editor compares the
+//! document's graph of the shown material with the graph it last drew and, when they
+//! differ, rebuilds its [`Snarl`] from it (nodes in id order, so snarl's node ids and
+//! with them its selection stay stable while nothing is added or removed). The
+//! [`SnarlViewer`] never changes the snarl: a wire drawn, a value dragged or a node added
+//! becomes a [`GraphEdit`], which [`NodeEditor::ui`] returns as a document [`Command`];
+//! the app applies it, the document's graph changes, and the next frame shows it. Snarl
+//! reports no node moves, so after drawing, node positions are compared with the
+//! document's and a difference becomes a move command under one gesture (a drag is one
+//! undo step).
+//!
+//! Connections are checked as they are dropped ([`GraphEdit::apply`] on a copy, which
+//! applies the compiler's type rules and refuses cycles) and a refused one leaves its
+//! reason in the editor's message line.
+
+use std::cell::RefCell;
+use std::collections::BTreeMap;
+use std::rc::Rc;
+
+use egui::emath::TSTransform;
+use egui::{Color32, Key, Modifiers, Pos2, RichText, Stroke, Ui};
+use egui_snarl::ui::{
+    AnyPins, PinInfo, PinShape, PinWireInfo, SnarlPin, SnarlStyle, SnarlViewer, SnarlWidget,
+    get_selected_nodes,
+};
+use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
+
+use super::document::{Command, Document, GestureId, Selection};
+use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
+use crate::material::nodes::{self, ParamKind};
+use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
+use crate::scene::Material;
+
+/// The gesture node drags merge under (one drag, one undo step).
+const MOVE_GESTURE: GestureId = 0x6e6f_6465_6d6f_7665;
+
+/// The canvas's egui id (fixed, so snarl's selection can be read back).
+fn canvas_id() -> egui::Id {
+    egui::Id::new("kiln node editor canvas")
+}
+
+/// A socket's colour, as Blender draws it: grey floats, purple vectors, yellow colours,
+/// green shaders (and a blue for Kiln's two-component vectors).
+pub fn socket_color(ty: SocketType) -> Color32 {
+    match ty {
+        SocketType::Float => Color32::from_rgb(0xa1, 0xa1, 0xa1),
+        SocketType::Vec2 => Color32::from_rgb(0x63, 0xa1, 0xc7),
+        SocketType::Vector => Color32::from_rgb(0x63, 0x63, 0xc7),
+        SocketType::Color => Color32::from_rgb(0xc7, 0xc7, 0x29),
+        SocketType::Bsdf => Color32::from_rgb(0x63, 0xc7, 0x63),
+    }
+}
+
+/// A socket's shape: circles as Blender's, a square for the two-component vector (no
+/// Blender type to follow) and a diamond-like triangle nowhere — shaders are circles too.
+pub fn socket_shape(ty: SocketType) -> PinShape {
+    match ty {
+        SocketType::Vec2 => PinShape::Square,
+        _ => PinShape::Circle,
+    }
+}
+
+/// Which side of a node a pin is on.
+#[derive(Clone, Debug, PartialEq, Eq, PartialOrd, Ord)]
+enum Side {
+    Input,
+    Output,
+}
+
+/// Where pins were drawn in the last frame, in canvas coordinates, by node, side and
+/// socket name.
+type PinRects = Rc<RefCell<BTreeMap<(String, Side, String), egui::Rect>>>;
+
+/// A pin that draws as [`PinInfo`] and records where it was drawn.
+struct RecordedPin {
+    info: PinInfo,
+    key: (String, Side, String),
+    rects: PinRects,
+}
+
+impl SnarlPin for RecordedPin {
+    fn draw(
+        self,
+        snarl_style: &SnarlStyle,
+        style: &egui::Style,
+        rect: egui::Rect,
+        painter: &egui::Painter,
+    ) -> PinWireInfo {
+        self.rects.borrow_mut().insert(self.key, rect);
+        self.info.draw(snarl_style, style, rect, painter)
+    }
+}
+
+/// The node editor's state: which material it shows, the snarl it draws, and the
+/// transient state of its menus.
+pub struct NodeEditor {
+    material: Option<usize>,
+    /// The selection the material was last taken from.
+    followed: Option<Selection>,
+    snarl: Snarl<String>,
+    /// The graph the snarl was built from, and where each node was drawn.
+    shown: Option<(usize, Graph)>,
+    positions: BTreeMap<String, [f32; 2]>,
+    search: String,
+    /// The Shift+A menu, open at this screen position.
+    add_menu: Option<Pos2>,
+    message: Option<String>,
+    clipboard: Vec<(String, Node)>,
+    rename: String,
+    to_global: TSTransform,
+    pins: PinRects,
+    rect: Option<egui::Rect>,
+    /// Set when the view should frame all nodes in the next frame (another material
+    /// shown, or Home).
+    frame_all: bool,
+}
+
+impl Default for NodeEditor {
+    fn default() -> Self {
+        Self {
+            material: None,
+            followed: None,
+            snarl: Snarl::new(),
+            shown: None,
+            positions: BTreeMap::new(),
+            search: String::new(),
+            add_menu: None,
+            message: None,
+            clipboard: Vec::new(),
+            rename: String::new(),
+            to_global: TSTransform::IDENTITY,
+            pins: PinRects::default(),
+            rect: None,
+            frame_all: true,
+        }
+    }
+}
+
+/// What the viewer collects while the canvas is drawn.
+struct Viewer<'a> {
+    graph: &'a Graph,
+    error: Option<&'a GraphError>,
+    edits: Vec<(GraphEdit, Option<GestureId>)>,
+    message: Option<String>,
+    search: &'a mut String,
+    to_global: TSTransform,
+    pins: PinRects,
+    /// The view to set this frame: the nodes' bounds in canvas coordinates and the
+    /// screen rectangle to fit them in.
+    frame: Option<(egui::Rect, egui::Rect)>,
+}
+
+impl NodeEditor {
+    /// The material shown, by index into the scene's materials.
+    pub fn material(&self) -> Option<usize> {
+        self.material
+    }
+
+    /// The last refused edit's reason, shown above the canvas.
+    pub fn message(&self) -> Option<&str> {
+        self.message.as_deref()
+    }
+
+    /// Where the pin of `socket` on node `node` (an input when `input`) was drawn in the
+    /// last frame, in screen points.
+    pub fn pin_position(&self, node: &str, socket: &str, input: bool) -> Option<Pos2> {
+        let side = if input { Side::Input } else { Side::Output };
+        let rects = self.pins.borrow();
+        let rect = rects.get(&(node.to_owned(), side, socket.to_owned()))?;
+        Some(self.to_global * rect.center())
+    }
+
+    /// Where node `node` is drawn, in screen points (its top-left corner).
+    pub fn node_position(&self, node: &str) -> Option<Pos2> {
+        let p = self.positions.get(node)?;
+        Some(self.to_global * Pos2::new(p[0], p[1]))
+    }
+
+    /// The rectangle the canvas took in the last frame.
+    pub fn canvas_rect(&self) -> Option<egui::Rect> {
+        self.rect
+    }
+
+    /// Draws the material list and the shown material's graph; returns the commands the
+    /// user's edits make, each with its gesture.
+    pub fn ui(&mut self, ui: &mut Ui, document: &Document) -> Vec<(Command, Option<GestureId>)> {
+        let mut commands = Vec::new();
+        self.follow_selection(document);
+        self.material_bar(ui, document, &mut commands);
+        let Some(material) = self.material else {
+            ui.label("No material.");
+            return commands;
+        };
+        let Some(graph) = document.material_graph(material) else {
+            return commands;
+        };
+        let error = document.graph_error(material);
+        if let Some(e) = error {
+            ui.label(
+                RichText::new(format!(
+                    "⚠ {} (the viewport shows the last valid material)",
+                    e.message
+                ))
+                .color(Color32::LIGHT_RED),
+            );
+        }
+        if let Some(m) = &self.message {
+            ui.label(RichText::new(m).color(Color32::from_rgb(255, 170, 60)));
+        }
+        self.sync(material, &graph);
+
+        let mut viewer = Viewer {
+            graph: &graph,
+            error,
+            edits: Vec::new(),
+            message: None,
+            search: &mut self.search,
+            to_global: self.to_global,
+            pins: Rc::clone(&self.pins),
+            frame: None,
+        };
+        self.pins.borrow_mut().clear();
+        // The canvas fills what is left of the panel (snarl's response covers the whole
+        // plane it pans over, so it cannot tell where the canvas is).
+        let canvas = ui.available_rect_before_wrap();
+        if std::mem::take(&mut self.frame_all) {
+            viewer.frame = Some((bounds(&graph, &self.positions), canvas));
+        }
+        SnarlWidget::new()
+            .id(canvas_id())
+            .style(style())
+            .show(&mut self.snarl, &mut viewer, ui);
+        self.rect = Some(canvas);
+        self.to_global = viewer.to_global;
+        let mut edits = std::mem::take(&mut viewer.edits);
+        if let Some(m) = viewer.message.take() {
+            self.message = Some(m);
+        } else if !edits.is_empty() {
+            self.message = None;
+        }
+
+        if let Some(moves) = self.moves(&graph) {
+            edits.push((moves, Some(MOVE_GESTURE)));
+        }
+        // The pointer over the canvas, whichever of snarl's layers it is over (its nodes
+        // sit on a layer of their own).
+        let hovered = ui
+            .ctx()
+            .pointer_hover_pos()
+            .is_some_and(|p| canvas.contains(p));
+        edits.extend(
+            self.keyboard(ui, &graph, hovered)
+                .into_iter()
+                .map(|e| (e, None)),
+        );
+        edits.extend(
+            self.add_menu_popup(ui, &graph)
+                .into_iter()
+                .map(|e| (e, None)),
+        );
+        commands.extend(
+            edits
+                .into_iter()
+                .map(|(edit, gesture)| (Command::EditGraph { material, edit }, gesture)),
+        );
+        commands
+    }
+
+    /// Shows the selected object's material when the selection changes to an object.
+    fn follow_selection(&mut self, document: &Document) {
+        let materials = document.scene().materials.len();
+        if document.selection != self.followed {
+            self.followed = document.selection;
+            if let Some(Selection::Object(i)) = document.selection {
+                if let Some(instance) = document.scene().instances.get(i) {
+                    self.material = Some(instance.material);
+                }
+            }
+        }
+        if self.material.is_none_or(|m| m >= materials) {
+            self.material = (materials > 0).then_some(0);
+        }
+    }
+
+    /// The material list: pick the material shown, create, duplicate, rename, delete, and
+    /// assign it to the selected object.
+    fn material_bar(
+        &mut self,
+        ui: &mut Ui,
+        document: &Document,
+        commands: &mut Vec<(Command, Option<GestureId>)>,
+    ) {
+        let materials = &document.scene().materials;
+        ui.horizontal(|ui| {
+            let label = ui.label("Material");
+            let current = self
+                .material
+                .and_then(|m| materials.get(m))
+                .map_or("—".to_owned(), |m| m.name.clone());
+            egui::ComboBox::from_id_salt("node editor material")
+                .selected_text(current)
+                .show_ui(ui, |ui| {
+                    for (i, m) in materials.iter().enumerate() {
+                        if ui
+                            .selectable_label(self.material == Some(i), m.name.as_str())
+                            .clicked()
+                        {
+                            self.material = Some(i);
+                        }
+                    }
+                })
+                .response
+                .labelled_by(label.id);
+            if ui.button("New").clicked() {
+                let name = unique_name(materials, "Material");
+                commands.push((
+                    Command::AddMaterial {
+                        index: materials.len(),
+                        material: Box::new(Material::with(&name, Default::default())),
+                        pending: None,
+                    },
+                    None,
+                ));
+                self.material = Some(materials.len());
+            }
+            let Some(m) = self.material.filter(|&m| m < materials.len()) else {
+                return;
+            };
+            if ui.button("Duplicate").clicked() {
+                let mut copy = materials[m].clone();
+                copy.name = unique_name(materials, &copy.name);
+                commands.push((
+                    Command::AddMaterial {
+                        index: materials.len(),
+                        material: Box::new(copy),
+                        pending: None,
+                    },
+                    None,
+                ));
+                self.material = Some(materials.len());
+            }
+            if ui.button("Delete").clicked() {
+                commands.push((Command::RemoveMaterial { index: m }, None));
+            }
+            if let Some(Selection::Object(object)) = document.selection {
+                let assigned = document
+                    .scene()
+                    .instances
+                    .get(object)
+                    .is_some_and(|i| i.material == m);
+                if ui
+                    .add_enabled(!assigned, egui::Button::new("Assign"))
+                    .on_hover_text(format!(
+                        "Give \"{}\" this material",
+                        document.name(Selection::Object(object))
+                    ))
+                    .clicked()
+                {
+                    commands.push((
+                        Command::AssignMaterial {
+                            object,
+                            material: m,
+                        },
+                        None,
+                    ));
+                }
+            }
+            let label = ui.label("Name");
+            let edit = ui
+                .add(egui::TextEdit::singleline(&mut self.rename).desired_width(140.0))
+                .labelled_by(label.id);
+            if !edit.has_focus() && !edit.lost_focus() {
+                self.rename = materials[m].name.clone();
+            }
+            if edit.lost_focus() && self.rename != materials[m].name {
+                commands.push((
+                    Command::RenameMaterial {
+                        material: m,
+                        name: self.rename.clone(),
+                    },
+                    None,
+                ));
+            }
+        });
+    }
+
+    /// Rebuilds the snarl when the document's graph differs from the one drawn.
+    fn sync(&mut self, material: usize, graph: &Graph) {
+        if self
+            .shown
+            .as_ref()
+            .is_some_and(|(m, g)| *m == material && g == graph)
+        {
+            return;
+        }
+        let laid = graph_edit::layout(graph);
+        let mut snarl = Snarl::new();
+        let mut ids = BTreeMap::new();
+        for id in graph.nodes.keys() {
+            let p = laid.get(id).copied().unwrap_or([0.0, 0.0]);
+            ids.insert(
+                id.clone(),
+                snarl.insert_node(Pos2::new(p[0], p[1]), id.clone()),
+            );
+        }
+        for (id, node) in &graph.nodes {
+            let Ok(to) = sockets_of(graph, node) else {
+                continue;
+            };
+            for (name, input) in &node.inputs {
+                let Input::Link(link) = input else { continue };
+                let (Some(&from_node), Some(input)) = (
+                    ids.get(&link.node),
+                    to.inputs.iter().position(|(n, _)| n == name),
+                ) else {
+                    continue;
+                };
+                let Some(output) = graph
+                    .nodes
+                    .get(&link.node)
+                    .and_then(|n| sockets_of(graph, n).ok())
+                    .and_then(|s| s.outputs.iter().position(|(n, _)| *n == link.socket))
+                else {
+                    continue;
+                };
+                snarl.connect(
+                    OutPinId {
+                        node: from_node,
+                        output,
+                    },
+                    InPinId {
+                        node: ids[id],
+                        input,
+                    },
+                );
+            }
+        }
+        if self.shown.as_ref().is_none_or(|(m, _)| *m != material) {
+            self.frame_all = true;
+        }
+        self.snarl = snarl;
+        self.positions = laid;
+        self.shown = Some((material, graph.clone()));
+    }
+
+    /// The move command for nodes the user dragged this frame, if any. The first move of
+    /// a graph without saved positions also saves the layout of every other node, so the
+    /// file keeps what the user saw.
+    fn moves(&mut self, graph: &Graph) -> Option<GraphEdit> {
+        let mut moved = Vec::new();
+        for (_, pos, id) in self.snarl.nodes_pos_ids() {
+            let now = [pos.x, pos.y];
+            if self.positions.get(id).is_some_and(|p| *p != now) {
+                moved.push((id.clone(), Some(now)));
+            }
+        }
+        if moved.is_empty() {
+            return None;
+        }
+        for (id, p) in moved.iter().filter_map(|(id, p)| p.map(|p| (id, p))) {
+            self.positions.insert(id.clone(), p);
+        }
+        let mut all = graph_edit::fix_layout(graph);
+        all.retain(|(id, _)| !moved.iter().any(|(m, _)| m == id));
+        all.extend(moved);
+        Some(GraphEdit::MoveNodes(all))
+    }
+
+    /// Node ids of the nodes selected on the canvas.
+    fn selected(&self, ui: &Ui) -> Vec<String> {
+        let mut ids: Vec<String> = get_selected_nodes(canvas_id(), ui.ctx())
+            .into_iter()
+            .filter_map(|n| self.snarl.get_node(n).cloned())
+            .collect();
+        ids.sort();
+        ids.dedup();
+        ids
+    }
+
+    /// Delete (X, Delete), duplicate (Shift+D), copy and paste (Ctrl+C, Ctrl+V) and the
+    /// add menu (Shift+A), while the pointer is over the canvas and no text field has the
+    /// keyboard.
+    fn keyboard(&mut self, ui: &Ui, graph: &Graph, hovered: bool) -> Vec<GraphEdit> {
+        let ctx = ui.ctx();
+        if !hovered || ctx.egui_wants_keyboard_input() {
+            return Vec::new();
+        }
+        let mut edits = Vec::new();
+        let pressed =
+            |key: Key, modifiers: Modifiers| ctx.input_mut(|i| i.consume_key(modifiers, key));
+        let copy_event = ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Copy)));
+        let paste_event =
+            ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Paste(_))));
+        if pressed(Key::Home, Modifiers::NONE) {
+            self.frame_all = true;
+        }
+        if pressed(Key::A, Modifiers::SHIFT) {
+            self.add_menu = ctx.pointer_latest_pos();
+            self.search.clear();
+        }
+        let selected = self.selected(ui);
+        let delete = pressed(Key::X, Modifiers::NONE) || pressed(Key::Delete, Modifiers::NONE);
+        if delete && !selected.is_empty() {
+            edits.push(GraphEdit::Batch(
+                selected
+                    .iter()
+                    .map(|id| GraphEdit::RemoveNode { id: id.clone() })
+                    .collect(),
+            ));
+        }
+        let picked = |ids: &[String]| -> Vec<(String, Node)> {
+            ids.iter()
+                .filter_map(|id| graph.nodes.get(id).map(|n| (id.clone(), n.clone())))
+                .collect()
+        };
+        if pressed(Key::D, Modifiers::SHIFT) && !selected.is_empty() {
+            let (adds, _) = graph_edit::copies(graph, &picked(&selected), [40.0, 40.0]);
+            edits.push(GraphEdit::Batch(adds));
+        }
+        if (copy_event || pressed(Key::C, Modifiers::COMMAND)) && !selected.is_empty() {
+            self.clipboard = picked(&selected);
+        }
+        if (paste_event || pressed(Key::V, Modifiers::COMMAND)) && !self.clipboard.is_empty() {
+            let (adds, _) = graph_edit::copies(graph, &self.clipboard, [60.0, 60.0]);
+            edits.push(GraphEdit::Batch(adds));
+        }
+        edits
+    }
+
+    /// The add menu opened with Shift+A, as a popup at the pointer.
+    fn add_menu_popup(&mut self, ui: &Ui, graph: &Graph) -> Vec<GraphEdit> {
+        let Some(at) = self.add_menu else {
+            return Vec::new();
+        };
+        let ctx = ui.ctx().clone();
+        let graph_pos = self.to_global.inverse() * at;
+        let mut chosen = None;
+        let area = egui::Area::new(egui::Id::new("kiln add node menu"))
+            .fixed_pos(at)
+            .order(egui::Order::Foreground)
+            .show(&ctx, |ui| {
+                egui::Frame::popup(ui.style()).show(ui, |ui| {
+                    chosen = add_menu(ui, &mut self.search, None);
+                })
+            });
+        let clicked_outside = ctx.input(|i| i.pointer.any_pressed())
+            && !ctx
+                .pointer_interact_pos()
+                .is_some_and(|p| area.response.rect.contains(p));
+        if chosen.is_some() || clicked_outside || ctx.input(|i| i.key_pressed(Key::Escape)) {
+            self.add_menu = None;
+        }
+        chosen
+            .map(|kind| vec![new_node(graph, kind, graph_pos)])
+            .unwrap_or_default()
+    }
+}
+
+/// The bounds of the nodes at `positions` in canvas coordinates, with the layout's
+/// estimate of their sizes.
+fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
+    let mut bounds = egui::Rect::NOTHING;
+    for (id, p) in positions {
+        let Some(node) = graph.nodes.get(id) else {
+            continue;
+        };
+        let min = Pos2::new(p[0], p[1]);
+        bounds = bounds.union(egui::Rect::from_min_size(
+            min,
+            egui::vec2(
+                graph_edit::estimated_width(graph, node),
+                graph_edit::estimated_height(graph, node),
+            ),
+        ));
+    }
+    if bounds.is_finite() {
+        bounds
+    } else {
+        egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 200.0))
+    }
+}
+
+/// The view that shows `bounds` in `canvas`: whole when it fits at a readable scale
+/// (at most 1, at least 0.8: text stays legible, as in Blender, and a tall graph is shown
+/// from its top, to be scrolled), else from its top, centred across.
+fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
+    let margin = 24.0;
+    let room = (canvas.size() - egui::vec2(2.0 * margin, 2.0 * margin)).max(egui::vec2(1.0, 1.0));
+    let fit = (room.x / bounds.width()).min(room.y / bounds.height());
+    let scale = fit.clamp(0.8, 1.0);
+    let x = canvas.center().x - bounds.center().x * scale;
+    let y = if bounds.height() * scale <= room.y {
+        canvas.center().y - bounds.center().y * scale
+    } else {
+        canvas.top() + margin - bounds.top() * scale
+    };
+    TSTransform::new(egui::vec2(x, y), scale)
+}
+
+/// A material name not in `materials`: `base`, or with Blender's `.001` suffixes.
+fn unique_name(materials: &[Material], base: &str) -> String {
+    let taken = |n: &str| materials.iter().any(|m| m.name == n);
+    if !taken(base) {
+        return base.to_owned();
+    }
+    let stem = match base.rsplit_once('.') {
+        Some((stem, n)) if n.len() == 3 && n.chars().all(|c| c.is_ascii_digit()) => stem,
+        _ => base,
+    };
+    (1..)
+        .map(|n| format!("{stem}.{n:03}"))
+        .find(|n| !taken(n))
+        .expect("a free name exists")
+}
+
+fn style() -> SnarlStyle {
+    SnarlStyle {
+        collapsible: Some(true),
+        ..SnarlStyle::new()
+    }
+}
+
+/// The edit adding a node of type `kind` at canvas position `pos`.
+fn new_node(graph: &Graph, kind: &str, pos: Pos2) -> GraphEdit {
+    let mut node = Node::new(kind);
+    node.position = Some([pos.x, pos.y]);
+    GraphEdit::AddNode {
+        id: graph_edit::fresh_id(graph, kind),
+        node,
+    }
+}
+
+/// The add-node menu: a search field, then the node library grouped by category (or,
+/// while searching, the matching nodes). With `only`, lists only node types that have a
+/// socket that can take the given socket type (an input when the flag is true). Returns
+/// the chosen node type.
+fn add_menu(
+    ui: &mut Ui,
+    search: &mut String,
+    only: Option<(SocketType, bool)>,
+) -> Option<&'static str> {
+    let label = ui.label("Search");
+    let field = ui
+        .add(egui::TextEdit::singleline(search).hint_text("node name…"))
+        .labelled_by(label.id);
+    if !field.has_focus() && search.is_empty() {
+        field.request_focus();
+    }
+    ui.separator();
+    let fits = |def: &nodes::NodeDef| match only {
+        None => true,
+        Some((ty, true)) => def.inputs.iter().any(|s| ty.converts_to(s.ty).is_some()),
+        Some((ty, false)) => def.outputs.iter().any(|s| s.ty.converts_to(ty).is_some()),
+    };
+    let query = search.trim().to_lowercase();
+    let mut chosen = None;
+    if query.is_empty() {
+        let mut categories: Vec<&str> = Vec::new();
+        for def in nodes::library() {
+            if !categories.contains(&def.category) {
+                categories.push(def.category);
+            }
+        }
+        for category in categories {
+            let defs: Vec<_> = nodes::library()
+                .iter()
+                .filter(|d| d.category == category && fits(d))
+                .collect();
+            if defs.is_empty() {
+                continue;
+            }
+            ui.menu_button(category, |ui| {
+                for def in defs {
+                    if ui.button(def.label).on_hover_text(def.doc).clicked() {
+                        chosen = Some(def.kind);
+                    }
+                }
+            });
+        }
+    } else {
+        egui::ScrollArea::vertical()
+            .max_height(300.0)
+            .show(ui, |ui| {
+                for def in nodes::library().iter().filter(|d| {
+                    fits(d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
+                }) {
+                    if ui
+                        .button(def.label)
+                        .on_hover_text(format!("{} — {}", def.category, def.doc))
+                        .clicked()
+                    {
+                        chosen = Some(def.kind);
+                    }
+                }
+            });
+    }
+    if chosen.is_some() {
+        search.clear();
+        ui.close();
+    }
+    chosen
+}
+
+impl<'a> Viewer<'a> {
+    fn node(&self, id: &str) -> Option<&'a Node> {
+        self.graph.nodes.get(id)
+    }
+
+    fn sockets(&self, id: &str) -> Sockets {
+        self.node(id)
+            .and_then(|n| sockets_of(self.graph, n).ok())
+            .unwrap_or_default()
+    }
+
+    fn error_on(&self, id: &str) -> Option<&'a GraphError> {
+        self.error.filter(|e| e.node.as_deref() == Some(id))
+    }
+
+    /// Records `edit` if the graph accepts it, else its reason.
+    fn try_edit(&mut self, edit: GraphEdit, gesture: Option<GestureId>) {
+        let mut scratch = self.graph.clone();
+        match edit.clone().apply(&mut scratch) {
+            Ok(_) => self.edits.push((edit, gesture)),
+            Err(e) => self.message = Some(e),
+        }
+    }
+
+    fn pin(&self, node: &str, side: Side, socket: &str, ty: SocketType) -> RecordedPin {
+        let mut info = PinInfo::default()
+            .with_shape(socket_shape(ty))
+            .with_fill(socket_color(ty))
+            .with_wire_color(socket_color(ty));
+        let at_fault = self
+            .error_on(node)
+            .is_some_and(|e| e.socket.as_deref() == Some(socket));
+        if at_fault {
+            info = info.with_stroke(Stroke::new(2.0, Color32::RED));
+        }
+        RecordedPin {
+            info,
+            key: (node.to_owned(), side, socket.to_owned()),
+            rects: Rc::clone(&self.pins),
+        }
+    }
+
+    /// The widget of an unconnected input's value.
+    fn value_ui(&mut self, ui: &mut Ui, id: &str, name: &str, ty: SocketType, label: egui::Id) {
+        let Some(node) = self.node(id) else { return };
+        let def = nodes::find(&node.kind);
+        let given = match node.inputs.get(name) {
+            Some(Input::Value(v)) => Some(v.clone()),
+            _ => None,
+        };
+        let declared = def.and_then(|d| d.input(name)).map(|s| &s.default);
+        let value = match (given, declared) {
+            (Some(v), _) => v,
+            (None, Some(nodes::Default::Value(v))) => v.clone(),
+            (None, Some(nodes::Default::Implicit(_, what))) => {
+                ui.label(RichText::new(format!("({what})")).weak());
+                return;
+            }
+            (None, None) => match ty {
+                SocketType::Float => Value::Float(0.0),
+                SocketType::Vec2 => Value::Vec2([0.0; 2]),
+                _ => Value::Vec3([0.0; 3]),
+            },
+        };
+        let range = input_range(&node.kind, name);
+        let mut changed = None;
+        let mut gesture = None;
+        match ty {
+            SocketType::Float => {
+                let mut x = value.as_f32();
+                let mut drag = egui::DragValue::new(&mut x).speed(0.01).max_decimals(3);
+                if let Some(r) = range.clone() {
+                    drag = drag.range(r);
+                }
+                let r = ui.add(drag).labelled_by(label);
+                if r.changed() {
+                    changed = Some(Value::Float(x));
+                    gesture = r.dragged().then(|| r.id.value());
+                }
+            }
+            SocketType::Color => {
+                let mut rgb = value.as_vec3();
+                let r = ui
+                    .color_edit_button_rgb(&mut rgb)
+                    .labelled_by(label)
+                    .on_hover_text("Linear RGB (scene-referred); the picker shows it as sRGB");
+                if r.changed() {
+                    changed = Some(Value::Vec3(rgb));
+                    gesture = Some(r.id.value());
+                }
+            }
+            SocketType::Vector | SocketType::Vec2 => {
+                let mut v = value.as_vec3();
+                let n = if ty == SocketType::Vec2 { 2 } else { 3 };
+                let mut any = false;
+                for x in v.iter_mut().take(n) {
+                    let r = ui
+                        .add(egui::DragValue::new(x).speed(0.01).max_decimals(3))
+                        .labelled_by(label);
+                    if r.changed() {
+                        any = true;
+                        gesture = r.dragged().then(|| r.id.value());
+                    }
+                }
+                if any {
+                    changed = Some(if n == 2 {
+                        Value::Vec2([v[0], v[1]])
+                    } else {
+                        Value::Vec3(v)
+                    });
+                }
+            }
+            SocketType::Bsdf => {}
+        }
+        if let Some(v) = changed {
+            self.try_edit(
+                GraphEdit::SetInput {
+                    node: id.to_owned(),
+                    input: name.to_owned(),
+                    value: Some(Input::Value(v)),
+                },
+                gesture,
+            );
+        }
+    }
+
+    /// A node's parameters: dropdowns for enums, checkboxes for flags, and what a ramp or
+    /// a file holds.
+    fn params_ui(&mut self, ui: &mut Ui, id: &str) {
+        let Some(node) = self.node(id) else { return };
+        let Some(def) = nodes::find(&node.kind) else {
+            if let Some(Param::Text(group)) = node.params.get(crate::material::graph::GROUP_PARAM) {
+                ui.label(format!("Group \"{group}\""));
+            }
+            return;
+        };
+        let mut edit = None;
+        for p in &def.params {
+            let current = node.params.get(p.name);
+            match &p.kind {
+                ParamKind::Enum(options) => {
+                    let chosen = match current {
+                        Some(Param::Text(t)) => t.as_str(),
+                        _ => options[0],
+                    };
+                    ui.horizontal(|ui| {
+                        let label = ui.label(p.name);
+                        egui::ComboBox::from_id_salt((id, p.name))
+                            .selected_text(chosen)
+                            .show_ui(ui, |ui| {
+                                for option in *options {
+                                    if ui.selectable_label(*option == chosen, *option).clicked()
+                                        && *option != chosen
+                                    {
+                                        edit = Some((p.name, Param::Text((*option).to_owned())));
+                                    }
+                                }
+                            })
+                            .response
+                            .labelled_by(label.id)
+                            .on_hover_text(p.doc);
+                    });
+                }
+                ParamKind::Bool(default) => {
+                    let mut b = match current {
+                        Some(Param::Bool(b)) => *b,
+                        _ => *default,
+                    };
+                    if ui.checkbox(&mut b, p.name).on_hover_text(p.doc).changed() {
+                        edit = Some((p.name, Param::Bool(b)));
+                    }
+                }
+                ParamKind::Ramp => {
+                    if let Some(Param::Ramp(stops)) = current {
+                        ramp_preview(ui, stops);
+                    }
+                }
+                ParamKind::File => {
+                    let file = match current {
+                        Some(Param::Text(t)) => std::path::Path::new(t)
+                            .file_name()
+                            .map_or(t.clone(), |f| f.to_string_lossy().into_owned()),
+                        _ => "(no image)".to_owned(),
+                    };
+                    ui.label(format!("{}: {file}", p.name)).on_hover_text(p.doc);
+                }
+            }
+        }
+        if let Some((param, value)) = edit {
+            self.try_edit(
+                GraphEdit::SetParam {
+                    node: id.to_owned(),
+                    param: param.to_owned(),
+                    value: Some(value),
+                },
+                None,
+            );
+        }
+    }
+}
+
+/// Draws a colour ramp's stops as a gradient strip.
+fn ramp_preview(ui: &mut Ui, stops: &[crate::material::RampStop]) {
+    let (rect, _) = ui.allocate_exact_size(egui::vec2(160.0, 14.0), egui::Sense::hover());
+    let painter = ui.painter_at(rect);
+    let steps = 32;
+    for i in 0..steps {
+        let t = (i as f32 + 0.5) / steps as f32;
+        let c = ramp_at(stops, t);
+        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
+        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
+        painter.rect_filled(
+            egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range()),
+            0.0,
+            egui::Rgba::from_rgb(c[0], c[1], c[2]),
+        );
+    }
+}
+
+/// The ramp's colour at `t` (linear interpolation between stops).
+fn ramp_at(stops: &[crate::material::RampStop], t: f32) -> [f32; 3] {
+    let Some(first) = stops.first() else {
+        return [0.0; 3];
+    };
+    let mut prev = first;
+    if t <= first.position {
+        return [first.color[0], first.color[1], first.color[2]];
+    }
+    for s in stops {
+        if t <= s.position {
+            let w = ((t - prev.position) / (s.position - prev.position).max(1e-6)).clamp(0.0, 1.0);
+            return std::array::from_fn(|i| prev.color[i] + (s.color[i] - prev.color[i]) * w);
+        }
+        prev = s;
+    }
+    [prev.color[0], prev.color[1], prev.color[2]]
+}
+
+/// The range a float input's field keeps to: the principled parameters' ranges
+/// (`crate::shader::principled::PARAMETERS`) for the Principled BSDF, [0, 1] for factors.
+fn input_range(kind: &str, input: &str) -> Option<std::ops::RangeInclusive<f32>> {
+    use crate::shader::principled::{PARAMETERS, Range};
+    if kind == "principled_bsdf" {
+        let p = PARAMETERS.iter().find(|p| p.name == input)?;
+        return match p.range {
+            Range::Unit => Some(0.0..=1.0),
+            Range::NonNegative => Some(0.0..=f32::MAX),
+            Range::Ior => Some(1.0..=100.0),
+            Range::Finite | Range::Flag => None,
+        };
+    }
+    (input == "fac").then_some(0.0..=1.0)
+}
+
+impl SnarlViewer<String> for Viewer<'_> {
+    fn title(&mut self, node: &String) -> String {
+        let kind = self.node(node).map_or("", |n| n.kind.as_str());
+        let label = nodes::find(kind).map_or(kind, |d| d.label);
+        format!("{label}  ·  {node}")
+    }
+
+    fn show_header(
+        &mut self,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        let id = snarl[node].clone();
+        // Node text is not selectable, so a click anywhere on a node reaches the node
+        // (to select or drag it), as in Blender.
+        ui.style_mut().interaction.selectable_labels = false;
+        ui.label(self.title(&id));
+        if self.error_on(&id).is_some() {
+            ui.label(RichText::new("⚠").color(Color32::LIGHT_RED));
+        }
+    }
+
+    fn inputs(&mut self, node: &String) -> usize {
+        self.sockets(node).inputs.len()
+    }
+
+    fn outputs(&mut self, node: &String) -> usize {
+        self.sockets(node).outputs.len()
+    }
+
+    fn show_input(
+        &mut self,
+        pin: &InPin,
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) -> impl SnarlPin + 'static {
+        let id = snarl[pin.id.node].clone();
+        let sockets = self.sockets(&id);
+        let (name, ty) = sockets
+            .inputs
+            .get(pin.id.input)
+            .cloned()
+            .unwrap_or(("?".into(), SocketType::Float));
+        ui.style_mut().interaction.selectable_labels = false;
+        let label = ui.label(&name);
+        if pin.remotes.is_empty() && ty != SocketType::Bsdf {
+            self.value_ui(ui, &id, &name, ty, label.id);
+        }
+        self.pin(&id, Side::Input, &name, ty)
+    }
+
+    fn show_output(
+        &mut self,
+        pin: &OutPin,
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) -> impl SnarlPin + 'static {
+        let id = snarl[pin.id.node].clone();
+        let sockets = self.sockets(&id);
+        let (name, ty) = sockets
+            .outputs
+            .get(pin.id.output)
+            .cloned()
+            .unwrap_or(("?".into(), SocketType::Float));
+        ui.style_mut().interaction.selectable_labels = false;
+        ui.label(&name);
+        self.pin(&id, Side::Output, &name, ty)
+    }
+
+    fn has_body(&mut self, node: &String) -> bool {
+        self.error_on(node).is_some()
+            || self.node(node).is_some_and(|n| {
+                nodes::find(&n.kind).map_or(!n.params.is_empty(), |d| !d.params.is_empty())
+            })
+    }
+
+    fn show_body(
+        &mut self,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        let id = snarl[node].clone();
+        ui.vertical(|ui| {
+            if let Some(e) = self.error_on(&id) {
+                ui.label(RichText::new(&e.message).color(Color32::LIGHT_RED));
+            }
+            self.params_ui(ui, &id);
+        });
+    }
+
+    fn node_frame(
+        &mut self,
+        default: egui::Frame,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        snarl: &Snarl<String>,
+    ) -> egui::Frame {
+        if self.error_on(&snarl[node]).is_some() {
+            default.stroke(Stroke::new(2.0, Color32::RED))
+        } else {
+            default
+        }
+    }
+
+    fn connect(&mut self, from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
+        let from_id = snarl[from.id.node].clone();
+        let to_id = snarl[to.id.node].clone();
+        let (Some((output, _)), Some((input, _))) = (
+            self.sockets(&from_id).outputs.get(from.id.output).cloned(),
+            self.sockets(&to_id).inputs.get(to.id.input).cloned(),
+        ) else {
+            return;
+        };
+        // An input takes one wire: setting the link replaces the one it had.
+        self.try_edit(GraphEdit::connect(&from_id, &output, &to_id, &input), None);
+    }
+
+    fn disconnect(&mut self, _from: &OutPin, to: &InPin, snarl: &mut Snarl<String>) {
+        self.drop_inputs(to, snarl);
+    }
+
+    fn drop_inputs(&mut self, pin: &InPin, snarl: &mut Snarl<String>) {
+        let id = snarl[pin.id.node].clone();
+        if let Some((input, _)) = self.sockets(&id).inputs.get(pin.id.input).cloned() {
+            self.try_edit(
+                GraphEdit::SetInput {
+                    node: id,
+                    input,
+                    value: None,
+                },
+                None,
+            );
+        }
+    }
+
+    fn drop_outputs(&mut self, pin: &OutPin, snarl: &mut Snarl<String>) {
+        let edits: Vec<GraphEdit> = pin
+            .remotes
+            .iter()
+            .filter_map(|remote| {
+                let id = snarl[remote.node].clone();
+                let (input, _) = self.sockets(&id).inputs.get(remote.input).cloned()?;
+                Some(GraphEdit::SetInput {
+                    node: id,
+                    input,
+                    value: None,
+                })
+            })
+            .collect();
+        if !edits.is_empty() {
+            self.try_edit(GraphEdit::Batch(edits), None);
+        }
+    }
+
+    fn has_graph_menu(&mut self, _pos: Pos2, _snarl: &mut Snarl<String>) -> bool {
+        true
+    }
+
+    fn show_graph_menu(&mut self, pos: Pos2, ui: &mut Ui, _snarl: &mut Snarl<String>) {
+        if let Some(kind) = add_menu(ui, self.search, None) {
+            let edit = new_node(self.graph, kind, pos);
+            self.try_edit(edit, None);
+        }
+    }
+
+    fn has_dropped_wire_menu(&mut self, _src: AnyPins, _snarl: &mut Snarl<String>) -> bool {
+        true
+    }
+
+    fn show_dropped_wire_menu(
+        &mut self,
+        pos: Pos2,
+        ui: &mut Ui,
+        src: AnyPins,
+        snarl: &mut Snarl<String>,
+    ) {
+        // The first pin the wire came from decides what fits.
+        let source = match src {
+            AnyPins::Out(pins) => pins.first().and_then(|p| {
+                let id = snarl[p.node].clone();
+                let (name, ty) = self.sockets(&id).outputs.get(p.output).cloned()?;
+                Some((id, name, ty, true))
+            }),
+            AnyPins::In(pins) => pins.first().and_then(|p| {
+                let id = snarl[p.node].clone();
+                let (name, ty) = self.sockets(&id).inputs.get(p.input).cloned()?;
+                Some((id, name, ty, false))
+            }),
+        };
+        let Some((source, socket, ty, from_output)) = source else {
+            ui.close();
+            return;
+        };
+        let Some(kind) = add_menu(ui, self.search, Some((ty, from_output))) else {
+            return;
+        };
+        let GraphEdit::AddNode { id, node } = new_node(self.graph, kind, pos) else {
+            return;
+        };
+        let Some(def) = nodes::find(kind) else { return };
+        let wire = if from_output {
+            def.inputs
+                .iter()
+                .find(|s| ty.converts_to(s.ty).is_some())
+                .map(|s| GraphEdit::connect(&source, &socket, &id, s.name))
+        } else {
+            def.outputs
+                .iter()
+                .find(|s| s.ty.converts_to(ty).is_some())
+                .map(|s| GraphEdit::connect(&id, s.name, &source, &socket))
+        };
+        let mut edits = vec![GraphEdit::AddNode { id, node }];
+        edits.extend(wire);
+        self.try_edit(GraphEdit::Batch(edits), None);
+    }
+
+    fn has_node_menu(&mut self, _node: &String) -> bool {
+        true
+    }
+
+    fn show_node_menu(
+        &mut self,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        let id = snarl[node].clone();
+        if ui.button("Duplicate").clicked() {
+            if let Some(n) = self.node(&id) {
+                let (adds, _) =
+                    graph_edit::copies(self.graph, &[(id.clone(), n.clone())], [40.0, 40.0]);
+                self.try_edit(GraphEdit::Batch(adds), None);
+            }
+            ui.close();
+        }
+        if ui.button("Delete").clicked() {
+            self.try_edit(GraphEdit::RemoveNode { id }, None);
+            ui.close();
+        }
+    }
+
+    fn current_transform(&mut self, to_global: &mut TSTransform, _snarl: &mut Snarl<String>) {
+        if let Some((bounds, canvas)) = self.frame.take() {
+            *to_global = framing(bounds, canvas);
+        }
+        self.to_global = *to_global;
+    }
+}

@@ -1,0 +1,330 @@
+//! The node editor driven like a user, headless on lavapipe (as tests/editor.rs): add a
+//! node through the search menu, draw wires by dragging between pins, edit a value, see a
+//! refused wire's reason, undo and redo back and forth, and save and reopen.
+
+use std::time::{Duration, Instant};
+
+use egui::accesskit::{self, Role};
+use egui_kittest::Harness;
+use egui_kittest::kittest::{NodeT, Queryable};
+use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs, Selection};
+use kiln::material::{Graph, Input, Link};
+use kiln::plugin::PluginHost;
+
+const SAMPLE_LIMIT: u32 = 2;
+/// Building the viewport's kernel on lavapipe takes seconds on a busy machine.
+const WAIT: Duration = Duration::from_secs(300);
+
+fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: set before any thread of this test starts a device.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    Harness::builder()
+        // Wide, so the canvas has room left of the material's nodes for the new one.
+        .with_size(egui::vec2(1920.0, 1000.0))
+        .wgpu_setup(kiln::editor::wgpu_setup(true))
+        .build_eframe(move |cc| {
+            EditorApp::new(
+                cc,
+                EditorOptions {
+                    file: None,
+                    dialogs: Box::new(dialogs),
+                    plugins: PluginHost::default(),
+                    sample_limit: SAMPLE_LIMIT,
+                    state_dir: None,
+                    autosave_every: kiln::editor::AUTOSAVE_EVERY,
+                    quit_when_done: false,
+                },
+            )
+        })
+}
+
+fn step_until(harness: &mut Harness<'_, EditorApp>, what: &str, done: impl Fn(&EditorApp) -> bool) {
+    let start = Instant::now();
+    while !done(harness.state()) {
+        assert!(
+            start.elapsed() < WAIT,
+            "timed out waiting for {what}; viewport error: {:?}",
+            harness.state().viewport_status().and_then(|s| s.error)
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    harness.step();
+}
+
+fn steps(harness: &mut Harness<'_, EditorApp>, n: usize) {
+    for _ in 0..n {
+        harness.step();
+    }
+}
+
+fn graph(app: &EditorApp) -> Graph {
+    let m = app.node_editor().material().expect("a material is shown");
+    app.document()
+        .material_graph(m)
+        .expect("the material exists")
+}
+
+fn pin(harness: &Harness<'_, EditorApp>, node: &str, socket: &str, input: bool) -> egui::Pos2 {
+    harness
+        .state()
+        .node_editor()
+        .pin_position(node, socket, input)
+        .unwrap_or_else(|| panic!("pin {node}.{socket} (input: {input}) is drawn"))
+}
+
+/// Drags a wire with the primary button from output `from` to input `to` (node, socket),
+/// as a mouse would.
+fn drag(harness: &mut Harness<'_, EditorApp>, from: (&str, &str), to: (&str, &str)) {
+    let from = pin(harness, from.0, from.1, false);
+    let to = pin(harness, to.0, to.1, true);
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    harness.event(egui::Event::PointerMoved(from));
+    harness.step();
+    harness.event(button(from, true));
+    harness.step();
+    for i in 1..=8 {
+        let t = i as f32 / 8.0;
+        harness.event(egui::Event::PointerMoved(from + (to - from) * t));
+        harness.step();
+    }
+    harness.event(button(to, false));
+    steps(harness, 3);
+}
+
+#[test]
+fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
+    let dir = tempfile::tempdir().unwrap();
+    let saved = dir.path().join("nodes.kiln");
+    let mut harness = harness(ScriptedDialogs {
+        save: vec![saved.clone()].into(),
+        ..ScriptedDialogs::default()
+    });
+    step_until(&mut harness, "the first samples", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.samples >= SAMPLE_LIMIT && s.error.is_none())
+    });
+
+    // Selecting the short block shows its material's graph.
+    harness.get_by_label("block").click();
+    steps(&mut harness, 3);
+    assert_eq!(
+        harness.state().document().selection,
+        Some(Selection::Object(6))
+    );
+    let material = harness.state().node_editor().material().unwrap();
+    assert_eq!(
+        material,
+        harness.state().document().scene().instances[6].material
+    );
+    let start = graph(harness.state());
+    assert!(
+        start.nodes.contains_key("surface"),
+        "{:?}",
+        start.nodes.keys()
+    );
+
+    // Shift+A over the canvas (left of the material's nodes) opens the add menu; search
+    // and pick the noise texture.
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    harness.event(egui::Event::PointerMoved(
+        canvas.left_top() + egui::vec2(30.0, 40.0),
+    ));
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::A);
+    steps(&mut harness, 2);
+    harness
+        .get_by_role_and_label(Role::TextInput, "Search")
+        .type_text("noise");
+    steps(&mut harness, 2);
+    let item = harness.get_by_label("Noise Texture");
+    eprintln!("noise menu item at {:?}", item.rect());
+    item.click_accesskit();
+    steps(&mut harness, 3);
+    let added = graph(harness.state());
+    assert_eq!(added.nodes["noise_texture"].kind, "noise_texture");
+    assert!(added.nodes["noise_texture"].position.is_some());
+
+    // A colour output into the output's shader input is refused, with the reason shown.
+    if let Some(path) = std::env::var_os("KILN_NODE_EDITOR_SHOT") {
+        // A look at the canvas, for whoever changes its layout.
+        harness.render().unwrap().save(path).unwrap();
+    }
+    let refused = graph(harness.state());
+    drag(
+        &mut harness,
+        ("noise_texture", "color"),
+        ("output", "surface"),
+    );
+    let message = harness
+        .state()
+        .node_editor()
+        .message()
+        .expect("a refused wire says why")
+        .to_owned();
+    assert!(
+        message.contains("color") && message.contains("bsdf"),
+        "{message}"
+    );
+    assert!(
+        harness.query_by_label(&message).is_some(),
+        "shown: {message}"
+    );
+    assert_eq!(
+        graph(harness.state()),
+        refused,
+        "a refused wire changes nothing"
+    );
+
+    // Noise colour → base colour: the material recompiles and the viewport restarts.
+    let status = harness.state().viewport_status().unwrap();
+    drag(
+        &mut harness,
+        ("noise_texture", "color"),
+        ("surface", "base_color"),
+    );
+    let connected = graph(harness.state());
+    assert_eq!(
+        connected.nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("noise_texture", "color")),
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+    assert!(harness.state().document().graph_error(material).is_none());
+    assert!(
+        harness.state().document().scene().materials[material]
+            .graph
+            .is_some(),
+        "the scene renders the graph"
+    );
+    step_until(&mut harness, "the recompiled material's samples", |app| {
+        app.viewport_status().is_some_and(|s| {
+            s.restarts > status.restarts
+                && s.shown_revision != status.shown_revision
+                && s.samples >= SAMPLE_LIMIT
+        })
+    });
+
+    // The noise scale, set as a screen reader would.
+    let status = harness.state().viewport_status().unwrap();
+    let field = harness
+        .get_all_by_role_and_label(Role::SpinButton, "scale")
+        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
+        .expect("the noise texture's scale field (5 by default)");
+    let (target_node, target_tree) = field.accesskit_node().locate();
+    harness.event(egui::Event::AccessKitActionRequest(
+        accesskit::ActionRequest {
+            action: accesskit::Action::SetValue,
+            target_node,
+            target_tree,
+            data: Some(accesskit::ActionData::NumericValue(12.5)),
+        },
+    ));
+    steps(&mut harness, 3);
+    let scaled = graph(harness.state());
+    assert_eq!(
+        scaled.nodes["noise_texture"].inputs["scale"],
+        Input::from(12.5)
+    );
+    assert!(harness.state().document().is_dirty());
+    step_until(&mut harness, "the rescaled material's samples", |app| {
+        app.viewport_status().is_some_and(|s| {
+            s.restarts > status.restarts && s.shown_revision != status.shown_revision
+        })
+    });
+
+    // Undo each step back to the start graph, then redo to the end.
+    let mut undos = 0;
+    while graph(harness.state()) != start {
+        assert!(undos < 10, "undo returns to the start graph");
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        steps(&mut harness, 2);
+        undos += 1;
+    }
+    assert_eq!(undos, 3, "add, connect and scale are one step each");
+    for _ in 0..undos {
+        harness.key_press_modifiers(
+            egui::Modifiers::COMMAND.plus(egui::Modifiers::SHIFT),
+            egui::Key::Z,
+        );
+        steps(&mut harness, 2);
+    }
+    assert_eq!(graph(harness.state()), scaled);
+
+    // Save, reopen: the same graph, positions included.
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    steps(&mut harness, 2);
+    assert!(saved.exists(), "{:?}", harness.state().error());
+    assert!(!harness.state().document().is_dirty());
+    let first = std::fs::read(&saved).unwrap();
+    harness.state_mut().open(saved.clone());
+    steps(&mut harness, 2);
+    let reopened = harness.state().document().material_graph(material).unwrap();
+    assert_eq!(reopened, scaled);
+    // Saving the unchanged document again writes the same bytes.
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    steps(&mut harness, 2);
+    assert_eq!(std::fs::read(&saved).unwrap(), first);
+
+    // Keyboard over the canvas: Shift+click the noise node's header to select it, Shift+D
+    // duplicates it, Ctrl+C / Ctrl+V paste another copy, X deletes the selected node.
+    let header = {
+        let node_editor = harness.state().node_editor();
+        let top = node_editor.node_position("noise_texture").unwrap();
+        let left = pin(&harness, "noise_texture", "vector", true);
+        let right = pin(&harness, "noise_texture", "color", false);
+        egui::pos2((left.x + right.x) / 2.0, top.y + (right.y - top.y) * 0.3)
+    };
+    harness.event(egui::Event::PointerMoved(header));
+    harness.step();
+    // Snarl selects with Shift+click (a plain click only raises the node).
+    for pressed in [true, false] {
+        harness.event_modifiers(
+            egui::Event::PointerButton {
+                pos: header,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: egui::Modifiers::SHIFT,
+            },
+            egui::Modifiers::SHIFT,
+        );
+        harness.step();
+    }
+    steps(&mut harness, 2);
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::D);
+    steps(&mut harness, 3);
+    let duplicated = graph(harness.state());
+    assert_eq!(duplicated.nodes["noise_texture_2"].kind, "noise_texture");
+    assert_eq!(
+        duplicated.nodes["noise_texture_2"].inputs["scale"],
+        Input::from(12.5),
+        "a duplicate keeps its values"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::C);
+    steps(&mut harness, 2);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::V);
+    steps(&mut harness, 3);
+    assert!(graph(harness.state()).nodes.contains_key("noise_texture_3"));
+    harness.key_press(egui::Key::X);
+    steps(&mut harness, 3);
+    let deleted = graph(harness.state());
+    assert!(!deleted.nodes.contains_key("noise_texture"));
+    assert!(
+        !deleted.nodes["surface"].inputs.contains_key("base_color"),
+        "deleting a node removes its wires"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 2);
+    assert_eq!(
+        graph(harness.state()).nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("noise_texture", "color")),
+        "undo restores the node and its wires"
+    );
+}
