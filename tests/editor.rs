@@ -4,7 +4,7 @@
 //! small sample limit, so the tests step frames until it reports what they wait for.
 
 use std::path::PathBuf;
-use std::time::{Duration, Instant};
+use std::time::Duration;
 
 use egui::accesskit::{self, Role};
 use egui_kittest::Harness;
@@ -12,64 +12,27 @@ use egui_kittest::kittest::{NodeT, Queryable};
 use glam::Vec3;
 use kiln::editor::final_render::RenderState;
 use kiln::editor::session::SessionStore;
-use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs, Selection};
+use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
 use kiln::plugin::PluginHost;
 
-const SAMPLE_LIMIT: u32 = 2;
-/// Building the viewport's kernel on lavapipe takes seconds on a busy machine.
-const WAIT: Duration = Duration::from_secs(240);
+#[path = "common/editor_harness.rs"]
+mod editor_harness;
+
+use editor_harness::{SAMPLE_LIMIT, Setup, bundled_plugins, quad_glb, start, step_until};
 
 fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
-    harness_with(dialogs, PluginHost::default())
+    start(Setup {
+        dialogs,
+        ..Setup::default()
+    })
 }
 
 fn harness_with(dialogs: ScriptedDialogs, plugins: PluginHost) -> Harness<'static, EditorApp> {
-    harness_in(dialogs, plugins, None, kiln::editor::AUTOSAVE_EVERY)
-}
-
-/// The editor with a state folder (recent files, autosaves) and autosave interval.
-fn harness_in(
-    dialogs: ScriptedDialogs,
-    plugins: PluginHost,
-    state_dir: Option<PathBuf>,
-    autosave_every: Duration,
-) -> Harness<'static, EditorApp> {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: set before any thread of this test starts a device.
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
-    Harness::builder()
-        .with_size(egui::vec2(1280.0, 800.0))
-        .wgpu_setup(kiln::editor::wgpu_setup(true))
-        .build_eframe(move |cc| {
-            EditorApp::new(
-                cc,
-                EditorOptions {
-                    file: None,
-                    dialogs: Box::new(dialogs),
-                    plugins,
-                    sample_limit: SAMPLE_LIMIT,
-                    state_dir,
-                    autosave_every,
-                    quit_when_done: false,
-                },
-            )
-        })
-}
-
-/// Steps frames until `done` holds; fails naming `what` after [`WAIT`].
-fn step_until(harness: &mut Harness<'_, EditorApp>, what: &str, done: impl Fn(&EditorApp) -> bool) {
-    let start = Instant::now();
-    while !done(harness.state()) {
-        assert!(
-            start.elapsed() < WAIT,
-            "timed out waiting for {what}; viewport error: {:?}",
-            harness.state().viewport_status().and_then(|s| s.error)
-        );
-        harness.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    harness.step();
+    start(Setup {
+        dialogs,
+        plugins,
+        ..Setup::default()
+    })
 }
 
 fn samples_done(app: &EditorApp) -> bool {
@@ -307,13 +270,9 @@ fn a_file_that_fails_to_open_is_reported_and_the_document_kept() {
 
 #[test]
 fn a_gltf_opens_through_the_importer_plugin_and_saves_as_a_kiln_scene() {
-    // The bundled plugins, as `cargo build` left them next to the test executable.
-    let exe = std::env::current_exe().unwrap();
-    let mut plugins = PluginHost::default();
-    plugins.load_dir(exe.parent().unwrap(), true);
+    let plugins = bundled_plugins();
     let dir = tempfile::tempdir().unwrap();
-    let glb = dir.path().join("quad.glb");
-    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
+    let glb = quad_glb(dir.path());
     let saved = dir.path().join("quad.kiln");
     let mut dialogs = ScriptedDialogs::default();
     dialogs.open.push_back(glb);
@@ -457,12 +416,9 @@ fn duplicate_and_delete_are_undoable_and_a_duplicate_shares_its_mesh() {
 
 #[test]
 fn an_import_adds_to_the_scene_as_one_undo_step() {
-    let exe = std::env::current_exe().unwrap();
-    let mut plugins = PluginHost::default();
-    plugins.load_dir(exe.parent().unwrap(), true);
+    let plugins = bundled_plugins();
     let dir = tempfile::tempdir().unwrap();
-    let glb = dir.path().join("quad.glb");
-    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
+    let glb = quad_glb(dir.path());
     let mut dialogs = ScriptedDialogs::default();
     dialogs.import.push_back(glb);
     let mut harness = harness_with(dialogs, plugins);
@@ -497,12 +453,11 @@ fn an_autosave_left_by_a_crash_is_offered_and_recovered() {
     )
     .unwrap();
 
-    let mut harness = harness_in(
-        ScriptedDialogs::default(),
-        PluginHost::default(),
-        Some(state.path().to_owned()),
-        Duration::ZERO,
-    );
+    let mut harness = start(Setup {
+        state_dir: Some(state.path().to_owned()),
+        autosave_every: Duration::ZERO,
+        ..Setup::default()
+    });
     harness.step();
     assert!(harness.state().offered_recovery().is_some());
     assert!(harness.query_by_label("Recover unsaved work?").is_some());

@@ -2,56 +2,24 @@
 //! node through the search menu, draw wires by dragging between pins, edit a value, see a
 //! refused wire's reason, undo and redo back and forth, and save and reopen.
 
-use std::time::{Duration, Instant};
-
 use egui::accesskit::{self, Role};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
-use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs, Selection};
+use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
 use kiln::material::{Graph, Input, Link};
-use kiln::plugin::PluginHost;
 
-const SAMPLE_LIMIT: u32 = 2;
-/// Building the viewport's kernel on lavapipe takes seconds on a busy machine.
-const WAIT: Duration = Duration::from_secs(300);
+#[path = "common/editor_harness.rs"]
+mod editor_harness;
+
+use editor_harness::{SAMPLE_LIMIT, Setup, start, step_until};
 
 fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
-    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
-        // SAFETY: set before any thread of this test starts a device.
-        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
-    }
-    Harness::builder()
+    start(Setup {
+        dialogs,
         // Wide, so the canvas has room left of the material's nodes for the new one.
-        .with_size(egui::vec2(1920.0, 1000.0))
-        .wgpu_setup(kiln::editor::wgpu_setup(true))
-        .build_eframe(move |cc| {
-            EditorApp::new(
-                cc,
-                EditorOptions {
-                    file: None,
-                    dialogs: Box::new(dialogs),
-                    plugins: PluginHost::default(),
-                    sample_limit: SAMPLE_LIMIT,
-                    state_dir: None,
-                    autosave_every: kiln::editor::AUTOSAVE_EVERY,
-                    quit_when_done: false,
-                },
-            )
-        })
-}
-
-fn step_until(harness: &mut Harness<'_, EditorApp>, what: &str, done: impl Fn(&EditorApp) -> bool) {
-    let start = Instant::now();
-    while !done(harness.state()) {
-        assert!(
-            start.elapsed() < WAIT,
-            "timed out waiting for {what}; viewport error: {:?}",
-            harness.state().viewport_status().and_then(|s| s.error)
-        );
-        harness.step();
-        std::thread::sleep(Duration::from_millis(20));
-    }
-    harness.step();
+        size: egui::vec2(1920.0, 1000.0),
+        ..Setup::default()
+    })
 }
 
 fn steps(harness: &mut Harness<'_, EditorApp>, n: usize) {

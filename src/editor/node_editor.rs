@@ -715,6 +715,19 @@ impl<'a> Viewer<'a> {
             .unwrap_or_default()
     }
 
+    /// The name and type of socket `index` on `side` of node `id` (a placeholder for a
+    /// socket the graph no longer has, drawn for the one frame before the view rebuilds).
+    fn socket(&self, id: &str, side: Side, index: usize) -> (String, SocketType) {
+        let sockets = self.sockets(id);
+        let list = match side {
+            Side::Input => sockets.inputs,
+            Side::Output => sockets.outputs,
+        };
+        list.get(index)
+            .cloned()
+            .unwrap_or(("?".into(), SocketType::Float))
+    }
+
     fn error_on(&self, id: &str) -> Option<&'a GraphError> {
         self.error.filter(|e| e.node.as_deref() == Some(id))
     }
@@ -998,12 +1011,7 @@ impl SnarlViewer<String> for Viewer<'_> {
         snarl: &mut Snarl<String>,
     ) -> impl SnarlPin + 'static {
         let id = snarl[pin.id.node].clone();
-        let sockets = self.sockets(&id);
-        let (name, ty) = sockets
-            .inputs
-            .get(pin.id.input)
-            .cloned()
-            .unwrap_or(("?".into(), SocketType::Float));
+        let (name, ty) = self.socket(&id, Side::Input, pin.id.input);
         ui.style_mut().interaction.selectable_labels = false;
         let label = ui.label(&name);
         if pin.remotes.is_empty() && ty != SocketType::Bsdf {
@@ -1019,12 +1027,7 @@ impl SnarlViewer<String> for Viewer<'_> {
         snarl: &mut Snarl<String>,
     ) -> impl SnarlPin + 'static {
         let id = snarl[pin.id.node].clone();
-        let sockets = self.sockets(&id);
-        let (name, ty) = sockets
-            .outputs
-            .get(pin.id.output)
-            .cloned()
-            .unwrap_or(("?".into(), SocketType::Float));
+        let (name, ty) = self.socket(&id, Side::Output, pin.id.output);
         ui.style_mut().interaction.selectable_labels = false;
         ui.label(&name);
         self.pin(&id, Side::Output, &name, ty)

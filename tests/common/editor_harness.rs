@@ -1,0 +1,107 @@
+//! The editor as egui_kittest drives it headless on lavapipe, shared by the editor's test
+//! binaries (`tests/editor.rs`, `tests/node_editor.rs`; included by `#[path]`, not
+//! through `common/mod.rs`, so that other tests do not link egui_kittest).
+
+// Each including binary uses a part.
+#![allow(dead_code)]
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs};
+use kiln::plugin::PluginHost;
+
+/// Samples per pixel the viewport stops at: tests wait for it, then the app rests.
+pub const SAMPLE_LIMIT: u32 = 2;
+/// Building the viewport's kernel on lavapipe takes seconds on a busy machine.
+pub const WAIT: Duration = Duration::from_secs(300);
+
+/// How a test's editor starts.
+pub struct Setup {
+    pub dialogs: ScriptedDialogs,
+    pub plugins: PluginHost,
+    /// The folder for recent files and autosaves (None keeps neither).
+    pub state_dir: Option<PathBuf>,
+    pub autosave_every: Duration,
+    /// The window's size in points.
+    pub size: egui::Vec2,
+}
+
+impl Default for Setup {
+    fn default() -> Self {
+        Self {
+            dialogs: ScriptedDialogs::default(),
+            plugins: PluginHost::default(),
+            state_dir: None,
+            autosave_every: kiln::editor::AUTOSAVE_EVERY,
+            size: egui::vec2(1280.0, 800.0),
+        }
+    }
+}
+
+/// The real app on the bundled Cornell box, with a software adapter.
+pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
+    if std::env::var_os("XDG_RUNTIME_DIR").is_none() {
+        // SAFETY: set before any thread of this test starts a device.
+        unsafe { std::env::set_var("XDG_RUNTIME_DIR", std::env::temp_dir()) };
+    }
+    let Setup {
+        dialogs,
+        plugins,
+        state_dir,
+        autosave_every,
+        size,
+    } = setup;
+    Harness::builder()
+        .with_size(size)
+        .wgpu_setup(kiln::editor::wgpu_setup(true))
+        .build_eframe(move |cc| {
+            EditorApp::new(
+                cc,
+                EditorOptions {
+                    file: None,
+                    dialogs: Box::new(dialogs),
+                    plugins,
+                    sample_limit: SAMPLE_LIMIT,
+                    state_dir,
+                    autosave_every,
+                    quit_when_done: false,
+                },
+            )
+        })
+}
+
+/// Steps frames until `done` holds; fails naming `what` after [`WAIT`].
+pub fn step_until(
+    harness: &mut Harness<'_, EditorApp>,
+    what: &str,
+    done: impl Fn(&EditorApp) -> bool,
+) {
+    let start = Instant::now();
+    while !done(harness.state()) {
+        assert!(
+            start.elapsed() < WAIT,
+            "timed out waiting for {what}; viewport error: {:?}",
+            harness.state().viewport_status().and_then(|s| s.error)
+        );
+        harness.step();
+        std::thread::sleep(Duration::from_millis(20));
+    }
+    harness.step();
+}
+
+/// The bundled plugins, as `cargo build` left them next to the test executable.
+pub fn bundled_plugins() -> PluginHost {
+    let exe = std::env::current_exe().unwrap();
+    let mut plugins = PluginHost::default();
+    plugins.load_dir(exe.parent().unwrap(), true);
+    plugins
+}
+
+/// A binary glTF of a unit quad (two triangles) in `dir`.
+pub fn quad_glb(dir: &Path) -> PathBuf {
+    let glb = dir.join("quad.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
+    glb
+}
