@@ -602,18 +602,34 @@ fn g_x_moves_the_selection_along_x_in_one_step_and_esc_cancels_a_rotation() {
     assert!(!harness.state().document().can_undo() && !harness.state().document().can_redo());
 }
 
-#[test]
-fn dragging_the_gizmos_y_arrow_moves_the_selection_up() {
+/// The editor with the short block selected (and the toolbar's `tool`, if given): the
+/// block's transform and the viewport's projection, for grabbing gizmo handles.
+fn block_selected(
+    tool: Option<&str>,
+) -> (
+    Harness<'static, EditorApp>,
+    glam::Affine3A,
+    kiln::editor::gizmo::ViewProjection,
+) {
     let mut harness = harness(ScriptedDialogs::default());
     harness.step();
     harness.get_by_label("block").click();
     harness.step();
-    let rect = harness.state().viewport_rect().unwrap();
+    if let Some(tool) = tool {
+        harness.get_by_label(tool).click();
+        harness.step();
+    }
     let start = harness.state().document().scene().instances[6].transform;
     let view = kiln::editor::gizmo::ViewProjection {
         camera: *harness.state().view(),
-        rect,
+        rect: harness.state().viewport_rect().unwrap(),
     };
+    (harness, start, view)
+}
+
+#[test]
+fn dragging_the_gizmos_y_arrow_moves_the_selection_up() {
+    let (mut harness, start, view) = block_selected(None);
     let arrows =
         kiln::editor::gizmo::arrows(&view, &start, kiln::editor::gizmo::Orientation::Global)
             .expect("the block is in front of the camera");
@@ -687,18 +703,7 @@ fn a_new_scene_gets_objects_and_lights_from_the_add_menu() {
 
 #[test]
 fn the_rotate_gizmo_turns_the_selection_about_the_grabbed_ring() {
-    let mut harness = harness(ScriptedDialogs::default());
-    harness.step();
-    harness.get_by_label("block").click();
-    harness.step();
-    harness.get_by_label("⟳ Rotate").click();
-    harness.step();
-    let rect = harness.state().viewport_rect().unwrap();
-    let start = harness.state().document().scene().instances[6].transform;
-    let view = kiln::editor::gizmo::ViewProjection {
-        camera: *harness.state().view(),
-        rect,
-    };
+    let (mut harness, start, view) = block_selected(Some("⟳ Rotate"));
     let rings = kiln::editor::gizmo::rings(&view, &start, kiln::editor::gizmo::Orientation::Global)
         .unwrap();
     // The Y ring's point farthest to the right of the origin, away from the others.
