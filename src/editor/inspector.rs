@@ -167,30 +167,15 @@ fn object_ui(ui: &mut Ui, document: &Document, object: usize, actions: &mut Vec<
     let before = trs;
     let mut changed = None;
     section(ui, "Transform", |ui| {
-        changed = changed.or(vec3_row(
-            ui,
-            "Location",
-            &mut trs.translation,
-            0.1,
-            f32::MIN..=f32::MAX,
-            "",
-        ));
-        changed = changed.or(vec3_row(
-            ui,
-            "Rotation",
-            &mut trs.rotation_degrees,
-            0.5,
-            f32::MIN..=f32::MAX,
-            "°",
-        ));
-        changed = changed.or(vec3_row(
-            ui,
-            "Scale",
-            &mut trs.scale,
-            0.01,
-            f32::MIN..=f32::MAX,
-            "",
-        ));
+        let rows = [
+            ("Location", &mut trs.translation, 0.1, ""),
+            ("Rotation", &mut trs.rotation_degrees, 0.5, "°"),
+            ("Scale", &mut trs.scale, 0.01, ""),
+        ];
+        for (label, value, speed, suffix) in rows {
+            let row = vec3_row(ui, label, value, speed, f32::MIN..=f32::MAX, suffix);
+            changed = changed.or(row);
+        }
     });
     if let Some(gesture) = changed.filter(|_| trs != before) {
         actions.push(InspectorAction::Edit(Edit {

@@ -37,6 +37,9 @@ pub enum OutputFormat {
     Exr,
 }
 
+/// The extensions the host's own writers take (what [`OutputFormat::from_path`] knows).
+pub const HOST_EXTENSIONS: [&str; 4] = ["png", "jpg", "jpeg", "exr"];
+
 impl OutputFormat {
     pub fn from_path(path: &Path) -> Result<Self, OutputError> {
         let ext = path

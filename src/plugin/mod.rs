@@ -262,7 +262,9 @@ impl PluginHost {
 
     /// The extensions images can be written with: the exporter plugins' and the host's.
     pub fn export_extensions(&self) -> Vec<String> {
-        let mut extensions: Vec<String> = ["png", "jpg", "exr"].map(String::from).into();
+        let mut extensions: Vec<String> = crate::film::output::HOST_EXTENSIONS
+            .map(String::from)
+            .into();
         for plugin in self.plugins() {
             if plugin.kind == PluginKind::Exporter {
                 extensions.extend(plugin.extensions.iter().cloned());
