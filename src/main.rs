@@ -9,6 +9,7 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::{Context, Result, bail};
+use clap::builder::TypedValueParser as _;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
@@ -52,23 +53,10 @@ impl From<BackendArg> for Backend {
     }
 }
 
-#[derive(Clone, Copy, ValueEnum)]
-enum TonemapArg {
-    None,
-    Agx,
-    Aces,
-    PbrNeutral,
-}
-
-impl From<TonemapArg> for Tonemap {
-    fn from(t: TonemapArg) -> Self {
-        match t {
-            TonemapArg::None => Tonemap::None,
-            TonemapArg::Agx => Tonemap::Agx,
-            TonemapArg::Aces => Tonemap::Aces,
-            TonemapArg::PbrNeutral => Tonemap::PbrNeutral,
-        }
-    }
+/// `--tonemap`'s values: the view transforms' keys, as scene files spell them.
+fn tonemap_parser() -> impl clap::builder::TypedValueParser<Value = Tonemap> {
+    clap::builder::PossibleValuesParser::new(Tonemap::ALL.map(Tonemap::key))
+        .map(|key| Tonemap::from_key(&key).expect("clap accepts only the listed keys"))
 }
 
 #[derive(Subcommand)]
@@ -138,15 +126,16 @@ struct RenderArgs {
     /// Image size as WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
-    /// Seed of the random sequence; the same seed gives the same image.
-    #[arg(long, default_value_t = 0)]
-    seed: u32,
-    /// Exposure in stops (EV) applied before tonemapping.
-    #[arg(long, default_value_t = 0.0, allow_hyphen_values = true)]
-    exposure: f32,
-    /// View transform from scene radiance to display.
-    #[arg(long, value_enum, default_value = "agx")]
-    tonemap: TonemapArg,
+    /// Seed of the random sequence; the same seed gives the same image (default: the
+    /// scene's, or 0).
+    #[arg(long)]
+    seed: Option<u32>,
+    /// Exposure in stops (EV) applied before tonemapping (default: the scene's, or 0).
+    #[arg(long, allow_hyphen_values = true)]
+    exposure: Option<f32>,
+    /// View transform from scene radiance to display (default: the scene's, or agx).
+    #[arg(long, value_parser = tonemap_parser())]
+    tonemap: Option<Tonemap>,
     /// Stop after this many seconds and write what has accumulated.
     #[arg(long)]
     time_limit: Option<f64>,
@@ -442,7 +431,7 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     {
         bail!("--time-limit must be a positive number of seconds, got {t}");
     }
-    if !args.exposure.is_finite() {
+    if args.exposure.is_some_and(|ev| !ev.is_finite()) {
         bail!("--exposure must be a finite number of stops");
     }
     let (mut scene, name) = load(args.scene.as_deref(), plugins)?;
@@ -470,7 +459,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     if let Some(b) = args.max_bounces {
         settings.max_bounces = b;
     }
-    settings.seed = args.seed;
+    if let Some(seed) = args.seed {
+        settings.seed = seed;
+    }
     settings.light_sampling = !args.no_light_sampling;
     // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,
     // which is the plugin's code).
@@ -570,8 +561,8 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     );
     bar.finish_and_clear();
     let view = ViewSettings {
-        exposure_ev: args.exposure,
-        tonemap: args.tonemap.into(),
+        exposure_ev: args.exposure.unwrap_or(scene.settings.view.exposure_ev),
+        tonemap: args.tonemap.unwrap_or(scene.settings.view.tonemap),
     };
     let stats = match result {
         Ok(stats) => stats,

@@ -27,7 +27,7 @@ fn brushed_floor(mesh: Mesh, anisotropy_rotation: f32) -> Vec<Vec3> {
     });
     let floor = scene.add_mesh(mesh);
     scene.add_instance(floor, m, Affine3A::from_scale(Vec3::splat(6.0)));
-    scene.lights.push(Light::Point {
+    scene.add_light(Light::Point {
         position: Vec3::new(0.0, 1.5, -1.5),
         intensity: Vec3::splat(2.0),
         radius: 0.1,

@@ -13,6 +13,7 @@ use glam::Vec3;
 use kiln::editor::final_render::RenderState;
 use kiln::editor::session::SessionStore;
 use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
+use kiln::film::tonemap::Tonemap;
 use kiln::plugin::PluginHost;
 
 #[path = "common/editor_harness.rs"]
@@ -342,6 +343,68 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
     assert_eq!(harness.state().error(), None);
     let image = image::open(&png).expect("a PNG was written");
     assert_eq!((image.width(), image.height()), (48, 32));
+}
+
+#[test]
+fn view_settings_change_the_display_not_the_samples_and_are_saved_with_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("looks.kiln");
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.save.push_back(path.clone());
+    let mut harness = harness(dialogs);
+    step_until(&mut harness, "the first samples", samples_done);
+    let restarts = harness.state().viewport_status().unwrap().restarts;
+    harness.get_by_label("📷 Render").click();
+    harness.step();
+
+    // Exposure and view transform: one undo step each, and the samples stay.
+    set_value(&mut harness, "Exposure", 1.5);
+    harness
+        .get_by_role_and_label(Role::ComboBox, "View Transform")
+        .click();
+    harness.step();
+    harness.step();
+    harness.get_by_label("ACES").click();
+    harness.step();
+    harness.step();
+    let view = harness.state().document().scene().settings.view;
+    assert_eq!((view.exposure_ev, view.tonemap), (1.5, Tonemap::Aces));
+    for _ in 0..3 {
+        harness.step();
+    }
+    let status = harness.state().viewport_status().unwrap();
+    assert_eq!(status.restarts, restarts, "a view change keeps the samples");
+    assert!(status.samples >= SAMPLE_LIMIT);
+
+    // The seed is a render setting: it restarts accumulation with other noise.
+    set_value(&mut harness, "Seed", 7.0);
+    assert_eq!(harness.state().document().scene().settings.seed, 7);
+    step_until(&mut harness, "a restart for the new seed", |app| {
+        app.viewport_status().is_some_and(|s| s.restarts > restarts)
+    });
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(harness.state().document().scene().settings.seed, 0);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(
+        harness.state().document().scene().settings.view.tonemap,
+        Tonemap::Agx
+    );
+    for _ in 0..2 {
+        harness.key_press_modifiers(
+            egui::Modifiers::COMMAND | egui::Modifiers::SHIFT,
+            egui::Key::Z,
+        );
+        harness.step();
+    }
+    let settings = harness.state().document().scene().settings;
+    assert_eq!((settings.seed, settings.view), (7, view));
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.step();
+    assert_eq!(kiln::scene::load_scene(&path).unwrap().settings, settings);
 }
 
 #[test]

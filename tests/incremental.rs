@@ -22,7 +22,7 @@ const SAMPLES: u32 = 6;
 /// The Cornell box with a point light added, so that every kind of edit has a target.
 fn scene() -> Scene {
     let mut s = scene::default_scene().expect("bundled scene");
-    s.lights.push(Light::Point {
+    s.add_light(Light::Point {
         position: Vec3::new(278.0, 400.0, 200.0),
         intensity: Vec3::splat(2.0e4),
         radius: 0.0,
@@ -105,7 +105,7 @@ fn moving_an_emitter_moves_its_light() {
 fn a_light_edit_writes_the_light_distribution() {
     let old = scene();
     let mut new = old.clone();
-    new.lights[0] = Light::Point {
+    new.lights[0].light = Light::Point {
         position: Vec3::new(150.0, 300.0, 120.0),
         intensity: Vec3::new(6.0e4, 2.0e4, 1.0e4),
         radius: 20.0,

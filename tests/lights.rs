@@ -22,7 +22,7 @@ fn lit_plane_with(light: Light, light_sampling: bool, spp: u32) -> f32 {
     let m = scene.add_material(Material::diffuse("matte", Vec3::splat(ALBEDO)));
     let quad = scene.add_mesh(shapes::quad());
     scene.add_instance(quad, m, Affine3A::from_scale(Vec3::splat(100.0)));
-    scene.lights.push(light);
+    scene.add_light(light);
     let mut s = settings(8, 8, spp);
     s.max_bounces = 1;
     s.light_sampling = light_sampling;

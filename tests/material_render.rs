@@ -30,7 +30,7 @@ fn spheres(materials: Vec<Material>) -> Scene {
         Affine3A::from_translation(Vec3::new(0.0, 3.0, 1.0))
             * Affine3A::from_rotation_x(std::f32::consts::PI),
     );
-    scene.lights.push(Light::Point {
+    scene.add_light(Light::Point {
         position: Vec3::new(2.0, 2.0, 2.0),
         intensity: Vec3::splat(3.0),
         radius: 0.2,

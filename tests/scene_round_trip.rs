@@ -10,9 +10,11 @@ use base64::Engine;
 use glam::{Affine3A, EulerRot, Quat, Vec2, Vec3, Vec4};
 use kiln::plugin::PluginHost;
 use kiln::scene::{
-    Camera, EnvironmentMap, Light, Material, Mesh, Scene, SceneSettings, load_scene, save_scene,
+    Camera, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, load_scene,
+    save_scene,
 };
 use kiln::shader::principled::Principled;
+use kiln::shader::view::{Tonemap, ViewSettings};
 use proptest::prelude::*;
 
 /// Saves `scene` as `name` in `dir` and loads it back.
@@ -121,6 +123,11 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
         height: 180,
         samples_per_pixel: 17,
         max_bounces: 3,
+        seed: 42,
+        view: ViewSettings {
+            exposure_ev: -1.25,
+            tonemap: Tonemap::PbrNeutral,
+        },
     };
     let plain = scene.add_material(Material {
         name: "plain".into(),
@@ -232,7 +239,13 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
             irradiance: Vec3::new(3.0, 2.9, 2.7),
             angular_diameter: 0.53,
         },
-    ];
+    ]
+    .into_iter()
+    .map(LightObject::from)
+    .collect();
+    // Light names (quotes and all) and a hidden light.
+    scene.lights[0].name = "Key \"left\"".into();
+    scene.lights[2].visible = false;
     scene.validate().unwrap();
 
     let again = save_and_load(&scene, dir.path(), "every.kiln", &[]);
@@ -260,8 +273,8 @@ fn data_uri(mime: &str, bytes: &[u8]) -> String {
 }
 
 /// A glTF triangle with normals, two UV sets, RGBA vertex colours and a base-colour
-/// texture embedded as a data URI.
-fn write_gltf(path: &Path) {
+/// texture embedded as a data URI, whose blue channel is `blue`.
+fn write_gltf(path: &Path, blue: u8) {
     let mut bin: Vec<u8> = Vec::new();
     let mut push = |values: &[f32]| {
         let offset = bin.len();
@@ -277,7 +290,7 @@ fn write_gltf(path: &Path) {
     let colors = push(&[1.0, 0.0, 0.0, 1.0, 0.0, 1.0, 0.0, 0.5, 0.0, 0.0, 1.0, 0.25]);
     let mut png = Vec::new();
     image::RgbaImage::from_fn(2, 2, |x, y| {
-        image::Rgba([200 * x as u8, 100 * y as u8, 50, 255])
+        image::Rgba([200 * x as u8, 100 * y as u8, blue, 255])
     })
     .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
     .unwrap();
@@ -317,7 +330,7 @@ fn imported_gltf_with_two_uv_sets_colours_and_a_texture_survives_saving() {
     host.load_dir(exe.parent().unwrap(), true);
     let dir = tempfile::tempdir().unwrap();
     let gltf = dir.path().join("tri.gltf");
-    write_gltf(&gltf);
+    write_gltf(&gltf, 50);
     let imported = host
         .import(&gltf)
         .unwrap_or_else(|e| panic!("importing {}: {e}", gltf.display()));
@@ -365,6 +378,70 @@ fn imported_gltf_with_two_uv_sets_colours_and_a_texture_survives_saving() {
         again == saved,
         "changed by a second save:\n{}",
         first_difference(&saved, &again)
+    );
+}
+
+#[test]
+fn an_import_into_an_open_document_keeps_both_files_embedded_images_apart() {
+    use kiln::editor::Document;
+    let exe = std::env::current_exe().unwrap();
+    let mut host = PluginHost::default();
+    host.load_dir(exe.parent().unwrap(), true);
+    let dir = tempfile::tempdir().unwrap();
+    let import = |blue: u8| {
+        let gltf = dir.path().join(format!("tri{blue}.gltf"));
+        write_gltf(&gltf, blue);
+        host.import(&gltf).unwrap()
+    };
+    let (first, second) = (import(50), import(150));
+    let texels =
+        |m: &Material| -> Vec<_> { m.graph.as_ref().unwrap().images.values().cloned().collect() };
+    let textured = |scene: &Scene| -> Vec<Material> {
+        let reads_images = |m: &&Material| m.graph.as_ref().is_some_and(|g| !g.images.is_empty());
+        scene
+            .materials
+            .iter()
+            .filter(reads_images)
+            .cloned()
+            .collect()
+    };
+
+    let mut document = Document::new(first.scene.clone(), None, first.images.clone());
+    let opened = document.scene().clone();
+    document
+        .apply(
+            document.append(second.scene.clone(), second.images.clone()),
+            None,
+        )
+        .unwrap();
+    assert_eq!(document.images().len(), 2, "both files' images held");
+    let saved = save_and_load(document.scene(), dir.path(), "both.kiln", document.images());
+    let [a, b] = <[Material; 2]>::try_from(textured(&saved)).expect("two textured materials");
+    assert_eq!(
+        texels(&a),
+        texels(&textured(&first.scene)[0]),
+        "the first file's texture"
+    );
+    assert_eq!(
+        texels(&b),
+        texels(&textured(&second.scene)[0]),
+        "the second file's texture"
+    );
+    assert_ne!(texels(&a), texels(&b));
+
+    assert!(document.undo());
+    assert_eq!(
+        document.images().len(),
+        1,
+        "undo takes the import's images back"
+    );
+    assert_eq!(*document.scene(), opened);
+    assert!(document.redo());
+    let redone = save_and_load(document.scene(), dir.path(), "redo.kiln", document.images());
+    assert_eq!(
+        texels(&textured(&redone)[1]),
+        texels(&b),
+        "redo renumbers the same way"
     );
 }
 
@@ -568,9 +645,16 @@ fn scene() -> impl Strategy<Value = Scene> {
         prop::collection::vec(material(), 1..4),
         prop::collection::vec(mesh(), 1..4),
         camera(),
-        prop::collection::vec(light(), 0..4),
+        prop::collection::vec((light(), "\\PC{0,6}", any::<bool>()), 0..4),
         (vec3(0.0..10.0), prop::option::of(environment_map())),
-        (1u32..=16384, 1u32..=16384, 1u32..100_000, 0u32..64),
+        (
+            (1u32..=16384, 1u32..=16384, 1u32..100_000, 0u32..64),
+            (
+                any::<u32>(),
+                -64f32..=64.0,
+                prop::sample::select(Tonemap::ALL.to_vec()),
+            ),
+        ),
     )
         .prop_flat_map(|(materials, meshes, camera, lights, sky, settings)| {
             let (m, n) = (materials.len(), meshes.len());
@@ -591,12 +675,26 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let mut scene = Scene::empty(camera);
                 scene.environment = environment;
                 scene.environment_map = environment_map;
-                scene.lights = lights;
+                scene.lights = lights
+                    .into_iter()
+                    .map(|(light, name, visible)| LightObject {
+                        light,
+                        name,
+                        visible,
+                    })
+                    .collect();
+                let ((width, height, samples_per_pixel, max_bounces), (seed, ev, tonemap)) =
+                    settings;
                 scene.settings = SceneSettings {
-                    width: settings.0,
-                    height: settings.1,
-                    samples_per_pixel: settings.2,
-                    max_bounces: settings.3,
+                    width,
+                    height,
+                    samples_per_pixel,
+                    max_bounces,
+                    seed,
+                    view: ViewSettings {
+                        exposure_ev: ev,
+                        tonemap,
+                    },
                 };
                 for (m, name) in materials.into_iter().zip(material_names) {
                     scene.add_material(Material { name, ..m });

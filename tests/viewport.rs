@@ -24,8 +24,7 @@ fn target(scene: Scene, revision: u64, size: [u32; 2]) -> Target {
         size,
         // Never reached: the viewport keeps accumulating.
         sample_limit: 1 << 20,
-        exposure_ev: 0.0,
-        tonemap: Default::default(),
+        view: Default::default(),
     }
 }
 
@@ -90,7 +89,7 @@ fn edits_at(size: [u32; 2]) {
     let ctx = GpuContext::new(None).unwrap_or_else(|e| panic!("a GPU adapter: {e}"));
     let mut viewport = ViewportRenderer::new(Arc::clone(&ctx), || {});
     let mut scene = scene::default_scene().expect("bundled scene");
-    scene.lights.push(Light::Point {
+    scene.add_light(Light::Point {
         position: Vec3::new(278.0, 400.0, 200.0),
         intensity: Vec3::splat(2.0e4),
         radius: 0.0,
@@ -132,7 +131,7 @@ fn edits_at(size: [u32; 2]) {
     let mut light_times = Vec::new();
     let lit_before = status.clone();
     for i in 0..REPEATS {
-        scene.lights[0] = Light::Point {
+        scene.lights[0].light = Light::Point {
             position: Vec3::new(200.0 + 10.0 * i as f32, 350.0, 150.0),
             intensity: Vec3::new(4.0e4, 2.0e4, 1.0e4),
             radius: 10.0,

@@ -8,7 +8,7 @@ struct DisplayParams {
     size: vec2<u32>,
     // 2^exposure in stops.
     exposure_scale: f32,
-    // 0: clip ("Standard"), 1: AgX.
+    // Tonemap::gpu_id: 0 clip ("Standard"), 1 AgX, 2 ACES, 3 Khronos PBR Neutral.
     tonemap: u32,
 }
 
@@ -40,6 +40,42 @@ fn agx(c: vec3<f32>) -> vec3<f32> {
     return pow(shown, vec3<f32>(2.2));
 }
 
+fn aces(c: vec3<f32>) -> vec3<f32> {
+    let input = mat3x3<f32>(
+        vec3<f32>(0.59719, 0.07600, 0.02840),
+        vec3<f32>(0.35458, 0.90834, 0.13383),
+        vec3<f32>(0.04823, 0.01566, 0.83777),
+    );
+    let output = mat3x3<f32>(
+        vec3<f32>(1.60475, -0.10208, -0.00327),
+        vec3<f32>(-0.53108, 1.10813, -0.07276),
+        vec3<f32>(-0.07367, -0.00605, 1.07602),
+    );
+    let v = input * c;
+    let fit = (v * (v + vec3<f32>(0.0245786)) - vec3<f32>(0.000090537))
+        / (v * (0.983729 * v + vec3<f32>(0.432951)) + vec3<f32>(0.238081));
+    return clamp(output * fit, vec3<f32>(0.0), vec3<f32>(1.0));
+}
+
+fn pbr_neutral(color: vec3<f32>) -> vec3<f32> {
+    let start_compression = 0.8 - 0.04;
+    let desaturation = 0.15;
+    let x = min(color.r, min(color.g, color.b));
+    var offset = 0.04;
+    if (x < 0.08) {
+        offset = x - 6.25 * x * x;
+    }
+    let c = color - vec3<f32>(offset);
+    let peak = max(c.r, max(c.g, c.b));
+    if (peak < start_compression) {
+        return c;
+    }
+    let d = 1.0 - start_compression;
+    let new_peak = 1.0 - d * d / (peak + d - start_compression);
+    let g = 1.0 - 1.0 / (desaturation * (peak - new_peak) + 1.0);
+    return mix(c * (new_peak / peak), vec3<f32>(new_peak), g);
+}
+
 fn srgb_encode(v: vec3<f32>) -> vec3<f32> {
     let c = clamp(v, vec3<f32>(0.0), vec3<f32>(1.0));
     let low = 12.92 * c;
@@ -59,8 +95,11 @@ fn display_film(@builtin(global_invocation_id) gid: vec3<u32>) {
         radiance = max(sum.rgb / sum.w, vec3<f32>(0.0)) * display.exposure_scale;
     }
     var shown = clamp(radiance, vec3<f32>(0.0), vec3<f32>(1.0));
-    if (display.tonemap == 1u) {
-        shown = agx(radiance);
+    switch display.tonemap {
+        case 1u: { shown = agx(radiance); }
+        case 2u: { shown = aces(radiance); }
+        case 3u: { shown = pbr_neutral(radiance); }
+        default: {}
     }
     textureStore(output, vec2<i32>(gid.xy), vec4<f32>(srgb_encode(shown), 1.0));
 }

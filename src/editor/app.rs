@@ -11,8 +11,6 @@ use std::time::{Duration, Instant};
 use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, RichText, Sense, Ui};
 use glam::Vec3;
 
-use crate::film::output::ViewSettings;
-use crate::film::tonemap::Tonemap;
 use crate::plugin::PluginHost;
 use crate::render::GpuContext;
 use crate::scene::{Camera, Scene};
@@ -238,9 +236,6 @@ impl EditorApp {
             picker: None,
             render_scene: None,
             options: ViewOptions {
-                seed: 0,
-                exposure_ev: 0.0,
-                tonemap: Tonemap::Agx,
                 viewport_samples: options.sample_limit.max(1),
                 export_options: String::new(),
             },
@@ -452,14 +447,7 @@ impl EditorApp {
                 return;
             }
         };
-        if !imported.images.is_empty() {
-            self.error = Some(format!(
-                "{} embeds images, which an import into an open scene does not carry yet: open it as its own document (File ▸ Open) instead",
-                path.display()
-            ));
-            return;
-        }
-        let command = self.document.append(imported.scene);
+        let command = self.document.append(imported.scene, imported.images);
         self.apply(command, None);
     }
 
@@ -528,16 +516,10 @@ impl EditorApp {
         {
             return;
         }
-        let view = ViewSettings {
-            exposure_ev: self.options.exposure_ev,
-            tonemap: self.options.tonemap,
-        };
         let repaint = ctx.clone();
         self.final_render = Some(FinalRender::start(
             Arc::clone(gpu),
             self.render_scene(),
-            self.options.seed,
-            view,
             move || repaint.request_repaint(),
         ));
         self.render_window = true;
@@ -996,8 +978,7 @@ impl EditorApp {
             camera: self.view,
             size,
             sample_limit: self.options.viewport_samples,
-            exposure_ev: self.options.exposure_ev,
-            tonemap: self.options.tonemap,
+            view: self.document.scene().settings.view,
         };
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_gray(30));

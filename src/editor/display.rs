@@ -2,7 +2,7 @@
 //! turns the renderer's film, where it lies on the device, into an 8-bit sRGB texture egui
 //! draws. Nothing is read back to the CPU.
 
-use crate::film::tonemap::Tonemap;
+use crate::film::output::ViewSettings;
 use crate::render::GpuContext;
 
 const SOURCE: &str = include_str!("../../shaders/editor/display.wgsl");
@@ -173,16 +173,11 @@ impl DisplayPipeline {
 
     /// Writes the film's current image into the display's texture (queued on the device;
     /// anything submitted earlier, such as the samples just rendered, is included).
-    pub fn run(&self, ctx: &GpuContext, display: &FilmDisplay, exposure_ev: f32, tonemap: Tonemap) {
+    pub fn run(&self, ctx: &GpuContext, display: &FilmDisplay, view: ViewSettings) {
         let params = DisplayParams {
             size: display.size,
-            exposure_scale: exposure_ev.exp2(),
-            tonemap: match tonemap {
-                Tonemap::Agx => 1,
-                // The viewport offers AgX (Blender's default) and Standard; the other
-                // view transforms are for final renders.
-                _ => 0,
-            },
+            exposure_scale: view.exposure_ev.exp2(),
+            tonemap: view.tonemap.gpu_id(),
         };
         ctx.queue
             .write_buffer(&display.params, 0, bytemuck::bytes_of(&params));

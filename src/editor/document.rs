@@ -18,8 +18,11 @@ use glam::{Affine3A, EulerRot, Quat, Vec3};
 use super::graph_edit::GraphEdit;
 use crate::material::texture::load_texture;
 use crate::material::{Graph, GraphError};
-use crate::scene::{Camera, EnvironmentMap, Instance, Light, Material, Scene, SceneSettings};
+use crate::scene::{
+    Camera, EnvironmentMap, Instance, Light, LightObject, Material, Scene, SceneSettings,
+};
 use crate::shader::principled::ParamValue;
+use crate::shader::view::ViewSettings;
 
 /// What can be selected.
 #[derive(Clone, Copy, Debug, PartialEq, Eq, Hash)]
@@ -30,14 +33,6 @@ pub enum Selection {
     Light(usize),
     /// The scene's camera.
     Camera,
-}
-
-/// The editor's own state of an object or light.
-#[derive(Clone, Debug, PartialEq, Eq)]
-pub struct ItemState {
-    pub name: String,
-    /// Hidden items stay in the document (and in saved files) but are not rendered.
-    pub visible: bool,
 }
 
 /// One edit of the document. Applying a command yields its inverse.
@@ -81,8 +76,7 @@ pub enum Command {
     },
     InsertLight {
         light: usize,
-        value: Light,
-        state: ItemState,
+        value: LightObject,
     },
     /// An edit of a material's node graph ([`GraphEdit`]). A graph that no longer
     /// compiles is kept as the edited graph with its error, and the material renders as
@@ -118,8 +112,10 @@ pub enum Command {
         object: usize,
         material: usize,
     },
-    /// The render settings the scene file carries (size, samples, bounces).
+    /// The render settings the scene file carries (size, samples, bounces, seed, view).
     SetSettings(SceneSettings),
+    /// Exposure and view transform alone: the display changes, the samples stay.
+    SetView(ViewSettings),
     /// The uniform environment radiance (linear RGB), shown where no map is.
     SetEnvironmentColor(Vec3),
     /// The environment map's strength and rotation (degrees about +Y).
@@ -136,21 +132,23 @@ pub enum Command {
     Truncate(Counts),
 }
 
-/// What an [`Command::Append`] adds: a scene's contents (its objects named) with the
-/// editor's state of its lights.
+/// What an [`Command::Append`] adds: a scene's contents (its objects and lights named)
+/// with the images its materials embed, which they name `image:0`, `image:1`, … in this
+/// list (the document renumbers them after its own).
 #[derive(Clone, Debug, PartialEq)]
 pub struct Appended {
     pub scene: Scene,
-    pub lights: Vec<ItemState>,
+    pub images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
 }
 
-/// How many meshes, materials, objects and lights a document holds.
+/// How many meshes, materials, objects, lights and embedded images a document holds.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub struct Counts {
     pub meshes: usize,
     pub materials: usize,
     pub objects: usize,
     pub lights: usize,
+    pub images: usize,
 }
 
 impl Command {
@@ -169,6 +167,7 @@ impl Command {
             Command::Rename { .. } => (4, 0, ""),
             Command::SetVisible { .. } => (5, 0, ""),
             Command::SetSettings(_) => (12, 0, ""),
+            Command::SetView(_) => (15, 0, ""),
             Command::SetEnvironmentColor(_) => (13, 0, ""),
             Command::SetEnvironmentMapParams { .. } => (14, 0, ""),
             Command::EditGraph { material, edit } => {
@@ -184,10 +183,11 @@ impl Command {
         }
     }
 
-    /// Whether the command changes what is rendered (a rename does not).
+    /// Whether the command changes what is rendered (a rename does not, nor does a view
+    /// setting: the display pass applies it to the samples already taken).
     pub fn changes_image(&self) -> bool {
         match self {
-            Command::Rename { .. } | Command::RenameMaterial { .. } => false,
+            Command::Rename { .. } | Command::RenameMaterial { .. } | Command::SetView(_) => false,
             Command::EditGraph { edit, .. } => !edit.only_moves(),
             _ => true,
         }
@@ -244,10 +244,8 @@ impl Trs {
 
 /// The scene being edited with the editor's state of it and its undo history.
 pub struct Document {
-    /// The objects' names and visibility live in the scene's instances (saved with it);
-    /// the lights' here.
+    /// The objects' and lights' names and visibility live in the scene (saved with it).
     scene: Scene,
-    lights: Vec<ItemState>,
     /// Images an importer embedded, written beside the scene when it is saved.
     images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
     pub selection: Option<Selection>,
@@ -270,39 +268,38 @@ pub struct Document {
 impl Document {
     /// A document on `scene`, as read from `path` (None: not saved yet). Objects the file
     /// did not name are named after their mesh, with Blender's `.001` suffixes where a
-    /// mesh is placed more than once.
+    /// mesh is placed more than once; lights after their kind ("Point", "Sun").
     pub fn new(
         mut scene: Scene,
         path: Option<PathBuf>,
         images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
     ) -> Self {
-        let mut taken: std::collections::HashSet<String> =
-            scene.instances.iter().map(|i| i.name.clone()).collect();
-        for i in 0..scene.instances.len() {
-            if !scene.instances[i].name.is_empty() {
-                continue;
-            }
-            let base = &scene.meshes[scene.instances[i].mesh].name;
-            let base = if base.is_empty() { "object" } else { base };
+        let mut taken: std::collections::HashSet<String> = (scene.instances.iter())
+            .map(|i| i.name.clone())
+            .chain(scene.lights.iter().map(|l| l.name.clone()))
+            .collect();
+        let mut name_after = |base: &str| {
             let name = std::iter::once(base.to_owned())
                 .chain((1..).map(|n| format!("{base}.{n:03}")))
                 .find(|n| !taken.contains(n))
                 .expect("some suffix is free");
             taken.insert(name.clone());
-            scene.instances[i].name = name;
+            name
+        };
+        for i in 0..scene.instances.len() {
+            if scene.instances[i].name.is_empty() {
+                let base = &scene.meshes[scene.instances[i].mesh].name;
+                let base = if base.is_empty() { "object" } else { base };
+                scene.instances[i].name = name_after(base);
+            }
         }
-        let lights = scene
-            .lights
-            .iter()
-            .enumerate()
-            .map(|(i, light)| ItemState {
-                name: format!("{} light {}", light_kind(light), i + 1),
-                visible: true,
-            })
-            .collect();
+        for light in &mut scene.lights {
+            if light.name.is_empty() {
+                light.name = name_after(light_kind(&light.light));
+            }
+        }
         Self {
             scene,
-            lights,
             images,
             selection: None,
             pending_graphs: std::collections::BTreeMap::new(),
@@ -324,10 +321,7 @@ impl Document {
 
     /// The scene as rendered: hidden objects and lights left out.
     pub fn render_scene(&self) -> Scene {
-        let mut scene = self.scene.without_hidden();
-        let mut visible = self.lights.iter().map(|l| l.visible);
-        scene.lights.retain(|_| visible.next().unwrap_or(true));
-        scene
+        self.scene.without_hidden()
     }
 
     /// Maps an instance index of [`Document::render_scene`] back to the document's.
@@ -341,20 +335,12 @@ impl Document {
             .map(|(i, _)| i)
     }
 
-    /// The objects' names and visibility, in the scene's order.
-    pub fn objects(&self) -> Vec<ItemState> {
-        self.scene
-            .instances
-            .iter()
-            .map(|i| ItemState {
-                name: i.name.clone(),
-                visible: i.visible,
-            })
-            .collect()
+    pub fn objects(&self) -> &[Instance] {
+        &self.scene.instances
     }
 
-    pub fn lights(&self) -> &[ItemState] {
-        &self.lights
+    pub fn lights(&self) -> &[LightObject] {
+        &self.scene.lights
     }
 
     pub fn images(&self) -> &[(String, std::sync::Arc<Vec<u8>>)] {
@@ -369,8 +355,17 @@ impl Document {
     pub fn name(&self, target: Selection) -> &str {
         match target {
             Selection::Object(i) => self.scene.instances.get(i).map_or("", |o| o.name.as_str()),
-            Selection::Light(i) => self.lights.get(i).map_or("", |l| l.name.as_str()),
+            Selection::Light(i) => self.scene.lights.get(i).map_or("", |l| l.name.as_str()),
             Selection::Camera => "Camera",
+        }
+    }
+
+    /// Whether a selectable item is rendered (the camera always is).
+    pub fn visible(&self, target: Selection) -> bool {
+        match target {
+            Selection::Object(i) => self.scene.instances.get(i).is_some_and(|o| o.visible),
+            Selection::Light(i) => self.scene.lights.get(i).is_some_and(|l| l.visible),
+            Selection::Camera => true,
         }
     }
 
@@ -380,32 +375,20 @@ impl Document {
             meshes: self.scene.meshes.len(),
             materials: self.scene.materials.len(),
             objects: self.scene.instances.len(),
-            lights: self.lights.len(),
+            lights: self.scene.lights.len(),
+            images: self.images.len(),
         }
     }
 
     /// A name not yet taken among the objects and lights, from `base` with Blender's
     /// numeric suffixes (`block` → `block.001`, `block.001` → `block.002`).
     pub fn unique_name(&self, base: &str) -> String {
-        let taken = |n: &str| {
-            self.scene.instances.iter().any(|i| i.name == n)
-                || self.lights.iter().any(|l| l.name == n)
-        };
-        let stem = match base.rsplit_once('.') {
-            Some((stem, digits))
-                if digits.len() == 3 && digits.bytes().all(|b| b.is_ascii_digit()) =>
-            {
-                stem
-            }
-            _ => base,
-        };
-        if !taken(stem) {
-            return stem.to_owned();
-        }
-        (1..)
-            .map(|i| format!("{stem}.{i:03}"))
-            .find(|n| !taken(n))
-            .expect("some suffix is free")
+        suffixed(base, |n| self.name_taken(n))
+    }
+
+    fn name_taken(&self, name: &str) -> bool {
+        self.scene.instances.iter().any(|i| i.name == name)
+            || self.scene.lights.iter().any(|l| l.name == name)
     }
 
     /// The command that duplicates `target` (an object or a light) as a new item at the
@@ -423,14 +406,16 @@ impl Document {
                     },
                 })
             }
-            Selection::Light(i) => Some(Command::InsertLight {
-                light: self.lights.len(),
-                value: self.scene.lights.get(i)?.clone(),
-                state: ItemState {
-                    name: self.unique_name(&self.lights[i].name),
-                    visible: self.lights[i].visible,
-                },
-            }),
+            Selection::Light(i) => {
+                let original = self.scene.lights.get(i)?;
+                Some(Command::InsertLight {
+                    light: self.scene.lights.len(),
+                    value: LightObject {
+                        name: self.unique_name(&original.name),
+                        ..original.clone()
+                    },
+                })
+            }
             Selection::Camera => None,
         }
     }
@@ -441,41 +426,33 @@ impl Document {
             Selection::Object(object) if object < self.scene.instances.len() => {
                 Some(Command::DeleteObject { object })
             }
-            Selection::Light(light) if light < self.lights.len() => {
+            Selection::Light(light) if light < self.scene.lights.len() => {
                 Some(Command::DeleteLight { light })
             }
             _ => None,
         }
     }
 
-    /// The command that appends `scene` (an import) to the document, its objects and
-    /// lights named as a newly opened document would name them, made unique.
-    pub fn append(&self, scene: Scene) -> Command {
-        let fresh = Document::new(scene, None, Vec::new());
-        let mut taken = Vec::new();
-        let mut unique = |item: &ItemState| {
-            let mut name = self.unique_name(&item.name);
-            let mut i = 1;
-            while taken.contains(&name) {
-                name = format!("{}.{i:03}", item.name);
-                i += 1;
+    /// The command that appends `scene` (an import, with the images its materials embed)
+    /// to the document, its objects and lights named as a newly opened document would
+    /// name them, made unique.
+    pub fn append(&self, scene: Scene, images: Vec<(String, std::sync::Arc<Vec<u8>>)>) -> Command {
+        let mut scene = Document::new(scene, None, Vec::new()).scene;
+        let mut taken = std::collections::HashSet::new();
+        let mut unique = |name: &mut String| {
+            let free = |n: &str| !self.name_taken(n) && !taken.contains(n);
+            if !free(name) {
+                *name = suffixed(name, |n| !free(n));
             }
-            taken.push(name.clone());
-            ItemState {
-                name,
-                visible: item.visible,
-            }
+            taken.insert(name.clone());
         };
-        let mut scene = fresh.scene;
         for instance in &mut scene.instances {
-            instance.name = unique(&ItemState {
-                name: std::mem::take(&mut instance.name),
-                visible: true,
-            })
-            .name;
+            unique(&mut instance.name);
         }
-        let lights = fresh.lights.iter().map(&mut unique).collect();
-        Command::Append(Box::new(Appended { scene, lights }))
+        for light in &mut scene.lights {
+            unique(&mut light.name);
+        }
+        Command::Append(Box::new(Appended { scene, images }))
     }
 
     /// The command that adds a new object with `mesh` at `transform`, with a new default
@@ -491,7 +468,7 @@ impl Document {
         ));
         scene.add_instance(mesh, material, transform);
         scene.instances[0].name = name;
-        self.append(scene)
+        self.append(scene, Vec::new())
     }
 
     /// A material name not yet taken, from `base` with Blender's numeric suffixes.
@@ -506,12 +483,11 @@ impl Document {
     /// The command that adds `light` at the end of the lights, named after its kind.
     pub fn add_light(&self, light: Light) -> Command {
         Command::InsertLight {
-            light: self.lights.len(),
-            state: ItemState {
+            light: self.scene.lights.len(),
+            value: LightObject {
                 name: self.unique_name(light_kind(&light)),
-                visible: true,
+                ..light.into()
             },
-            value: light,
         }
     }
 
@@ -722,8 +698,8 @@ impl Document {
                 };
                 value
                     .validate()
-                    .map_err(|e| CommandError(format!("{}: {e}", self.lights[light].name)))?;
-                let old = std::mem::replace(slot, value);
+                    .map_err(|e| CommandError(format!("{}: {e}", slot.name)))?;
+                let old = std::mem::replace(&mut slot.light, value);
                 Ok(Command::SetLight { light, value: old })
             }
             Command::SetCamera(camera) => {
@@ -734,7 +710,7 @@ impl Document {
             Command::Rename { target, name } => {
                 let slot = match target {
                     Selection::Object(i) => self.scene.instances.get_mut(i).map(|o| &mut o.name),
-                    Selection::Light(i) => self.lights.get_mut(i).map(|l| &mut l.name),
+                    Selection::Light(i) => self.scene.lights.get_mut(i).map(|l| &mut l.name),
                     Selection::Camera => return err("the camera cannot be renamed".into()),
                 };
                 let Some(slot) = slot else {
@@ -852,7 +828,7 @@ impl Document {
             Command::SetVisible { target, visible } => {
                 let slot = match target {
                     Selection::Object(i) => self.scene.instances.get_mut(i).map(|o| &mut o.visible),
-                    Selection::Light(i) => self.lights.get_mut(i).map(|l| &mut l.visible),
+                    Selection::Light(i) => self.scene.lights.get_mut(i).map(|l| &mut l.visible),
                     Selection::Camera => return err("the camera cannot be hidden".into()),
                 };
                 let Some(slot) = slot else {
@@ -891,40 +867,36 @@ impl Document {
                 Ok(Command::DeleteObject { object })
             }
             Command::DeleteLight { light } => {
-                if light >= self.lights.len() {
+                if light >= self.scene.lights.len() {
                     return err(format!("no light {light}"));
                 }
                 self.selection = shifted_selection(self.selection, Selection::Light(light));
                 Ok(Command::InsertLight {
                     light,
                     value: self.scene.lights.remove(light),
-                    state: self.lights.remove(light),
                 })
             }
-            Command::InsertLight {
-                light,
-                value,
-                state,
-            } => {
-                if light > self.lights.len() {
+            Command::InsertLight { light, value } => {
+                if light > self.scene.lights.len() {
                     return err(format!("cannot insert a light at {light}"));
                 }
                 value
+                    .light
                     .validate()
-                    .map_err(|e| CommandError(format!("{}: {e}", state.name)))?;
+                    .map_err(|e| CommandError(format!("{}: {e}", value.name)))?;
                 self.scene.lights.insert(light, value);
-                self.lights.insert(light, state);
                 self.selection = Some(Selection::Light(light));
                 Ok(Command::DeleteLight { light })
             }
             Command::SetSettings(settings) => {
-                crate::scene::validate_image_size(settings.width, settings.height)
-                    .map_err(CommandError)?;
-                if settings.samples_per_pixel == 0 {
-                    return err("samples per pixel must be at least 1".into());
-                }
+                settings.validate().map_err(CommandError)?;
                 let old = std::mem::replace(&mut self.scene.settings, settings);
                 Ok(Command::SetSettings(old))
+            }
+            Command::SetView(view) => {
+                view.validate().map_err(CommandError)?;
+                let old = std::mem::replace(&mut self.scene.settings.view, view);
+                Ok(Command::SetView(old))
             }
             Command::SetEnvironmentColor(color) => {
                 if !color.is_finite() || color.min_element() < 0.0 {
@@ -963,13 +935,14 @@ impl Document {
                 Ok(Command::SetEnvironmentMap(old.map(Box::new)))
             }
             Command::Append(appended) => {
-                let Appended { scene, lights } = *appended;
-                if lights.len() != scene.lights.len() {
-                    return err("an appended scene needs one name per light".into());
-                }
+                let Appended { mut scene, images } = *appended;
                 scene.validate().map_err(CommandError)?;
                 let before = self.counts();
                 let (mesh_base, material_base) = (before.meshes, before.materials);
+                for material in &mut scene.materials {
+                    renumber_embedded_images(material, |i| i + before.images);
+                }
+                self.images.extend(images);
                 self.scene.meshes.extend(scene.meshes);
                 self.scene.materials.extend(scene.materials);
                 self.scene
@@ -980,7 +953,6 @@ impl Document {
                         ..i
                     }));
                 self.scene.lights.extend(scene.lights);
-                self.lights.extend(lights);
                 Ok(Command::Truncate(before))
             }
             Command::Truncate(counts) => {
@@ -989,6 +961,7 @@ impl Document {
                     || counts.materials > now.materials
                     || counts.objects > now.objects
                     || counts.lights > now.lights
+                    || counts.images > now.images
                 {
                     return err(format!(
                         "cannot truncate the document to {counts:?}: it holds {now:?}"
@@ -1018,7 +991,10 @@ impl Document {
                     })
                     .collect();
                 removed.lights = self.scene.lights.split_off(counts.lights);
-                let lights = self.lights.split_off(counts.lights);
+                let images = self.images.split_off(counts.images);
+                for material in &mut removed.materials {
+                    renumber_embedded_images(material, |i| i.saturating_sub(counts.images));
+                }
                 if matches!(self.selection, Some(Selection::Object(i)) if i >= counts.objects)
                     || matches!(self.selection, Some(Selection::Light(i)) if i >= counts.lights)
                 {
@@ -1026,7 +1002,7 @@ impl Document {
                 }
                 Ok(Command::Append(Box::new(Appended {
                     scene: removed,
-                    lights,
+                    images,
                 })))
             }
         }
@@ -1096,6 +1072,47 @@ impl Document {
             },
         })
     }
+}
+
+/// The stem of `base` (`block.001` → `block`) if `taken` does not hold it, otherwise the
+/// first of its Blender suffixes (`block.001`, `block.002`, …) that `taken` does not hold.
+fn suffixed(base: &str, taken: impl Fn(&str) -> bool) -> String {
+    let stem = match base.rsplit_once('.') {
+        Some((stem, digits)) if digits.len() == 3 && digits.bytes().all(|b| b.is_ascii_digit()) => {
+            stem
+        }
+        _ => base,
+    };
+    if !taken(stem) {
+        return stem.to_owned();
+    }
+    (1..)
+        .map(|i| format!("{stem}.{i:03}"))
+        .find(|n| !taken(n))
+        .expect("some suffix is free")
+}
+
+/// Renumbers the embedded images (`image:N`) a material's graph reads, and the decoded
+/// images it holds for them, by `renumber`: an import's images keep their own numbering
+/// until they join a document's.
+fn renumber_embedded_images(material: &mut Material, renumber: impl Fn(usize) -> usize) {
+    let Some(graph) = material.graph.as_mut() else {
+        return;
+    };
+    let renamed = |file: &str| {
+        let n = file.strip_prefix("image:")?.parse::<usize>().ok()?;
+        Some(format!("image:{}", renumber(n)))
+    };
+    let graph = std::sync::Arc::make_mut(graph);
+    for file in graph.graph.image_files_mut() {
+        if let Some(new) = renamed(file) {
+            *file = new;
+        }
+    }
+    graph.images = std::mem::take(&mut graph.images)
+        .into_iter()
+        .map(|(file, image)| (renamed(&file).unwrap_or(file), image))
+        .collect();
 }
 
 /// A light's kind in a word, for names and headings.
@@ -1271,7 +1288,8 @@ mod tests {
         let before = doc.scene().clone();
         let other = crate::scene::default_scene().unwrap();
         let added = other.instances.len();
-        doc.apply(doc.append(other.clone()), None).unwrap();
+        doc.apply(doc.append(other.clone(), Vec::new()), None)
+            .unwrap();
         let scene = doc.scene();
         assert_eq!(scene.instances.len(), before.instances.len() + added);
         let first = &scene.instances[before.instances.len()];

@@ -9,7 +9,7 @@ use std::sync::{Arc, Mutex};
 use std::thread::JoinHandle;
 use std::time::Duration;
 
-use crate::film::output::{ExportFilm, ViewSettings};
+use crate::film::output::ExportFilm;
 use crate::render::{GpuContext, RenderControl, RenderSettings, Renderer, export_film};
 use crate::scene::Scene;
 
@@ -45,13 +45,11 @@ pub struct FinalRender {
 }
 
 impl FinalRender {
-    /// Starts rendering `scene` at its own settings (size, samples, bounces) with `seed`;
-    /// `view` tonemaps the display image. `repaint` is called as progress is made.
+    /// Starts rendering `scene` at its own settings (size, samples, bounces, seed); its
+    /// view settings tonemap the display image. `repaint` is called as progress is made.
     pub fn start(
         ctx: Arc<GpuContext>,
         scene: Arc<Scene>,
-        seed: u32,
-        view: ViewSettings,
         repaint: impl Fn() + Send + 'static,
     ) -> Self {
         let state = Arc::new(Mutex::new(RenderState::Preparing));
@@ -64,7 +62,7 @@ impl FinalRender {
         let thread = std::thread::Builder::new()
             .name("kiln final render".into())
             .spawn(move || {
-                let result = render(ctx, &scene, seed, view, &thread_cancel, &set);
+                let result = render(ctx, &scene, &thread_cancel, &set);
                 set(match result {
                     Ok(r) => RenderState::Finished(Arc::new(r)),
                     Err(e) => RenderState::Failed(e),
@@ -115,15 +113,11 @@ impl Drop for FinalRender {
 fn render(
     ctx: Arc<GpuContext>,
     scene: &Scene,
-    seed: u32,
-    view: ViewSettings,
     cancel: &AtomicBool,
     set: &impl Fn(RenderState),
 ) -> Result<RenderResult, String> {
-    let settings = RenderSettings {
-        seed,
-        ..RenderSettings::from_scene(scene)
-    };
+    let settings = RenderSettings::from_scene(scene);
+    let view = scene.settings.view;
     let mut renderer = Renderer::new(ctx, scene, settings).map_err(|e| e.to_string())?;
     let spp = settings.samples_per_pixel;
     let mut report = |p: &crate::render::Progress| {

@@ -350,7 +350,7 @@ fn convert_light(light: &Light, kind: &str) -> Light {
 }
 
 fn light_ui(ui: &mut Ui, document: &Document, index: usize, actions: &mut Vec<InspectorAction>) {
-    let Some(light) = document.scene().lights.get(index) else {
+    let Some(light) = document.lights().get(index).map(|l| &l.light) else {
         return;
     };
     ui.heading(document.name(Selection::Light(index)));

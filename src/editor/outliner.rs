@@ -46,11 +46,7 @@ impl Outliner {
         actions: &mut Vec<OutlinerAction>,
     ) {
         let name = document.name(target).to_owned();
-        let visible = match target {
-            Selection::Object(i) => document.objects()[i].visible,
-            Selection::Light(i) => document.lights()[i].visible,
-            Selection::Camera => true,
-        };
+        let visible = document.visible(target);
         ui.horizontal(|ui| {
             ui.add_space(12.0);
             ui.label(icon);

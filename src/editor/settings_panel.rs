@@ -1,8 +1,8 @@
 //! The Render and World tabs of the properties editor, as Blender has them: the render
-//! settings the scene file carries (resolution with presets, samples, bounces), the
-//! editor's own (seed, view transform, exposure, the viewport's sample limit), the final
-//! render's button, progress and export; and the environment (colour, map, strength,
-//! rotation). Document settings change through commands, like every other edit.
+//! settings the scene file carries (resolution with presets, samples, bounces, seed, view
+//! transform, exposure), the editor's own (the viewport's sample limit, export options),
+//! the final render's button, progress and export; and the environment (colour, map,
+//! strength, rotation). Document settings change through commands, like every other edit.
 
 use egui::{DragValue, RichText, Ui};
 use glam::Vec3;
@@ -24,9 +24,6 @@ pub const RESOLUTION_PRESETS: [(&str, u32, u32); 5] = [
 
 /// The editor's settings that are not part of the document.
 pub struct ViewOptions {
-    pub seed: u32,
-    pub exposure_ev: f32,
-    pub tonemap: Tonemap,
     /// Samples per pixel after which the viewport stops accumulating.
     pub viewport_samples: u32,
     /// Options for the image writer on export (`bits=16`, `quality=90`, …).
@@ -110,8 +107,12 @@ pub fn render_tab_ui(
         let label = ui
             .label("Seed")
             .on_hover_text("The same seed renders the same image; another gives other noise.");
-        ui.add(DragValue::new(&mut options.seed))
+        let r = ui
+            .add(DragValue::new(&mut settings.seed))
             .labelled_by(label.id);
+        if r.changed() {
+            changed = Some(gesture(&r));
+        }
         ui.end_row();
         let label = ui
             .label("Viewport Samples")
@@ -126,31 +127,42 @@ pub fn render_tab_ui(
             gesture,
         }));
     }
+    let mut view = document.scene().settings.view;
+    let mut view_changed: Option<Option<GestureId>> = None;
     section(ui, "Color Management", |ui| {
         let label = ui.label("View Transform");
         egui::ComboBox::from_id_salt("view transform")
-            // The viewport's display pass has AgX and Standard (`display.rs`); the
-            // editor offers what it can show.
-            .selected_text(match options.tonemap {
-                Tonemap::Agx => "AgX",
-                _ => "Standard",
-            })
+            .selected_text(view.tonemap.label())
             .show_ui(ui, |ui| {
-                ui.selectable_value(&mut options.tonemap, Tonemap::Agx, "AgX");
-                ui.selectable_value(&mut options.tonemap, Tonemap::None, "Standard");
+                for tonemap in Tonemap::ALL {
+                    if ui
+                        .selectable_value(&mut view.tonemap, tonemap, tonemap.label())
+                        .clicked()
+                    {
+                        view_changed = Some(None);
+                    }
+                }
             })
             .response
             .labelled_by(label.id);
         ui.end_row();
-        float_row(
+        if let Some(gesture) = float_row(
             ui,
             "Exposure",
-            &mut options.exposure_ev,
+            &mut view.exposure_ev,
             0.05,
             -10.0..=10.0,
             "Stops (EV) applied before the view transform.",
-        );
+        ) {
+            view_changed = Some(gesture);
+        }
     });
+    if let Some(gesture) = view_changed.filter(|_| view != document.scene().settings.view) {
+        actions.push(RenderAction::Edit(Edit {
+            command: Command::SetView(view),
+            gesture,
+        }));
+    }
     ui.add_space(8.0);
     render_controls(ui, options, render, &mut actions);
     actions

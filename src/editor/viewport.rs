@@ -27,7 +27,7 @@ use std::sync::atomic::{AtomicBool, AtomicU64, Ordering};
 use std::sync::{Arc, Condvar, Mutex, mpsc};
 use std::time::{Duration, Instant};
 
-use crate::film::tonemap::Tonemap;
+use crate::film::output::ViewSettings;
 use crate::render::{
     GpuContext, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
 };
@@ -46,8 +46,8 @@ pub struct Target {
     pub size: [u32; 2],
     /// Stop accumulating after this many samples per pixel.
     pub sample_limit: u32,
-    pub exposure_ev: f32,
-    pub tonemap: Tonemap,
+    /// Exposure and view transform of the display pass (no restart when they change).
+    pub view: ViewSettings,
 }
 
 impl Target {
@@ -178,8 +178,10 @@ impl ViewportRenderer {
     /// Asks for `target`; does nothing when it equals the last one posted.
     pub fn post(&mut self, target: Target) {
         if let Some(old) = &self.posted {
-            let same_view = old.exposure_ev == target.exposure_ev && old.tonemap == target.tonemap;
-            if !old.restarts(&target) && old.sample_limit == target.sample_limit && same_view {
+            if !old.restarts(&target)
+                && old.sample_limit == target.sample_limit
+                && old.view == target.view
+            {
                 return;
             }
             if old.restarts(&target) {
@@ -284,7 +286,7 @@ fn build_renderer(
         height: size[1],
         samples_per_pixel: target.sample_limit,
         max_bounces: scene.settings.max_bounces,
-        seed: 0,
+        seed: scene.settings.seed,
         light_sampling: true,
         page_bytes: None,
         specialize: false,
@@ -570,12 +572,7 @@ impl Worker {
         } else {
             // Only the view transform or the limit changed: show the same film anew.
             if let Some(layer) = self.shown() {
-                self.display.run(
-                    &self.ctx,
-                    &layer.display,
-                    target.exposure_ev,
-                    target.tonemap,
-                );
+                self.display.run(&self.ctx, &layer.display, target.view);
                 (self.repaint)();
             }
             self.current = Some(target);
@@ -635,10 +632,10 @@ impl Worker {
         {
             Ok(stats) if stats.completed => {
                 layer.samples += 1;
-                let (exposure, tonemap) = (target.exposure_ev, target.tonemap);
+                let view = target.view;
                 let revision = target.scene_revision;
                 let shown = self.shown().map(|l| {
-                    self.display.run(&self.ctx, &l.display, exposure, tonemap);
+                    self.display.run(&self.ctx, &l.display, view);
                     (
                         l.texture_generation,
                         l.display.view.clone(),

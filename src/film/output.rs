@@ -17,7 +17,7 @@ use kiln_formats::{exr, image as display_image};
 use thiserror::Error;
 
 use super::Film;
-use super::tonemap::{Tonemap, srgb_encode, to_srgb8};
+use super::tonemap::{srgb_encode, to_srgb8};
 
 #[derive(Debug, Error)]
 pub enum OutputError {
@@ -57,12 +57,7 @@ impl OutputFormat {
     }
 }
 
-/// How the film becomes display values (ignored for EXR, which keeps scene-linear data).
-#[derive(Clone, Copy, Debug, Default, PartialEq)]
-pub struct ViewSettings {
-    pub exposure_ev: f32,
-    pub tonemap: Tonemap,
-}
+pub use crate::shader::view::ViewSettings;
 
 /// The film as 8-bit sRGB, through the one film → tonemap → sRGB path.
 pub fn to_srgb_image(film: &Film, view: ViewSettings) -> RgbImage {

@@ -1,21 +1,10 @@
 //! View transforms from scene-linear radiance to display-referred [0, 1] linear RGB, and
-//! the sRGB encoding for 8-bit output.
+//! the sRGB encoding for 8-bit output: the CPU side of [`Tonemap`] (declared in the shader
+//! contract, whose display pass implements the same curves).
 
 use glam::{Mat3, Vec3};
 
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
-pub enum Tonemap {
-    /// Clip to [0, 1].
-    None,
-    /// AgX (Troy Sobotka), Blender's default since 4.0, as the analytic fit of
-    /// Benjamin Wrensch's "Minimal AgX".
-    #[default]
-    Agx,
-    /// ACES RRT + ODT, Stephen Hill's fit.
-    Aces,
-    /// Khronos PBR Neutral: colours under the knee are left unchanged.
-    PbrNeutral,
-}
+pub use crate::shader::view::Tonemap;
 
 impl Tonemap {
     pub fn apply(self, c: Vec3) -> Vec3 {
@@ -122,12 +111,7 @@ pub fn to_srgb8(c: Vec3, exposure_ev: f32, tonemap: Tonemap) -> [u8; 3] {
 mod tests {
     use super::*;
 
-    const ALL: [Tonemap; 4] = [
-        Tonemap::None,
-        Tonemap::Agx,
-        Tonemap::Aces,
-        Tonemap::PbrNeutral,
-    ];
+    const ALL: [Tonemap; 4] = Tonemap::ALL;
 
     #[test]
     fn every_tonemap_is_monotonic_bounded_and_black_at_zero() {

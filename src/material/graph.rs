@@ -269,4 +269,18 @@ impl Graph {
         self.nodes.insert(id.to_owned(), node);
         self
     }
+
+    /// The files its image-texture nodes read, in the graph and its groups: resolved
+    /// against the file's folder on loading, renamed on saving and on merging scenes.
+    pub fn image_files_mut(&mut self) -> impl Iterator<Item = &mut String> {
+        let groups = self.groups.values_mut().flat_map(|g| g.nodes.values_mut());
+        self.nodes
+            .values_mut()
+            .chain(groups)
+            .filter(|node| node.kind == "image_texture")
+            .filter_map(|node| match node.params.get_mut("file") {
+                Some(Param::Text(file)) => Some(file),
+                _ => None,
+            })
+    }
 }

@@ -247,21 +247,10 @@ pub fn principled_lobes(
 /// Makes image paths of `image_texture` nodes (in the graph and its groups) relative to
 /// `base`, the directory of the file the graph came from.
 pub fn resolve_files(graph: &mut Graph, base: &Path) {
-    let fix = |nodes: &mut std::collections::BTreeMap<String, Node>| {
-        for node in nodes.values_mut() {
-            if node.kind != "image_texture" {
-                continue;
-            }
-            if let Some(Param::Text(file)) = node.params.get_mut("file") {
-                // `image:N` names an image an importer handed over in memory.
-                if !file.starts_with("image:") && Path::new(file.as_str()).is_relative() {
-                    *file = base.join(&*file).to_string_lossy().into_owned();
-                }
-            }
+    for file in graph.image_files_mut() {
+        // `image:N` names an image an importer handed over in memory.
+        if !file.starts_with("image:") && Path::new(file.as_str()).is_relative() {
+            *file = base.join(&*file).to_string_lossy().into_owned();
         }
-    };
-    fix(&mut graph.nodes);
-    for group in graph.groups.values_mut() {
-        fix(&mut group.nodes);
     }
 }

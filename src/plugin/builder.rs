@@ -320,7 +320,7 @@ impl ImportState {
         if let Err(e) = light.validate() {
             return self.refuse(format!("light refused: {e}"));
         }
-        self.scene.lights.push(light);
+        self.scene.add_light(light);
         (self.scene.lights.len() - 1) as u32
     }
 

@@ -112,7 +112,7 @@ pub fn light_selection(
     let analytic: Vec<(f64, GpuAnalyticLight)> = scene
         .lights
         .iter()
-        .map(|light| analytic_light(light, radius))
+        .map(|object| analytic_light(&object.light, radius))
         .collect();
     let total = environment + triangles + analytic.iter().map(|(p, _)| p).sum::<f64>();
     let mut selection = LightSelection::default();
@@ -255,7 +255,7 @@ mod tests {
     fn light_selection_splits_by_power_with_a_cdf_ending_at_one() {
         let mut scene = empty_scene();
         scene.environment = Vec3::splat(0.5);
-        scene.lights = vec![
+        scene.lights = [
             Light::Point {
                 position: Vec3::ZERO,
                 intensity: Vec3::splat(2.0),
@@ -266,7 +266,9 @@ mod tests {
                 irradiance: Vec3::ONE,
                 angular_diameter: 0.5,
             },
-        ];
+        ]
+        .map(Into::into)
+        .to_vec();
         // A scene of radius 1: a root node spanning a cube of diagonal 2.
         let root = BvhNode {
             min: [-1.0 / 3f32.sqrt(); 3],
@@ -303,11 +305,11 @@ mod tests {
     #[test]
     fn a_scene_without_light_selects_nothing() {
         let mut scene = empty_scene();
-        scene.lights = vec![Light::Point {
+        scene.add_light(Light::Point {
             position: Vec3::ZERO,
             intensity: Vec3::ZERO,
             radius: 0.0,
-        }];
+        });
         let selection = light_selection(&scene, None, 0.0);
         assert_eq!(selection.environment_pick, 0.0);
         assert_eq!(selection.triangle_pick, 0.0);

@@ -146,7 +146,7 @@ impl RenderSettings {
             height: scene.settings.height,
             samples_per_pixel: scene.settings.samples_per_pixel,
             max_bounces: scene.settings.max_bounces,
-            seed: 0,
+            seed: scene.settings.seed,
             light_sampling: true,
             page_bytes: None,
             specialize: true,

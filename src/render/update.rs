@@ -62,12 +62,19 @@ pub struct Updated {
     /// colour and share.
     pub lights: bool,
     pub max_bounces: bool,
+    /// The seed of the random sequence (the scene's render settings).
+    pub seed: bool,
 }
 
 impl Updated {
     /// Whether anything changed (and so the film must start over).
     pub fn any(&self) -> bool {
-        self.camera || self.instances || self.materials || self.lights || self.max_bounces
+        self.camera
+            || self.instances
+            || self.materials
+            || self.lights
+            || self.max_bounces
+            || self.seed
     }
 }
 
@@ -143,6 +150,11 @@ impl Renderer {
         if old.settings.max_bounces != new.settings.max_bounces {
             self.set_max_bounces(new.settings.max_bounces);
             updated.max_bounces = true;
+        }
+        if old.settings.seed != new.settings.seed {
+            self.settings.seed = new.settings.seed;
+            self.base_params.seed = new.settings.seed;
+            updated.seed = true;
         }
         Ok(updated)
     }

@@ -10,6 +10,30 @@
 
 use glam::Vec3;
 
+/// A light placed in the scene: its emitter, with the name and visibility the outliner
+/// shows for it (saved in the scene file, like an object's).
+#[derive(Clone, Debug, PartialEq)]
+pub struct LightObject {
+    pub light: Light,
+    /// Empty when the file gave none; the editor names such lights after their kind.
+    pub name: String,
+    /// Hidden lights stay in the scene and its file but do not shine
+    /// ([`Scene::without_hidden`](super::Scene::without_hidden)).
+    pub visible: bool,
+}
+
+impl From<Light> for LightObject {
+    /// An unnamed, visible light.
+    fn from(light: Light) -> Self {
+        Self {
+            light,
+            name: String::new(),
+            visible: true,
+        }
+    }
+}
+
+/// What a light emits, and from where.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Light {
     /// Radiant intensity `intensity` (W/sr per channel) from `position`; with `radius` > 0

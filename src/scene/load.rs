@@ -14,47 +14,74 @@ use serde::Deserialize;
 use super::file::{SCENE_FORMAT_VERSION, SceneError};
 use super::obj::load_obj;
 use super::schema::*;
-use super::{Camera, EnvironmentMap, Light, Material, Mesh, Scene, SceneSettings, shapes};
+use super::{
+    Camera, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, shapes,
+};
+use crate::shader::view::{Tonemap, ViewSettings};
 
 impl LightDesc {
-    fn to_light(&self) -> Light {
-        match *self {
+    fn object(&self) -> LightObject {
+        let (name, visible, light) = match *self {
             LightDesc::Point {
+                ref name,
                 position,
                 intensity,
                 radius,
-            } => Light::Point {
-                position: position.into(),
-                intensity: intensity.into(),
-                radius,
-            },
+                visible,
+            } => (
+                name,
+                visible,
+                Light::Point {
+                    position: position.into(),
+                    intensity: intensity.into(),
+                    radius,
+                },
+            ),
             LightDesc::Spot {
+                ref name,
                 position,
                 direction,
                 intensity,
                 cone_angle,
                 blend,
                 radius,
-            } => Light::Spot {
-                position: position.into(),
-                direction: direction.into(),
-                intensity: intensity.into(),
-                cone_angle,
-                blend,
-                radius,
-            },
+                visible,
+            } => (
+                name,
+                visible,
+                Light::Spot {
+                    position: position.into(),
+                    direction: direction.into(),
+                    intensity: intensity.into(),
+                    cone_angle,
+                    blend,
+                    radius,
+                },
+            ),
             LightDesc::Distant {
+                ref name,
                 direction,
                 irradiance,
                 angular_diameter,
-            } => Light::Distant {
-                direction: direction.into(),
-                irradiance: irradiance.into(),
-                angular_diameter,
-            },
+                visible,
+            } => (
+                name,
+                visible,
+                Light::Distant {
+                    direction: direction.into(),
+                    irradiance: irradiance.into(),
+                    angular_diameter,
+                },
+            ),
+        };
+        LightObject {
+            light,
+            name: name.clone(),
+            visible,
         }
     }
 }
+
 impl MaterialDesc {
     fn to_material(&self, name: &str, base_dir: &Path) -> Result<Material, String> {
         let graph = match (&self.graph, &self.graph_file) {
@@ -188,11 +215,24 @@ fn build_scene(
         map.rotation_degrees = desc.rotation;
         scene.environment_map = Some(map);
     }
+    let render = &file.render;
+    let tonemap = Tonemap::from_key(&render.view_transform).ok_or_else(|| {
+        invalid(format!(
+            "render: unknown view_transform \"{}\" (known: {})",
+            render.view_transform,
+            names(Tonemap::ALL.iter().map(|t| t.key()))
+        ))
+    })?;
     scene.settings = SceneSettings {
-        width: file.render.width,
-        height: file.render.height,
-        samples_per_pixel: file.render.samples_per_pixel,
-        max_bounces: file.render.max_bounces,
+        width: render.width,
+        height: render.height,
+        samples_per_pixel: render.samples_per_pixel,
+        max_bounces: render.max_bounces,
+        seed: render.seed,
+        view: ViewSettings {
+            exposure_ev: render.exposure,
+            tonemap,
+        },
     };
 
     let mut material_ids = BTreeMap::new();
@@ -276,7 +316,7 @@ fn build_scene(
         added.name = inst.name.clone();
         added.visible = inst.visible;
     }
-    scene.lights = file.lights.iter().map(LightDesc::to_light).collect();
+    scene.lights = file.lights.iter().map(LightDesc::object).collect();
     Ok(scene)
 }
 
@@ -368,7 +408,7 @@ mod tests {
         );
         let scene = parse(&text).unwrap();
         assert_eq!(scene.lights.len(), 3);
-        assert!(matches!(scene.lights[0], Light::Point { radius, .. } if radius == 0.0));
+        assert!(matches!(scene.lights[0].light, Light::Point { radius, .. } if radius == 0.0));
         let bad = text.replace("cone_angle: 30", "cone_angle: 300");
         assert!(parse(&bad).unwrap_err().to_string().contains("cone_angle"));
     }

@@ -21,13 +21,15 @@ pub mod shapes;
 pub use camera::Camera;
 pub use environment::EnvironmentMap;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene, save_scene};
-pub use light::Light;
+pub use light::{Light, LightObject};
 pub use material::{Material, graph_from_principled};
 pub use mesh::Mesh;
 
 use std::path::Path;
 
 use glam::{Affine3A, Vec3};
+
+use crate::shader::view::ViewSettings;
 
 /// Where the bundled default scene lives in the source tree.
 pub const DEFAULT_SCENE_PATH: &str = "assets/scenes/cornell-box.kiln";
@@ -62,6 +64,10 @@ pub struct SceneSettings {
     pub height: u32,
     pub samples_per_pixel: u32,
     pub max_bounces: u32,
+    /// Seed of the random sequence: the same seed renders the same image.
+    pub seed: u32,
+    /// Exposure and view transform (Blender's colour management).
+    pub view: ViewSettings,
 }
 
 impl Default for SceneSettings {
@@ -71,7 +77,19 @@ impl Default for SceneSettings {
             height: 512,
             samples_per_pixel: 64,
             max_bounces: 8,
+            seed: 0,
+            view: ViewSettings::default(),
         }
+    }
+}
+
+impl SceneSettings {
+    pub fn validate(&self) -> Result<(), String> {
+        validate_image_size(self.width, self.height)?;
+        if self.samples_per_pixel == 0 {
+            return Err("samples per pixel must be at least 1".into());
+        }
+        self.view.validate()
     }
 }
 
@@ -86,7 +104,7 @@ pub struct Scene {
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
     /// Lights other than emissive geometry.
-    pub lights: Vec<Light>,
+    pub lights: Vec<LightObject>,
     pub settings: SceneSettings,
 }
 
@@ -125,10 +143,16 @@ impl Scene {
         });
     }
 
-    /// The scene as rendered: hidden objects left out.
+    pub fn add_light(&mut self, light: Light) -> usize {
+        self.lights.push(light.into());
+        self.lights.len() - 1
+    }
+
+    /// The scene as rendered: hidden objects and lights left out.
     pub fn without_hidden(&self) -> Scene {
         let mut scene = self.clone();
         scene.instances.retain(|i| i.visible);
+        scene.lights.retain(|l| l.visible);
         scene
     }
 
@@ -151,8 +175,8 @@ impl Scene {
         scene.camera.look_at *= factor;
         scene.camera.focus_distance *= factor;
         scene.camera.aperture_radius *= factor;
-        for light in &mut scene.lights {
-            match light {
+        for object in &mut scene.lights {
+            match &mut object.light {
                 // Intensity is per steradian: at a distance scaled by f, irradiance falls
                 // by f²; scale intensity by f² to keep the image.
                 Light::Point {
@@ -192,8 +216,11 @@ impl Scene {
             m.validate()
                 .map_err(|e| format!("material \"{}\": {e}", m.name))?;
         }
-        for (i, light) in self.lights.iter().enumerate() {
-            light.validate().map_err(|e| format!("light {i}: {e}"))?;
+        for (i, object) in self.lights.iter().enumerate() {
+            object
+                .light
+                .validate()
+                .map_err(|e| format!("light {i}: {e}"))?;
         }
         for mesh in &self.meshes {
             mesh.validate()
@@ -224,7 +251,7 @@ impl Scene {
                 ));
             }
         }
-        validate_image_size(self.settings.width, self.settings.height)
+        self.settings.validate()
     }
 }
 

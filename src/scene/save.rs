@@ -5,7 +5,6 @@
 //! Not here: the schema ([`schema`](super::schema)), reading scenes ([`load`](super::load))
 //! and the OBJ format itself ([`obj`](super::obj)).
 
-use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::Mat4;
@@ -80,32 +79,21 @@ pub fn save_scene(
         let desc = match &m.graph {
             Some(g) => {
                 let mut graph = g.graph.clone();
-                let rename = |nodes: &mut BTreeMap<String, crate::material::Node>| {
-                    for node in nodes.values_mut() {
-                        if let Some(crate::material::Param::Text(file)) =
-                            node.params.get_mut("file")
-                        {
-                            if let Some(i) = file
-                                .strip_prefix("image:")
-                                .and_then(|n| n.parse::<usize>().ok())
-                            {
-                                if let Some(f) = image_files.get(i) {
-                                    *file = f.clone();
-                                }
-                            } else if Path::new(file.as_str()).is_relative() {
-                                // Loading resolved it against the old scene's folder, as
-                                // seen from the working directory; the saved scene may
-                                // live elsewhere.
-                                if let Ok(absolute) = std::path::absolute(file.as_str()) {
-                                    *file = absolute.to_string_lossy().into_owned();
-                                }
-                            }
+                for file in graph.image_files_mut() {
+                    if let Some(i) = file
+                        .strip_prefix("image:")
+                        .and_then(|n| n.parse::<usize>().ok())
+                    {
+                        if let Some(f) = image_files.get(i) {
+                            *file = f.clone();
+                        }
+                    } else if Path::new(file.as_str()).is_relative() {
+                        // Loading resolved it against the old scene's folder, as seen from
+                        // the working directory; the saved scene may live elsewhere.
+                        if let Ok(absolute) = std::path::absolute(file.as_str()) {
+                            *file = absolute.to_string_lossy().into_owned();
                         }
                     }
-                };
-                rename(&mut graph.nodes);
-                for group in graph.groups.values_mut() {
-                    rename(&mut group.nodes);
                 }
                 MaterialDesc::from_graph(graph)
             }
@@ -157,40 +145,50 @@ pub fn save_scene(
     let lights = scene
         .lights
         .iter()
-        .map(|l| match *l {
-            Light::Point {
-                position,
-                intensity,
-                radius,
-            } => LightDesc::Point {
-                position: position.into(),
-                intensity: intensity.into(),
-                radius,
-            },
-            Light::Spot {
-                position,
-                direction,
-                intensity,
-                cone_angle,
-                blend,
-                radius,
-            } => LightDesc::Spot {
-                position: position.into(),
-                direction: direction.into(),
-                intensity: intensity.into(),
-                cone_angle,
-                blend,
-                radius,
-            },
-            Light::Distant {
-                direction,
-                irradiance,
-                angular_diameter,
-            } => LightDesc::Distant {
-                direction: direction.into(),
-                irradiance: irradiance.into(),
-                angular_diameter,
-            },
+        .map(|object| {
+            let name = object.name.clone();
+            let visible = object.visible;
+            match object.light {
+                Light::Point {
+                    position,
+                    intensity,
+                    radius,
+                } => LightDesc::Point {
+                    name,
+                    position: position.into(),
+                    intensity: intensity.into(),
+                    radius,
+                    visible,
+                },
+                Light::Spot {
+                    position,
+                    direction,
+                    intensity,
+                    cone_angle,
+                    blend,
+                    radius,
+                } => LightDesc::Spot {
+                    name,
+                    position: position.into(),
+                    direction: direction.into(),
+                    intensity: intensity.into(),
+                    cone_angle,
+                    blend,
+                    radius,
+                    visible,
+                },
+                Light::Distant {
+                    direction,
+                    irradiance,
+                    angular_diameter,
+                } => LightDesc::Distant {
+                    name,
+                    direction: direction.into(),
+                    irradiance: irradiance.into(),
+                    angular_diameter,
+                    visible,
+                },
+            }
         })
         .collect();
     // The map is written as a 32-bit float EXR, which holds its texels exactly, by the
@@ -231,6 +229,9 @@ pub fn save_scene(
             height: scene.settings.height,
             samples_per_pixel: scene.settings.samples_per_pixel,
             max_bounces: scene.settings.max_bounces,
+            seed: scene.settings.seed,
+            exposure: scene.settings.view.exposure_ev,
+            view_transform: scene.settings.view.tonemap.key().to_owned(),
         },
         camera: CameraDesc {
             position: c.position.into(),

@@ -94,16 +94,25 @@ pub(super) fn unit_strength() -> f32 {
     1.0
 }
 
+/// A light. Every kind may carry the outliner's `name` and `visible` besides its own
+/// fields (serde cannot flatten shared fields into RON's enum variants, so each variant
+/// lists them; [`LightDesc::object`] reads them in one place).
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
 pub(super) enum LightDesc {
     Point {
+        #[serde(default, skip_serializing_if = "String::is_empty")]
+        name: String,
         position: [f32; 3],
         intensity: [f32; 3],
         #[serde(default)]
         radius: f32,
+        #[serde(default = "yes", skip_serializing_if = "is_true")]
+        visible: bool,
     },
     Spot {
+        #[serde(default, skip_serializing_if = "String::is_empty")]
+        name: String,
         position: [f32; 3],
         direction: [f32; 3],
         intensity: [f32; 3],
@@ -112,12 +121,18 @@ pub(super) enum LightDesc {
         blend: f32,
         #[serde(default)]
         radius: f32,
+        #[serde(default = "yes", skip_serializing_if = "is_true")]
+        visible: bool,
     },
     Distant {
+        #[serde(default, skip_serializing_if = "String::is_empty")]
+        name: String,
         direction: [f32; 3],
         irradiance: [f32; 3],
         #[serde(default)]
         angular_diameter: f32,
+        #[serde(default = "yes", skip_serializing_if = "is_true")]
+        visible: bool,
     },
 }
 
@@ -128,6 +143,28 @@ pub(super) struct RenderDesc {
     pub(super) height: u32,
     pub(super) samples_per_pixel: u32,
     pub(super) max_bounces: u32,
+    #[serde(skip_serializing_if = "is_zero_seed")]
+    pub(super) seed: u32,
+    /// Stops (EV) before the view transform.
+    #[serde(skip_serializing_if = "is_zero_ev")]
+    pub(super) exposure: f32,
+    /// A [`Tonemap::key`](crate::shader::view::Tonemap::key): "agx", "none", "aces",
+    /// "pbr-neutral".
+    #[serde(skip_serializing_if = "is_default_view_transform")]
+    pub(super) view_transform: String,
+}
+
+fn is_zero_seed(seed: &u32) -> bool {
+    *seed == 0
+}
+
+fn is_zero_ev(ev: &f32) -> bool {
+    // Bit for bit, so that -0 is written and read back as itself.
+    ev.to_bits() == 0
+}
+
+fn is_default_view_transform(key: &String) -> bool {
+    *key == crate::shader::view::Tonemap::default().key()
 }
 
 impl Default for RenderDesc {
@@ -138,6 +175,9 @@ impl Default for RenderDesc {
             height: s.height,
             samples_per_pixel: s.samples_per_pixel,
             max_bounces: s.max_bounces,
+            seed: s.seed,
+            exposure: s.view.exposure_ev,
+            view_transform: s.view.tonemap.key().to_owned(),
         }
     }
 }

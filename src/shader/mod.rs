@@ -2,13 +2,15 @@
 //! The WGSL files of `shaders/` ([`LIBRARY`]), the principled lobes' bits ([`lobes`]), what
 //! a kernel is specialised for ([`features`]), the principled parameters ([`principled`]),
 //! the Rust mirrors of the GPU structs
-//! ([`gpu_types`]) and the one table of bindings ([`bindings`]). It uses no other module
+//! ([`gpu_types`]), the one table of bindings ([`bindings`]) and the view transforms the
+//! display pass selects ([`view`]). It uses no other module
 //! of the crate; every layer above may use it (`tests/architecture.rs`).
 
 pub mod bindings;
 pub mod features;
 pub mod gpu_types;
 pub mod principled;
+pub mod view;
 
 pub use features::KernelFeatures;
 
