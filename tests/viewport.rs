@@ -10,6 +10,7 @@ use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Vec3};
 use kiln::editor::viewport::{Target, ViewportRenderer, ViewportStatus};
+use kiln::material::{Input, Value};
 use kiln::render::GpuContext;
 use kiln::scene::{self, Light, Material, Scene};
 
@@ -208,15 +209,52 @@ fn edits_at(size: [u32; 2]) {
         );
     }
 
+    // A value of the graph (the veins' scale, as a node-editor slider sets it): the
+    // viewport's kernel reads graph constants from its parameter buffer, so the edit is
+    // a write, not a kernel.
+    let mut value_times = Vec::new();
+    status = rebuilt.clone();
+    for i in 0..REPEATS {
+        let graph_material = scene.materials[0].graph.as_ref().expect("the marble graph");
+        let mut graph = graph_material.graph.clone();
+        graph.nodes.get_mut("veins").expect("veins").inputs.insert(
+            "scale".into(),
+            Input::Value(Value::Float(1.5 + 0.5 * i as f32)),
+        );
+        scene.materials[0] = Material::from_graph(&name, graph).expect("still compiles");
+        revision += 1;
+        let (edited, time) = edit(
+            &mut viewport,
+            scene.clone(),
+            revision,
+            size,
+            "the new scale",
+        );
+        assert!(edited.restarts > status.restarts, "accumulation restarted");
+        status = edited;
+        value_times.push(time);
+    }
+    assert_eq!(
+        status.material_updates,
+        rebuilt.material_updates + REPEATS,
+        "each value edit was written in place"
+    );
+    assert_eq!(
+        (status.renderer_builds, status.kernel_builds),
+        (rebuilt.renderer_builds, rebuilt.kernel_builds),
+        "a graph value edit built a renderer or a kernel"
+    );
+
     println!(
         "viewport {}x{} on {}: first image {first_time:?}; edit to first image, median of \
-         {REPEATS}: transform {:?}, light {:?}, camera {:?}; new kernel {kernel_time:?} \
-         ({passes_meanwhile} passes of the old image meanwhile)",
+         {REPEATS}: transform {:?}, light {:?}, camera {:?}, graph value {:?}; new kernel \
+         {kernel_time:?} ({passes_meanwhile} passes of the old image meanwhile)",
         size[0],
         size[1],
         ctx.describe(),
         median(transform_times),
         median(light_times),
         median(camera_times),
+        median(value_times),
     );
 }

@@ -8,6 +8,12 @@
 //! The emitted function is `fn <name>(sp: ShadingPoint) -> MaterialEval`
 //! (shaders/nodes/inputs.wgsl); it calls the node library's functions
 //! (shaders/nodes/*.wgsl), of which kernel assembly includes only those called.
+//!
+//! Constants are written into the code ([`Constants::Inline`]: folded, merged, what final
+//! renders compile) or, for the editor, read from the `material_params` buffer
+//! ([`Constants::Live`]): then no constant is folded or merged, so two graphs that differ
+//! only in their input values compile to the same code and a slider edit writes the
+//! buffer instead of building a kernel.
 
 use std::collections::{BTreeMap, BTreeSet, HashMap};
 use std::fmt::Write as _;
@@ -50,6 +56,16 @@ pub struct MaterialTraits {
     pub lobes: u32,
 }
 
+/// Where a compiled material's constant inputs live.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Constants {
+    /// In the code, folded through the nodes that only compute on constants.
+    Inline,
+    /// In `material_params` (`array<vec4<f32>>`), from element `base` on, one element per
+    /// constant input ([`CompiledMaterial::parameters`]).
+    Live { base: u32 },
+}
+
 #[derive(Clone, Debug)]
 pub struct CompiledMaterial {
     /// The material's name, for messages.
@@ -63,6 +79,9 @@ pub struct CompiledMaterial {
     pub traits: MaterialTraits,
     /// Image files the material reads, with the node that reads each.
     pub images: BTreeMap<String, String>,
+    /// With [`Constants::Live`]: the values of `material_params` from `base` on, in the
+    /// order the code reads them (empty for inline constants).
+    pub parameters: Vec<[f32; 4]>,
 }
 
 /// Where an input's value comes from after flattening.
@@ -114,6 +133,17 @@ pub fn compile_with_textures(
     function: &str,
     textures: &mut BTreeMap<String, u32>,
 ) -> Result<CompiledMaterial, GraphError> {
+    compile_with(material, graph, function, textures, Constants::Inline)
+}
+
+/// [`compile_with_textures`] with its constants where `constants` says.
+pub fn compile_with(
+    material: &str,
+    graph: &Graph,
+    function: &str,
+    textures: &mut BTreeMap<String, u32>,
+    constants: Constants,
+) -> Result<CompiledMaterial, GraphError> {
     let ctx = Ctx { material };
     let flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
@@ -122,28 +152,33 @@ pub fn compile_with_textures(
         &ctx,
         flat,
         (output, 0),
-        function,
-        "MaterialEval",
+        (function, "MaterialEval"),
         textures,
+        constants,
         |flat, root| (root.to_owned(), traits(flat, output)),
     )
 }
 
 /// Rejects cycles toward `root`, folds constants, merges identical nodes and emits
-/// `fn <function>(sp: ShadingPoint) -> <returns>`; `finish` turns the root's expression
-/// into the returned one and says what is known of the material.
+/// `fn <function>(sp: ShadingPoint) -> <returns>` for `(function, returns)`; `finish`
+/// turns the root's expression into the returned one and says what is known of the
+/// material.
 fn emit_function(
     ctx: &Ctx,
     mut flat: Vec<FlatNode>,
     root: (usize, usize),
-    function: &str,
-    returns: &str,
+    (function, returns): (&str, &str),
     textures: &mut BTreeMap<String, u32>,
+    constants: Constants,
     finish: impl FnOnce(&[FlatNode], &str) -> (String, MaterialTraits),
 ) -> Result<CompiledMaterial, GraphError> {
     reject_cycles(ctx, &flat, root.0)?;
-    fold_constants(&mut flat, root.0);
-    merge_identical(&mut flat, root.0);
+    if constants == Constants::Inline {
+        // Folding and merging look at the values, which live constants must not fix
+        // into the code.
+        fold_constants(&mut flat, root.0);
+        merge_identical(&mut flat, root.0);
+    }
     let mut emitter = Emitter {
         flat: &flat,
         prefix: function,
@@ -152,6 +187,10 @@ fn emit_function(
         calls: BTreeSet::new(),
         textures,
         images: BTreeMap::new(),
+        live: match constants {
+            Constants::Inline => None,
+            Constants::Live { base } => Some((base, Vec::new())),
+        },
     };
     let body = emitter.function_body(&[root])?;
     let (value, traits) = finish(&flat, &body.roots[0]);
@@ -166,6 +205,7 @@ fn emit_function(
         calls: emitter.calls,
         traits,
         images: emitter.images,
+        parameters: emitter.live.map(|(_, values)| values).unwrap_or_default(),
     })
 }
 
@@ -210,9 +250,9 @@ pub fn compile_value_with_textures(
         &ctx,
         flat,
         (node, output),
-        function,
-        "vec4<f32>",
+        (function, "vec4<f32>"),
         textures,
+        Constants::Inline,
         |_, v| {
             let value = match ty {
                 SocketType::Float => format!("vec4<f32>({v}, 0.0, 0.0, 0.0)"),
@@ -870,6 +910,9 @@ struct Emitter<'a> {
     textures: &'a mut BTreeMap<String, u32>,
     /// Image files read, with the node reading each.
     images: BTreeMap<String, String>,
+    /// With live constants: the first element of `material_params` this material uses,
+    /// and the values of those it reads so far.
+    live: Option<(u32, Vec<[f32; 4]>)>,
 }
 
 struct Body {
@@ -948,19 +991,44 @@ impl Emitter<'_> {
         format!("n{n}{}", self.flat[n].def.outputs[o].field)
     }
 
+    /// A constant of an input of type `ty`: a literal, or with live constants a read of
+    /// the next element of `material_params`, whose value is recorded.
+    fn constant_expr(&mut self, v: &Value, ty: SocketType) -> String {
+        let Some((base, values)) = self.live.as_mut() else {
+            return literal(v, ty);
+        };
+        let (value, swizzle) = match ty {
+            SocketType::Float => ([v.as_f32(), 0.0, 0.0, 0.0], "x"),
+            SocketType::Vec2 => {
+                let [x, y, _] = match v {
+                    Value::Float(x) => [*x; 3],
+                    _ => v.as_vec3(),
+                };
+                ([x, y, 0.0, 0.0], "xy")
+            }
+            SocketType::Vector | SocketType::Color | SocketType::Bsdf => {
+                let [x, y, z] = v.as_vec3();
+                ([x, y, z, 0.0], "xyz")
+            }
+        };
+        let index = *base + values.len() as u32;
+        values.push(value);
+        format!("material_params[{index}u].{swizzle}")
+    }
+
     /// The WGSL expression of input `i` of node `n`, in the input's type.
     fn input_expr(&mut self, n: usize, i: usize) -> String {
         let node = &self.flat[n];
         let socket = &node.def.inputs[i];
         match &node.inputs[i] {
-            Src::Const(v) => literal(v, socket.ty),
+            Src::Const(v) => self.constant_expr(v, socket.ty),
             Src::Out(m, o) => convert(
                 self.output_expr(*m, *o),
                 output_type(self.flat, *m, *o),
                 socket.ty,
             ),
             Src::Default => match &socket.default {
-                Default::Value(v) => literal(v, socket.ty),
+                Default::Value(v) => self.constant_expr(v, socket.ty),
                 Default::Implicit(expr, _) => {
                     self.calls.extend(called_functions(expr));
                     (*expr).to_owned()

@@ -15,7 +15,7 @@ use super::light_distribution::{emissive_triangles, light_selection};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
 use crate::shader::KernelFeatures;
-use crate::shader::bindings::{PAGES, Resource, bound, scene_layout_entries};
+use crate::shader::bindings::{MATERIAL_PARAMS, PAGES, Resource, bound, scene_layout_entries};
 use crate::shader::gpu_types::{
     BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
     INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
@@ -63,6 +63,9 @@ pub struct GpuScene {
     pub lobes: u32,
     /// The image textures (`material::texture::TextureTable::gpu_words`).
     pub textures: wgpu::Buffer,
+    /// The graph materials' live constants (`bindings::MATERIAL_PARAMS` elements;
+    /// zeros unless the renderer compiles its materials with live constants).
+    pub material_params: wgpu::Buffer,
     pub texture_count: u32,
     /// Probability that next-event estimation samples an emissive triangle.
     pub triangle_pick: f32,
@@ -434,6 +437,12 @@ impl GpuScene {
                 &mut bytes,
             )?,
             texture_count: texture_table.images.len() as u32,
+            material_params: ctx.device.create_buffer(&wgpu::BufferDescriptor {
+                label: Some("material parameters"),
+                size: std::mem::size_of::<[[f32; 4]; MATERIAL_PARAMS]>() as u64,
+                usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
+                mapped_at_creation: false,
+            }),
             lobes: instanced_lobes(scene),
             triangle_pick: a.triangle_pick,
             instance_count: a.instances.len() as u32,
@@ -528,6 +537,7 @@ impl GpuScene {
                     Resource::AnalyticLights => &self.analytic_lights,
                     Resource::EnvironmentData => &self.environment_data,
                     Resource::DielectricEnergyTable => &self.bsdf_tables,
+                    Resource::MaterialParams => &self.material_params,
                     Resource::Textures => &self.textures,
                     Resource::Uv1 => &self.uv1,
                     // Bound only when `features.aovs`, which is `film_aov.is_some()`.

@@ -357,8 +357,17 @@ impl Renderer {
         let device = &ctx.device;
         let features = kernel_features(gpu_scene.features(), &settings);
         let layout = scene_bind_group_layout(device, &features);
-        let materials = super::materials::scene_materials_wgsl(scene)?;
-        let kernel = path_tracing_kernel(&features, &materials);
+        // The unspecialised kernel (the editor's) reads the graphs' constants from a
+        // buffer, so that a value edit is a write, not a kernel.
+        let materials = super::materials::scene_materials(scene, !settings.specialize)?;
+        if !materials.parameters.is_empty() {
+            ctx.queue.write_buffer(
+                &gpu_scene.material_params,
+                0,
+                bytemuck::cast_slice(&materials.parameters),
+            );
+        }
+        let kernel = path_tracing_kernel(&features, &materials.wgsl);
         let kernel_compiled = !kernel.is_cached(&ctx, 1, "render");
         let pipeline = kernel.create_pipeline(&ctx, &[&layout], "render")?;
 
@@ -426,7 +435,7 @@ impl Renderer {
             gpu_scene,
             blas: accel.blas,
             features,
-            materials_wgsl: materials,
+            materials_wgsl: materials.wgsl,
             pacing: Pacing::Final,
             tile_size: TILE_SIZE,
             pieces,

@@ -18,6 +18,7 @@
 use thiserror::Error;
 
 use super::gpu_scene::{LightArrays, instance_arrays, instanced_lobes, light_arrays};
+use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
@@ -113,9 +114,11 @@ impl Renderer {
         let instances = old.instances != new.instances;
         let lights = old.lights != new.lights || old.environment != new.environment;
         self.check_features(new)?;
-        if materials {
-            self.check_materials(new)?;
-        }
+        let compiled = if materials {
+            Some(self.check_materials(new)?)
+        } else {
+            None
+        };
         let placed = if instances {
             Some(self.place_instances(new)?)
         } else {
@@ -129,8 +132,8 @@ impl Renderer {
         self.check_lights(&light_data)?;
 
         let mut updated = Updated::default();
-        if materials {
-            self.write_materials(new)?;
+        if let Some(compiled) = &compiled {
+            self.write_materials(new, compiled)?;
             updated.materials = true;
         }
         if let Some((tlas, packed)) = placed {
@@ -224,8 +227,8 @@ impl Renderer {
     /// have changed). Refuses a change of a graph material's code or of the lobes the
     /// kernel contains.
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
-        self.check_materials(scene)?;
-        self.write_materials(scene)?;
+        let compiled = self.check_materials(scene)?;
+        self.write_materials(scene, &compiled)?;
         self.update_lights(scene)
     }
 
@@ -235,15 +238,18 @@ impl Renderer {
         self.base_params.max_bounces = max_bounces;
     }
 
-    fn check_materials(&self, scene: &Scene) -> Result<(), UpdateError> {
+    /// Checks that the scene's materials fit the kernel; returns them compiled as the
+    /// kernel has them (with their live constants, if the kernel reads those).
+    fn check_materials(&self, scene: &Scene) -> Result<SceneMaterials, UpdateError> {
         self.check_features(scene)?;
         let packed = std::mem::size_of::<crate::shader::gpu_types::GpuMaterial>()
             * scene.materials.len().max(1);
         if packed as u64 != self.gpu_scene.materials.size() {
             return Err(UpdateError::rebuild("the material count changed"));
         }
-        let wgsl = super::materials::scene_materials_wgsl(scene).map_err(RenderError::from)?;
-        if wgsl != self.materials_wgsl {
+        let compiled = super::materials::scene_materials(scene, !self.settings.specialize)
+            .map_err(RenderError::from)?;
+        if compiled.wgsl != self.materials_wgsl {
             return Err(UpdateError::kernel("a material graph's code changed"));
         }
         let textures = super::materials::scene_textures(scene);
@@ -253,10 +259,14 @@ impl Renderer {
         {
             return Err(UpdateError::kernel("the material graphs read other images"));
         }
-        Ok(())
+        Ok(compiled)
     }
 
-    fn write_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+    fn write_materials(
+        &mut self,
+        scene: &Scene,
+        compiled: &SceneMaterials,
+    ) -> Result<(), UpdateError> {
         let packed: Vec<_> = scene
             .materials
             .iter()
@@ -266,6 +276,10 @@ impl Renderer {
         let words = super::materials::scene_textures(scene).gpu_words();
         if !words.is_empty() {
             self.write("textures", &self.gpu_scene.textures, &words)?;
+        }
+        if !compiled.parameters.is_empty() {
+            let buffer = &self.gpu_scene.material_params;
+            self.write("material parameters", buffer, &compiled.parameters)?;
         }
         Ok(())
     }

@@ -73,6 +73,7 @@ pub enum Resource {
     Textures,
     FilmAov,
     Uv1,
+    MaterialParams,
 }
 
 /// One buffer binding of group 0.
@@ -338,7 +339,21 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         stand_in: Some("array<vec2<f32>, 1>"),
         doc: "The second UV set per vertex, when a mesh has one.",
     },
+    Binding {
+        resource: Resource::MaterialParams,
+        name: "material_params",
+        binding: 25,
+        space: Space::Uniform,
+        wgsl_type: "array<vec4<f32>, 2048>",
+        element_bytes: bytes::<[[f32; 4]; MATERIAL_PARAMS]>(),
+        stand_in: None,
+        doc: "The graph materials' constant inputs in the editor (src/material/compile.rs,\n\
+              `Constants::Live`); uniform, so it takes none of GL's storage-buffer slots.",
+    },
 ];
+
+/// Elements of `material_params`: live constants beyond it are compiled inline.
+pub const MATERIAL_PARAMS: usize = 2048;
 
 /// The group 0 declarations of a kernel built for `features`.
 pub fn bindings_wgsl(features: &KernelFeatures) -> String {
