@@ -596,7 +596,7 @@ impl<'a> Flattener<'a> {
                         let inputs = def.inputs.iter().map(|s| {
                             let declared = match &s.default {
                                 Default::Value(v) => Src::Const(v.clone()),
-                                Default::Implicit(expr, _) => Src::Implicit(*expr, s.ty),
+                                Default::Implicit(expr, _) => Src::Implicit(expr, s.ty),
                             };
                             (s.name, s.ty, declared)
                         });
