@@ -2,7 +2,7 @@
 //! errors name the material, node and socket; dead branches emit no code; constants fold.
 
 use kiln::material::compile::link;
-use kiln::material::graph::{GROUP, GROUP_INPUT};
+use kiln::material::graph::{GROUP, GROUP_INPUT, REROUTE};
 use kiln::material::nodes::{Default as SocketDefault, ParamKind, library};
 use kiln::material::{Graph, Node, Param, SocketType, compile, materials_wgsl, parse_material};
 use kiln::render::kernel::path_tracing_kernel;
@@ -64,7 +64,9 @@ fn every_node_type_with_every_option_compiles_and_naga_accepts_the_kernel() {
                 let mut node = node.clone();
                 for s in &def.inputs {
                     if matches!(s.default, SocketDefault::Value(_)) && s.ty == SocketType::Float {
-                        node = node.input(s.name, 0.25);
+                        // 0.25, or the nearest value the input's range takes.
+                        let range = s.range.expect("a float input declares its range");
+                        node = node.input(s.name, 0.25f32.clamp(range.min, range.max));
                     }
                 }
                 let graph = feeding_base_color(node.clone(), output.name);
@@ -244,7 +246,7 @@ fn the_compiler_names_no_node_type() {
     let named: Vec<&str> = library()
         .iter()
         .map(|d| d.kind)
-        .chain([GROUP, GROUP_INPUT])
+        .chain([GROUP, GROUP_INPUT, REROUTE])
         .filter(|kind| source.contains(&format!("\"{kind}\"")))
         .collect();
     assert!(

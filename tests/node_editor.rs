@@ -67,6 +67,70 @@ fn drag(harness: &mut Harness<'_, EditorApp>, from: (&str, &str), to: (&str, &st
     steps(harness, 3);
 }
 
+/// Shift+clicks the header of the noise texture node: snarl selects with Shift+click (a
+/// plain click only raises the node).
+fn select_noise(harness: &mut Harness<'_, EditorApp>) {
+    let header = {
+        let node_editor = harness.state().node_editor();
+        let top = node_editor.node_position("noise_texture").unwrap();
+        let left = pin(harness, "noise_texture", "vector", true);
+        let right = pin(harness, "noise_texture", "color", false);
+        egui::pos2((left.x + right.x) / 2.0, top.y + (right.y - top.y) * 0.3)
+    };
+    harness.event(egui::Event::PointerMoved(header));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event_modifiers(
+            egui::Event::PointerButton {
+                pos: header,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: egui::Modifiers::SHIFT,
+            },
+            egui::Modifiers::SHIFT,
+        );
+        harness.step();
+    }
+    steps(harness, 2);
+}
+
+/// Shift+A over the canvas at `at` from its top left (left of the material's nodes),
+/// search `query`, pick `label`.
+fn add_from_menu(harness: &mut Harness<'_, EditorApp>, at: egui::Vec2, query: &str, label: &str) {
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    harness.event(egui::Event::PointerMoved(canvas.left_top() + at));
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::A);
+    steps(harness, 2);
+    harness
+        .get_by_role_and_label(Role::TextInput, "Search")
+        .type_text(query);
+    steps(harness, 2);
+    harness.get_by_label(label).click_accesskit();
+    steps(harness, 3);
+}
+
+/// Presses the primary button at `from`, moves by `by` in steps and releases, as a mouse
+/// drag does.
+fn mouse_drag(harness: &mut Harness<'_, EditorApp>, from: egui::Pos2, by: egui::Vec2) {
+    let button = |pos, pressed| egui::Event::PointerButton {
+        pos,
+        button: egui::PointerButton::Primary,
+        pressed,
+        modifiers: egui::Modifiers::NONE,
+    };
+    harness.event(egui::Event::PointerMoved(from));
+    harness.step();
+    harness.event(button(from, true));
+    harness.step();
+    for i in 1..=12 {
+        harness.event(egui::Event::PointerMoved(from + by * (i as f32 / 12.0)));
+        harness.step();
+    }
+    harness.event(button(from + by, false));
+    steps(harness, 3);
+}
+
 #[test]
 fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
     let dir = tempfile::tempdir().unwrap();
@@ -243,29 +307,7 @@ fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
 
     // Keyboard over the canvas: Shift+click the noise node's header to select it, Shift+D
     // duplicates it, Ctrl+C / Ctrl+V paste another copy, X deletes the selected node.
-    let header = {
-        let node_editor = harness.state().node_editor();
-        let top = node_editor.node_position("noise_texture").unwrap();
-        let left = pin(&harness, "noise_texture", "vector", true);
-        let right = pin(&harness, "noise_texture", "color", false);
-        egui::pos2((left.x + right.x) / 2.0, top.y + (right.y - top.y) * 0.3)
-    };
-    harness.event(egui::Event::PointerMoved(header));
-    harness.step();
-    // Snarl selects with Shift+click (a plain click only raises the node).
-    for pressed in [true, false] {
-        harness.event_modifiers(
-            egui::Event::PointerButton {
-                pos: header,
-                button: egui::PointerButton::Primary,
-                pressed,
-                modifiers: egui::Modifiers::SHIFT,
-            },
-            egui::Modifiers::SHIFT,
-        );
-        harness.step();
-    }
-    steps(&mut harness, 2);
+    select_noise(&mut harness);
     harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::D);
     steps(&mut harness, 3);
     let duplicated = graph(harness.state());
@@ -295,4 +337,97 @@ fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
         Input::Link(Link::new("noise_texture", "color")),
         "undo restores the node and its wires"
     );
+}
+
+#[test]
+fn ranges_mute_reroute_and_select_all_on_the_canvas() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.get_by_label("block").click();
+    steps(&mut harness, 3);
+    add_from_menu(
+        &mut harness,
+        egui::vec2(30.0, 40.0),
+        "noise",
+        "Noise Texture",
+    );
+    let start = graph(harness.state());
+    assert_eq!(start.nodes["noise_texture"].kind, "noise_texture");
+
+    // Dragging the noise scale far left stops at its hard minimum, 0.
+    let field = harness
+        .get_all_by_role_and_label(Role::SpinButton, "scale")
+        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
+        .expect("the noise texture's scale field (5 by default)")
+        .rect();
+    // Accessibility reports the canvas's widgets in canvas coordinates.
+    let at = harness
+        .state()
+        .node_editor()
+        .canvas_to_screen(field.center());
+    mouse_drag(&mut harness, at, egui::vec2(-600.0, 0.0));
+    let dragged = graph(harness.state());
+    assert_eq!(
+        dragged.nodes["noise_texture"].inputs.get("scale"),
+        Some(&Input::from(0.0)),
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+
+    // M mutes the selected node, as one undo step.
+    select_noise(&mut harness);
+    harness.key_press(egui::Key::M);
+    steps(&mut harness, 3);
+    assert!(graph(harness.state()).nodes["noise_texture"].muted);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 2);
+    assert_eq!(graph(harness.state()), dragged, "undo unmutes");
+
+    // A selects every node, Alt+A none (snarl's own selection, the noise, included): X
+    // then deletes nothing.
+    harness.key_press(egui::Key::A);
+    steps(&mut harness, 2);
+    harness.key_press_modifiers(egui::Modifiers::ALT, egui::Key::A);
+    steps(&mut harness, 2);
+    harness.key_press(egui::Key::X);
+    steps(&mut harness, 3);
+    assert_eq!(graph(harness.state()), dragged, "nothing is selected");
+    // A then X deletes every node (delete protects none, the output included, as
+    // Blender's); undo restores them all.
+    harness.key_press(egui::Key::A);
+    steps(&mut harness, 2);
+    harness.key_press(egui::Key::X);
+    steps(&mut harness, 3);
+    assert!(
+        graph(harness.state()).nodes.is_empty(),
+        "{:?}",
+        graph(harness.state()).nodes.keys()
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 3);
+    assert_eq!(graph(harness.state()), dragged, "undo restores every node");
+
+    // A reroute from the add menu's Layout entries, wired between the noise and the base
+    // colour: the material compiles.
+    add_from_menu(&mut harness, egui::vec2(360.0, 60.0), "reroute", "Reroute");
+    assert_eq!(graph(harness.state()).nodes["reroute"].kind, "reroute");
+    steps(&mut harness, 2);
+    drag(
+        &mut harness,
+        ("noise_texture", "color"),
+        ("reroute", "input"),
+    );
+    drag(
+        &mut harness,
+        ("reroute", "output"),
+        ("surface", "base_color"),
+    );
+    let rerouted = graph(harness.state());
+    assert_eq!(
+        rerouted.nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("reroute", "output")),
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+    let material = harness.state().node_editor().material().unwrap();
+    assert!(harness.state().document().graph_error(material).is_none());
 }

@@ -14,7 +14,7 @@
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::material::graph::{GROUP, GROUP_PARAM};
+use crate::material::graph::{GROUP, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
 use crate::material::nodes::{self, ParamKind};
 use crate::material::{Graph, Input, Link, Node, Param, SocketType};
 
@@ -39,6 +39,8 @@ pub enum GraphEdit {
         param: String,
         value: Option<Param>,
     },
+    /// Mutes or unmutes a node (Blender's M: its outputs pass its inputs through).
+    SetMuted { node: String, muted: bool },
     /// Sets where nodes are drawn.
     MoveNodes(Vec<(String, Option<[f32; 2]>)>),
     /// Sets which node is the material's output (`None`: the only `material_output`).
@@ -125,6 +127,11 @@ impl GraphEdit {
                 };
                 match &value {
                     Some(Input::Link(link)) => check_link(graph, link, &node, &input, to_ty)?,
+                    Some(Input::Value(_)) if target.kind == REROUTE => {
+                        return Err(format!(
+                            "\"{node}\" is a reroute: it passes a wire on and holds no value"
+                        ));
+                    }
                     Some(Input::Value(v)) => {
                         let finite = match v {
                             crate::material::Value::Float(x) => x.is_finite(),
@@ -133,6 +140,17 @@ impl GraphEdit {
                         };
                         if !finite {
                             return Err(format!("input \"{input}\" of \"{node}\" must be finite"));
+                        }
+                        let range = nodes::find(&target.kind)
+                            .and_then(|d| d.input(&input))
+                            .and_then(|s| s.range);
+                        if let (crate::material::Value::Float(x), Some(range)) = (v, range) {
+                            if !range.contains(*x) {
+                                return Err(format!(
+                                    "input \"{input}\" of \"{node}\" takes {}, not {x}",
+                                    range.describe()
+                                ));
+                            }
                         }
                         if to_ty == SocketType::Bsdf {
                             return Err(format!(
@@ -168,6 +186,13 @@ impl GraphEdit {
                     param,
                     value: old,
                 })
+            }
+            GraphEdit::SetMuted { node, muted } => {
+                let Some(target) = graph.nodes.get_mut(&node) else {
+                    return Err(format!("no node \"{node}\""));
+                };
+                let old = std::mem::replace(&mut target.muted, muted);
+                Ok(GraphEdit::SetMuted { node, muted: old })
             }
             GraphEdit::MoveNodes(moves) => {
                 if let Some((id, _)) = moves.iter().find(|(id, _)| !graph.nodes.contains_key(id)) {
@@ -229,9 +254,18 @@ pub struct Sockets {
     pub outputs: Vec<(String, SocketType)>,
 }
 
-/// The sockets of `node` in `graph`: its library declaration's, or for a group node its
-/// group's interface. An unknown type or group is an error naming it.
+/// The sockets of `node` in `graph`: its library declaration's, for a group node its
+/// group's interface, for a reroute one input and one output of the type wired into it
+/// ([`reroute_type`]; drawn as a float while nothing is). An unknown type or group is an
+/// error naming it.
 pub fn sockets_of(graph: &Graph, node: &Node) -> Result<Sockets, String> {
+    if node.kind == REROUTE {
+        let ty = reroute_type(graph, node).unwrap_or(SocketType::Float);
+        return Ok(Sockets {
+            inputs: vec![(REROUTE_INPUT.to_owned(), ty)],
+            outputs: vec![(REROUTE_OUTPUT.to_owned(), ty)],
+        });
+    }
     if node.kind == GROUP {
         let Some(Param::Text(name)) = node.params.get(GROUP_PARAM) else {
             return Err("a group node needs its \"group\" parameter".into());
@@ -257,8 +291,61 @@ fn named<'a>(sockets: impl Iterator<Item = (&'a str, SocketType)>) -> Vec<(Strin
     sockets.map(|(n, t)| (n.to_owned(), t)).collect()
 }
 
+/// The type of what is wired into a reroute (through chains of reroutes), or `None` when
+/// nothing is: the type its output carries.
+pub fn reroute_type(graph: &Graph, node: &Node) -> Option<SocketType> {
+    let mut node = node;
+    // A chain longer than the graph loops; its type is none.
+    for _ in 0..=graph.nodes.len() {
+        let Some(Input::Link(link)) = node.inputs.get(REROUTE_INPUT) else {
+            return None;
+        };
+        let source = graph.nodes.get(&link.node)?;
+        if source.kind != REROUTE {
+            return sockets_of(graph, source)
+                .ok()?
+                .outputs
+                .into_iter()
+                .find(|(n, _)| *n == link.socket)
+                .map(|(_, t)| t);
+        }
+        node = source;
+    }
+    None
+}
+
+/// The inputs (node, input, type) that read reroute `id`, through chains of reroutes.
+fn reroute_consumers(graph: &Graph, id: &str) -> Vec<(String, String, SocketType)> {
+    let mut found = Vec::new();
+    let mut seen = BTreeSet::new();
+    let mut stack = vec![id.to_owned()];
+    while let Some(reroute) = stack.pop() {
+        if !seen.insert(reroute.clone()) {
+            continue;
+        }
+        for (other, n) in &graph.nodes {
+            for (input, value) in &n.inputs {
+                if !matches!(value, Input::Link(l) if l.node == reroute) {
+                    continue;
+                }
+                if n.kind == REROUTE {
+                    stack.push(other.clone());
+                } else if let Some((_, ty)) = sockets_of(graph, n)
+                    .ok()
+                    .and_then(|s| s.inputs.into_iter().find(|(name, _)| name == input))
+                {
+                    found.push((other.clone(), input.clone(), ty));
+                }
+            }
+        }
+    }
+    found
+}
+
 /// Why a wire from `link` into input `input` (of type `to_ty`) of node `node` is refused,
 /// if it is: a missing node or socket, types the compiler does not convert, or a cycle.
+/// Through reroutes the types checked are the real ones: what a reroute's source feeds
+/// (an unconnected reroute feeds any input its default), and every input a reroute feeds.
 fn check_link(
     graph: &Graph,
     link: &Link,
@@ -275,16 +362,28 @@ fn check_link(
         .find(|(n, _)| *n == link.socket)
         .map(|&(_, t)| t)
         .ok_or_else(|| format!("node \"{}\" has no output \"{}\"", link.node, link.socket))?;
-    if from_ty.converts_to(to_ty).is_none() {
-        return Err(format!(
-            "cannot connect {} output \"{}\" of \"{}\" to {} input \"{input}\" of \"{node}\": a {} does not convert to a {}",
-            from_ty.name(),
-            link.socket,
-            link.node,
-            to_ty.name(),
-            from_ty.name(),
-            to_ty.name(),
-        ));
+    let from_ty = if source.kind == REROUTE {
+        reroute_type(graph, source)
+    } else {
+        Some(from_ty)
+    };
+    let targets = match graph.nodes.get(node) {
+        Some(n) if n.kind == REROUTE => reroute_consumers(graph, node),
+        _ => vec![(node.to_owned(), input.to_owned(), to_ty)],
+    };
+    for (node, input, to_ty) in targets {
+        let Some(from_ty) = from_ty else { break };
+        if from_ty.converts_to(to_ty).is_none() {
+            return Err(format!(
+                "cannot connect {} output \"{}\" of \"{}\" to {} input \"{input}\" of \"{node}\": a {} does not convert to a {}",
+                from_ty.name(),
+                link.socket,
+                link.node,
+                to_ty.name(),
+                from_ty.name(),
+                to_ty.name(),
+            ));
+        }
     }
     if link.node == node || depends_on(graph, &link.node, node) {
         return Err(format!(
@@ -656,6 +755,77 @@ mod tests {
     }
 
     #[test]
+    fn a_value_outside_the_declared_range_is_refused() {
+        let mut g = marble();
+        g.add("noise", Node::new("noise_texture"));
+        let before = g.clone();
+        let set = |x: f32| GraphEdit::SetInput {
+            node: "noise".into(),
+            input: "scale".into(),
+            value: Some(Input::Value(Value::Float(x))),
+        };
+        let e = set(-0.5).apply(&mut g).unwrap_err();
+        assert!(e.contains("scale") && e.contains("[0, 1000]"), "{e}");
+        assert_eq!(g, before);
+        set(0.0).apply(&mut g).unwrap();
+    }
+
+    #[test]
+    fn muting_is_one_edit_that_reverts() {
+        let mut g = marble();
+        let before = g.clone();
+        let inverse = GraphEdit::SetMuted {
+            node: "ramp".into(),
+            muted: true,
+        }
+        .apply(&mut g)
+        .unwrap();
+        assert!(g.nodes["ramp"].muted);
+        inverse.apply(&mut g).unwrap();
+        assert_eq!(g, before);
+    }
+
+    #[test]
+    fn a_reroute_carries_the_type_wired_into_it() {
+        let mut g = marble();
+        g.add("reroute", Node::new(REROUTE));
+        // Unconnected, it takes any wire and feeds any input (its consumers' defaults).
+        GraphEdit::connect("reroute", REROUTE_OUTPUT, "surface", "roughness")
+            .apply(&mut g)
+            .unwrap();
+        GraphEdit::connect("ramp", "alpha", "reroute", REROUTE_INPUT)
+            .apply(&mut g)
+            .unwrap();
+        assert_eq!(
+            sockets_of(&g, &g.nodes["reroute"]).unwrap().outputs,
+            vec![(REROUTE_OUTPUT.to_owned(), SocketType::Float)]
+        );
+        // Its type is its source's: a float through it into a shader input is refused,
+        // and so is a source that its consumers cannot take.
+        let e = GraphEdit::connect("reroute", REROUTE_OUTPUT, "out", "surface")
+            .apply(&mut g)
+            .unwrap_err();
+        assert!(e.contains("float") && e.contains("bsdf"), "{e}");
+        GraphEdit::connect("reroute", REROUTE_OUTPUT, "surface", "roughness")
+            .apply(&mut g)
+            .unwrap();
+        let e = GraphEdit::connect("surface", "bsdf", "reroute", REROUTE_INPUT)
+            .apply(&mut g)
+            .unwrap_err();
+        assert!(e.contains("roughness"), "{e}");
+        // It holds no value.
+        let e = GraphEdit::SetInput {
+            node: "reroute".into(),
+            input: REROUTE_INPUT.into(),
+            value: Some(Input::Value(Value::Float(1.0))),
+        }
+        .apply(&mut g)
+        .unwrap_err();
+        assert!(e.contains("reroute"), "{e}");
+        assert!(crate::material::compile("m", &g, "material_0").is_ok());
+    }
+
+    #[test]
     fn bad_parameters_and_unknown_nodes_are_refused() {
         let mut g = marble();
         let e = GraphEdit::SetParam {
@@ -791,6 +961,7 @@ mod tests {
             Disconnect(usize, usize),
             SetValue(usize, usize, f32),
             Move(usize, f32, f32),
+            Mute(usize),
             Undo,
             Redo,
         }
@@ -807,6 +978,7 @@ mod tests {
                     .prop_map(|(a, b, v)| Action::SetValue(a, b, v)),
                 (n.clone(), -500.0f32..500.0, -500.0f32..500.0)
                     .prop_map(|(a, x, y)| Action::Move(a, x, y)),
+                n.clone().prop_map(Action::Mute),
                 Just(Action::Undo),
                 Just(Action::Redo),
             ]
@@ -821,10 +993,23 @@ mod tests {
             let sockets = |id: &str| sockets_of(g, &g.nodes[id]).unwrap_or_default();
             Some(match *action {
                 Action::Add(k) => {
-                    let def = pick(nodes::library(), k)?;
+                    // The library's nodes and reroutes.
+                    let kinds: Vec<&str> = nodes::library()
+                        .iter()
+                        .map(|d| d.kind)
+                        .chain([REROUTE])
+                        .collect();
+                    let kind = pick(&kinds, k)?;
                     GraphEdit::AddNode {
-                        id: fresh_id(g, def.kind),
-                        node: Node::new(def.kind),
+                        id: fresh_id(g, kind),
+                        node: Node::new(kind),
+                    }
+                }
+                Action::Mute(a) => {
+                    let node = pick(&ids, a)?;
+                    GraphEdit::SetMuted {
+                        muted: !g.nodes[&node].muted,
+                        node,
                     }
                 }
                 Action::Remove(a) => GraphEdit::RemoveNode { id: pick(&ids, a)? },

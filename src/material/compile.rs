@@ -1,6 +1,7 @@
 //! Material graph → WGSL.
 //!
-//! The passes, in order: flatten node groups → check node types, parameters and socket
+//! The passes, in order: flatten node groups, reroutes and muted nodes (links through
+//! them become links to what they pass) → check node types, parameters and socket
 //! types → find the output and reject cycles → keep only what reaches the output → fold
 //! constants → merge identical nodes → emit one WGSL function per material, its nodes in
 //! topological order. Every error names the material, the node and the socket.
@@ -21,7 +22,8 @@ use std::fmt::Write as _;
 use thiserror::Error;
 
 use super::graph::{
-    Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, SocketType, Value,
+    Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, REROUTE,
+    REROUTE_INPUT, REROUTE_OUTPUT, SocketType, Value,
 };
 use super::nodes::{self, Code, Default, Emit, MATERIAL_OUTPUT, NodeDef, ParamKind, Params};
 
@@ -89,6 +91,9 @@ pub struct CompiledMaterial {
 enum Src {
     Const(Value),
     Out(usize, usize),
+    /// A shading-point expression of the given type: the declared default of a muted
+    /// node's input that it passes through.
+    Implicit(&'static str, SocketType),
     Default,
 }
 
@@ -229,6 +234,9 @@ pub fn compile_value_with_textures(
     function: &str,
     textures: &mut BTreeMap<String, u32>,
 ) -> Result<CompiledMaterial, GraphError> {
+    if let Some((graph, at)) = muted_probe(graph, at) {
+        return compile_value_with_textures(material, &graph, &at, function, textures);
+    }
     let ctx = Ctx { material };
     let flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
@@ -262,6 +270,32 @@ pub fn compile_value_with_textures(
             (value, MaterialTraits::default())
         },
     )
+}
+
+/// For an output `at` of a muted node: the graph with a probe node ([`nodes::identity`]
+/// of the output's type) reading it, and the probe's output, so that a preview shows what
+/// the muted node passes on. `None` for a node that is not muted (or a type no probe
+/// carries: a muted node's two-component output is previewed as computed).
+fn muted_probe(graph: &Graph, at: &Link) -> Option<(Graph, Link)> {
+    let node = graph.nodes.get(&at.node).filter(|n| n.muted)?;
+    let ty = match node.kind.as_str() {
+        GROUP => {
+            let Some(Param::Text(name)) = node.params.get(GROUP_PARAM) else {
+                return None;
+            };
+            let group = graph.groups.get(name)?;
+            group.outputs.iter().find(|s| s.name == at.socket)?.ty
+        }
+        kind => nodes::find(kind)?.output(&at.socket)?.1.ty,
+    };
+    let (kind, input, output) = nodes::identity(ty)?;
+    let mut id = format!("{}~preview", at.node);
+    while graph.nodes.contains_key(&id) {
+        id.push('~');
+    }
+    let mut probe = graph.clone();
+    probe.add(&id, Node::new(kind).input(input, Input::Link(at.clone())));
+    Some((probe, Link::new(&id, output)))
 }
 
 // ------------------------------------------------------------------ flattening
@@ -352,6 +386,31 @@ impl<'a> Flattener<'a> {
                         depth: scope.depth + 1,
                     })?;
                 }
+                REROUTE => {
+                    for (name, input) in &node.inputs {
+                        if name != REROUTE_INPUT {
+                            return Err(self.ctx.err(
+                                Some(&full),
+                                Some(name),
+                                format!("a {REROUTE} has one input, \"{REROUTE_INPUT}\""),
+                            ));
+                        }
+                        if matches!(input, Input::Value(_)) {
+                            return Err(self.ctx.err(
+                                Some(&full),
+                                Some(name),
+                                format!("a {REROUTE} passes a link on; it holds no value"),
+                            ));
+                        }
+                    }
+                    if let Some(name) = node.params.keys().next() {
+                        return Err(self.ctx.err(
+                            Some(&full),
+                            Some(name),
+                            format!("a {REROUTE} has no parameters"),
+                        ));
+                    }
+                }
                 GROUP_INPUT => {
                     if scope.instance.is_none() {
                         return Err(self.ctx.err(
@@ -432,6 +491,13 @@ impl<'a> Flattener<'a> {
                 })?;
                 continue;
             }
+            if node.kind == REROUTE {
+                // Checked here so that an unused reroute's broken link is reported too.
+                if let Some(input) = node.inputs.get(REROUTE_INPUT) {
+                    self.source(scope, &full, REROUTE_INPUT, input, 0)?;
+                }
+                continue;
+            }
             let Some(&index) = self.index.get(&full) else {
                 continue;
             };
@@ -456,9 +522,11 @@ impl<'a> Flattener<'a> {
         hops: usize,
     ) -> Result<Src, GraphError> {
         if hops > 64 * MAX_GROUP_DEPTH {
-            return Err(self
-                .ctx
-                .err(Some(at), Some(socket), "links through groups loop".into()));
+            return Err(self.ctx.err(
+                Some(at),
+                Some(socket),
+                "links through groups, reroutes or muted nodes loop".into(),
+            ));
         }
         let link = match input {
             Input::Value(v) => return Ok(Src::Const(v.clone())),
@@ -473,8 +541,46 @@ impl<'a> Flattener<'a> {
         };
         let full = format!("{}{}", scope.prefix, link.node);
         match target.kind.as_str() {
+            REROUTE => {
+                if link.socket != REROUTE_OUTPUT {
+                    return Err(self.ctx.err(
+                        Some(at),
+                        Some(socket),
+                        format!("link to \"{link}\": a {REROUTE}'s output is \"{REROUTE_OUTPUT}\""),
+                    ));
+                }
+                match target.inputs.get(REROUTE_INPUT) {
+                    Some(input) => self.source(scope, at, socket, input, hops + 1),
+                    None => Ok(Src::Default),
+                }
+            }
             GROUP => {
                 let (_, group) = self.group(&full, target)?;
+                if target.muted {
+                    let Some(out) = group.outputs.iter().find(|s| s.name == link.socket) else {
+                        return Err(self.ctx.err(
+                            Some(at),
+                            Some(socket),
+                            format!(
+                                "link to \"{link}\": the group has no output \"{}\"",
+                                link.socket
+                            ),
+                        ));
+                    };
+                    let inputs = group.inputs.iter().map(|s| {
+                        let declared = s.default.clone().map_or_else(|| zero(s.ty), Src::Const);
+                        (s.name.as_str(), s.ty, declared)
+                    });
+                    return self.muted_source(
+                        scope,
+                        at,
+                        socket,
+                        (&full, target),
+                        inputs,
+                        out.ty,
+                        hops,
+                    );
+                }
                 let Some(inner) = group.links.get(&link.socket) else {
                     return Err(self.ctx.err(
                         Some(at),
@@ -526,6 +632,16 @@ impl<'a> Flattener<'a> {
                 let index = self.index[&full];
                 let def = self.nodes[index].def;
                 match def.output(&link.socket) {
+                    Some((_, out)) if target.muted => {
+                        let inputs = def.inputs.iter().map(|s| {
+                            let declared = match &s.default {
+                                Default::Value(v) => Src::Const(v.clone()),
+                                Default::Implicit(expr, _) => Src::Implicit(expr, s.ty),
+                            };
+                            (s.name, s.ty, declared)
+                        });
+                        self.muted_source(scope, at, socket, (&full, target), inputs, out.ty, hops)
+                    }
                     Some((o, _)) => Ok(Src::Out(index, o)),
                     None => Err(self.ctx.err(
                         Some(at),
@@ -540,6 +656,65 @@ impl<'a> Flattener<'a> {
                 }
             }
         }
+    }
+}
+
+impl<'a> Flattener<'a> {
+    /// What an output of type `ty` of the muted node `target` (id `id`, in `scope`) passes
+    /// to input `socket` of node `at`: the first of the node's `inputs` (name, type, what
+    /// it reads when not given) of type `ty`, resolved as a link to it would be; else the
+    /// type's zero.
+    #[allow(clippy::too_many_arguments)]
+    fn muted_source<'i>(
+        &self,
+        scope: &Scope<'a>,
+        at: &str,
+        socket: &str,
+        (id, target): (&str, &'a Node),
+        mut inputs: impl Iterator<Item = (&'i str, SocketType, Src)>,
+        ty: SocketType,
+        hops: usize,
+    ) -> Result<Src, GraphError> {
+        let consumer = self
+            .index
+            .get(at)
+            .and_then(|&n| self.nodes[n].def.input(socket))
+            .map_or(ty, |s| s.ty);
+        // Muting must not hide a wire the compiler would refuse.
+        if ty.converts_to(consumer).is_none() {
+            return Err(self.ctx.err(
+                Some(at),
+                Some(socket),
+                format!(
+                    "a {} output (of muted node {id}) cannot feed a {} input",
+                    ty.name(),
+                    consumer.name()
+                ),
+            ));
+        }
+        let src = match inputs.find(|(_, t, _)| *t == ty) {
+            Some((name, _, declared)) => match target.inputs.get(name) {
+                Some(input) => self.source(scope, at, socket, input, hops + 1)?,
+                None => declared,
+            },
+            None => zero(ty),
+        };
+        // A constant is in the muted socket's type; the consumer reads it in its own.
+        Ok(match src {
+            Src::Const(v) => Src::Const(convert_const(&v, ty, consumer)),
+            other => other,
+        })
+    }
+}
+
+/// The zero of a socket type, as a source: 0, black; a shader has none, and its consumer
+/// reads its own default.
+fn zero(ty: SocketType) -> Src {
+    match ty {
+        SocketType::Float => Src::Const(Value::Float(0.0)),
+        SocketType::Vec2 => Src::Const(Value::Vec2([0.0; 2])),
+        SocketType::Vector | SocketType::Color => Src::Const(Value::Vec3([0.0; 3])),
+        SocketType::Bsdf => Src::Default,
     }
 }
 
@@ -658,6 +833,23 @@ fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
                     if !finite {
                         return fail("values must be finite".into());
                     }
+                    if let (Value::Float(x), Some(range)) = (v, socket.range) {
+                        if !range.contains(*x) {
+                            return fail(format!(
+                                "the value {x} lies outside the input's range {}",
+                                range.describe()
+                            ));
+                        }
+                    }
+                }
+                Src::Implicit(_, from) => {
+                    if from.converts_to(socket.ty).is_none() {
+                        return fail(format!(
+                            "a {} cannot feed a {} input",
+                            from.name(),
+                            socket.ty.name()
+                        ));
+                    }
                 }
                 Src::Default => {}
             }
@@ -775,7 +967,7 @@ fn constant(node: &FlatNode, input: usize) -> Option<Value> {
             Default::Value(v) => Some(v.clone()),
             Default::Implicit(..) => None,
         },
-        Src::Out(..) => None,
+        Src::Out(..) | Src::Implicit(..) => None,
     }
 }
 
@@ -1027,6 +1219,10 @@ impl Emitter<'_> {
                 output_type(self.flat, *m, *o),
                 socket.ty,
             ),
+            Src::Implicit(expr, from) => {
+                self.calls.extend(called_functions(expr));
+                convert((*expr).to_owned(), *from, socket.ty)
+            }
             Src::Default => match &socket.default {
                 Default::Value(v) => self.constant_expr(v, socket.ty),
                 Default::Implicit(expr, _) => {
@@ -1162,3 +1358,8 @@ impl Emit for NodeEmitter<'_, '_> {
 pub fn link(node: &str, socket: &str) -> Input {
     Input::Link(Link::new(node, socket))
 }
+
+// The tests name library nodes, which this file does not (a test checks): they live in
+// `compile/tests.rs`.
+#[cfg(test)]
+mod tests;

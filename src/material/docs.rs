@@ -31,6 +31,14 @@ mix. `groups: { \"name\": (inputs: [(name: \"x\", type: float, default: 1.0)], o
 [(name: \"y\", type: color)], nodes: {...}, links: { \"y\": \"inner.socket\" }) }` declares a
 node group, used as `(type: \"group\", params: { \"group\": \"name\" })`; inside, node type
 `group_input` has one output per group input.
+
+A float input's range is the values a constant may take: the compiler reports a value
+outside it, naming node and socket (a link may compute any value; the Principled BSDF
+clamps what it is fed). `(type: \"reroute\", inputs: { \"input\": \"node.output\" })` passes
+a wire on with the type of what feeds it (its output is `output`; it compiles to nothing).
+`muted: true` mutes a node: each output passes the node's first input of the same type (a
+link, a value or that input's default), or 0 / black when it has none (a shader output:
+what its consumer reads unconnected).
 ";
 
 fn value(v: &Value) -> String {
@@ -51,18 +59,20 @@ pub fn nodes_markdown() -> String {
         }
         let _ = writeln!(out, "### {} (`{}`)\n\n{}\n", def.label, def.kind, def.doc);
         if !def.inputs.is_empty() {
-            out.push_str("| input | type | default | |\n|---|---|---|---|\n");
+            out.push_str("| input | type | default | range | |\n|---|---|---|---|---|\n");
             for s in &def.inputs {
                 let default = match &s.default {
                     Default::Value(v) => value(v),
                     Default::Implicit(_, what) => (*what).to_owned(),
                 };
+                let range = s.range.map(|r| r.describe()).unwrap_or_default();
                 let _ = writeln!(
                     out,
-                    "| `{}` | {} | {} | {} |",
+                    "| `{}` | {} | {} | {} | {} |",
                     s.name,
                     s.ty.name(),
                     default,
+                    range,
                     s.doc
                 );
             }

@@ -180,6 +180,11 @@ pub struct Node {
     /// the compiler.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub position: Option<[f32; 2]>,
+    /// A muted node computes nothing (Blender's M): each of its outputs passes the node's
+    /// first input of the output's type, or the type's zero (black, 0; for a shader, what
+    /// the consumer reads unconnected) when it has none. Saved only when set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub muted: bool,
 }
 
 impl Node {
@@ -237,6 +242,16 @@ pub const GROUP: &str = "group";
 pub const GROUP_PARAM: &str = "group";
 /// The node type that, inside a group, has one output per exposed input.
 pub const GROUP_INPUT: &str = "group_input";
+
+/// The node type that passes one wire on unchanged, to route wires (Blender's reroute): it
+/// has input [`REROUTE_INPUT`] and output [`REROUTE_OUTPUT`], of the type of what is wired
+/// into it, and compiles to nothing (a link through it is a link to its source; an
+/// unconnected one gives its consumers their defaults). It holds no value.
+pub const REROUTE: &str = "reroute";
+/// A reroute's input.
+pub const REROUTE_INPUT: &str = "input";
+/// A reroute's output.
+pub const REROUTE_OUTPUT: &str = "output";
 
 /// A graph used as a node (`type: "group", params: { "group": "name" }`). Inside, node
 /// type `group_input` has one output per exposed input; `outputs` says which inner

@@ -254,3 +254,20 @@ pub fn resolve_files(graph: &mut Graph, base: &Path) {
         }
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn muted_is_saved_only_when_set_and_reads_back() {
+        let mut graph = Graph::default();
+        graph.add("value", Node::new("value"));
+        let plain = material_text("m", &graph).unwrap();
+        assert!(!plain.contains("muted"), "{plain}");
+        graph.nodes.get_mut("value").unwrap().muted = true;
+        let muted = material_text("m", &graph).unwrap();
+        assert!(muted.contains("muted: true"), "{muted}");
+        assert_eq!(parse_material(&muted, "m.kmat").unwrap().1, graph);
+    }
+}

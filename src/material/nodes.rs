@@ -31,13 +31,91 @@ pub enum Default {
     Implicit(&'static str, &'static str),
 }
 
+/// An input's declaration: name, type, what it reads unconnected, and for a float its
+/// range.
 #[derive(Clone, Debug)]
 pub struct SocketDef {
     pub name: &'static str,
     pub ty: SocketType,
     pub default: Default,
+    /// The values a float input takes (every float input declares one; a library test
+    /// checks it holds the default); `None` for other types.
+    pub range: Option<FloatRange>,
     pub doc: &'static str,
 }
+
+/// The values a float input takes, as Blender declares its sockets' `min`/`max` and
+/// `soft_min`/`soft_max`.
+///
+/// - The hard range `[min, max]` bounds a constant: the compiler rejects a graph whose
+///   constant lies outside it, naming the node and socket (a loaded file is reported, never
+///   silently changed), an edit setting one is refused, and the editor's field clamps to
+///   it. Values a link computes are not limited: every node takes any finite input, as
+///   Blender's do (the Principled BSDF clamps what it is fed to its parameters' ranges).
+/// - The soft range `[soft_min, soft_max]`, inside the hard one, is where dragging the
+///   field stops (typing reaches the hard range) and what sets the drag's speed.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct FloatRange {
+    pub min: f32,
+    pub max: f32,
+    pub soft_min: f32,
+    pub soft_max: f32,
+}
+
+impl FloatRange {
+    /// `[min, max]`, with the soft range the same.
+    pub const fn new(min: f32, max: f32) -> Self {
+        Self {
+            min,
+            max,
+            soft_min: min,
+            soft_max: max,
+        }
+    }
+
+    /// The range with soft range `[soft_min, soft_max]`.
+    pub const fn soft(self, soft_min: f32, soft_max: f32) -> Self {
+        Self {
+            soft_min,
+            soft_max,
+            ..self
+        }
+    }
+
+    /// Whether `x` lies in the hard range.
+    pub fn contains(&self, x: f32) -> bool {
+        self.min <= x && x <= self.max
+    }
+
+    /// The editor's drag speed, in value per point: the soft range over 400 points, at
+    /// most 0.05 (a wide or unbounded range still moves by small steps).
+    pub fn drag_speed(&self) -> f64 {
+        (f64::from(self.soft_max) - f64::from(self.soft_min)).min(20.0) / 400.0
+    }
+
+    /// The hard range as the docs and messages write it: `[0, 1]`, `≥ 0`, `any`.
+    pub fn describe(&self) -> String {
+        match (self.min.is_finite(), self.max.is_finite()) {
+            (true, true) => format!("[{}, {}]", self.min, self.max),
+            (true, false) => format!("≥ {}", self.min),
+            (false, true) => format!("≤ {}", self.max),
+            (false, false) => "any".to_owned(),
+        }
+    }
+}
+
+/// Any finite number (Blender's math inputs).
+pub const ANY: FloatRange = FloatRange::new(f32::NEG_INFINITY, f32::INFINITY);
+/// A factor, an amount, a roughness: `[0, 1]`.
+pub const UNIT: FloatRange = FloatRange::new(0.0, 1.0);
+/// A texture's scale: at least 0 (a negative scale only mirrors), dragged up to 100.
+pub const TEXTURE_SCALE: FloatRange = FloatRange::new(0.0, 1000.0).soft(0.0, 100.0);
+/// Octaves of noise, `[0, 15]` as Blender's.
+pub const DETAIL: FloatRange = FloatRange::new(0.0, 15.0);
+/// Offsets and distortions, `[-1000, 1000]`, dragged within ±10.
+pub const LARGE: FloatRange = FloatRange::new(-1000.0, 1000.0).soft(-10.0, 10.0);
+/// An index of refraction: at least 1, dragged within [1, 3].
+pub const IOR: FloatRange = FloatRange::new(1.0, 1000.0).soft(1.0, 3.0);
 
 #[derive(Clone, Debug)]
 pub struct OutputDef {
@@ -188,12 +266,24 @@ pub fn find(kind: &str) -> Option<&'static NodeDef> {
     library().iter().find(|d| d.kind == kind)
 }
 
+/// The node that passes a value of type `ty` on unchanged: its type, input and output (the
+/// Value, RGB and Vector nodes); `None` for types none carries.
+pub fn identity(ty: SocketType) -> Option<(&'static str, &'static str, &'static str)> {
+    match ty {
+        SocketType::Float => Some(("value", "value", "value")),
+        SocketType::Color => Some(("rgb", "color", "color")),
+        SocketType::Vector => Some(("vector", "vector", "vector")),
+        SocketType::Vec2 | SocketType::Bsdf => None,
+    }
+}
+
 // Declaration helpers: sockets by type, with their defaults.
-fn float(name: &'static str, v: f32, doc: &'static str) -> SocketDef {
+fn float(name: &'static str, v: f32, range: FloatRange, doc: &'static str) -> SocketDef {
     SocketDef {
         name,
         ty: SocketType::Float,
         default: Default::Value(Value::Float(v)),
+        range: Some(range),
         doc,
     }
 }
@@ -203,6 +293,7 @@ fn color(name: &'static str, v: [f32; 3], doc: &'static str) -> SocketDef {
         name,
         ty: SocketType::Color,
         default: Default::Value(Value::Vec3(v)),
+        range: None,
         doc,
     }
 }
@@ -212,6 +303,7 @@ fn vector(name: &'static str, v: [f32; 3], doc: &'static str) -> SocketDef {
         name,
         ty: SocketType::Vector,
         default: Default::Value(Value::Vec3(v)),
+        range: None,
         doc,
     }
 }
@@ -227,6 +319,7 @@ fn implicit(
         name,
         ty: SocketType::Vector,
         default: Default::Implicit(expr, what),
+        range: None,
         doc,
     }
 }
@@ -485,7 +578,7 @@ fn build() -> Vec<NodeDef> {
             category: "Input",
             doc: "Dielectric Fresnel reflectance toward the viewer.",
             inputs: vec![
-                float("ior", 1.5, "index of refraction"),
+                float("ior", 1.5, IOR, "index of refraction"),
                 implicit("normal", "sp.n", "the shading normal", "normal"),
             ],
             outputs: vec![out("fac", Float, "", "reflectance")],
@@ -500,7 +593,7 @@ fn build() -> Vec<NodeDef> {
             category: "Input",
             doc: "Blending weights for layering, from the view angle.",
             inputs: vec![
-                float("blend", 0.5, "bias toward the edge"),
+                float("blend", 0.5, UNIT, "bias toward the edge"),
                 implicit("normal", "sp.n", "the shading normal", "normal"),
             ],
             outputs: vec![
@@ -522,7 +615,7 @@ fn build() -> Vec<NodeDef> {
             label: "Value",
             category: "Input",
             doc: "A constant number.",
-            inputs: vec![float("value", 0.5, "the number")],
+            inputs: vec![float("value", 0.5, ANY, "the number")],
             outputs: vec![out("value", Float, "", "the number")],
             params: vec![],
             traits: None,
@@ -611,7 +704,7 @@ fn build() -> Vec<NodeDef> {
                 ),
                 color("color1", [0.8; 3], "colour of the cells where fac = 1"),
                 color("color2", [0.2; 3], "colour of the other cells"),
-                float("scale", 5.0, "cells per unit"),
+                float("scale", 5.0, TEXTURE_SCALE, "cells per unit"),
             ],
             outputs: tex_out(),
             params: vec![],
@@ -660,17 +753,24 @@ fn build() -> Vec<NodeDef> {
                     "generated coordinates",
                     TEXTURE_VECTOR,
                 ),
-                float("scale", 5.0, "frequency of the base octave"),
+                float("scale", 5.0, TEXTURE_SCALE, "frequency of the base octave"),
                 float(
                     "detail",
                     2.0,
+                    DETAIL,
                     "octaves beyond the first, 0 to 15 (fractions blend)",
                 ),
-                float("roughness", 0.5, "amplitude ratio between octaves"),
-                float("lacunarity", 2.0, "frequency ratio between octaves"),
+                float("roughness", 0.5, UNIT, "amplitude ratio between octaves"),
+                float(
+                    "lacunarity",
+                    2.0,
+                    FloatRange::new(0.0, 1000.0).soft(0.0, 5.0),
+                    "frequency ratio between octaves",
+                ),
                 float(
                     "distortion",
                     0.0,
+                    LARGE,
                     "displaces the coordinates by noise first",
                 ),
             ],
@@ -694,12 +794,18 @@ fn build() -> Vec<NodeDef> {
                     "generated coordinates",
                     TEXTURE_VECTOR,
                 ),
-                float("scale", 5.0, "cells per unit"),
-                float("smoothness", 1.0, "blend width of smooth F1"),
-                float("exponent", 0.5, "exponent of the Minkowski metric"),
+                float("scale", 5.0, TEXTURE_SCALE, "cells per unit"),
+                float("smoothness", 1.0, UNIT, "blend width of smooth F1"),
+                float(
+                    "exponent",
+                    0.5,
+                    FloatRange::new(0.0, 32.0),
+                    "exponent of the Minkowski metric",
+                ),
                 float(
                     "randomness",
                     1.0,
+                    UNIT,
                     "how far feature points stray from the cell corner, 0 to 1",
                 ),
             ],
@@ -753,12 +859,22 @@ fn build() -> Vec<NodeDef> {
                     "generated coordinates",
                     TEXTURE_VECTOR,
                 ),
-                float("scale", 5.0, "waves per unit"),
-                float("distortion", 0.0, "amount of noise added to the phase"),
-                float("detail", 2.0, "octaves of the distortion noise"),
-                float("detail_scale", 1.0, "scale of the distortion noise"),
-                float("detail_roughness", 0.5, "roughness of the distortion noise"),
-                float("phase_offset", 0.0, "shifts the waves"),
+                float("scale", 5.0, TEXTURE_SCALE, "waves per unit"),
+                float(
+                    "distortion",
+                    0.0,
+                    LARGE,
+                    "amount of noise added to the phase",
+                ),
+                float("detail", 2.0, DETAIL, "octaves of the distortion noise"),
+                float("detail_scale", 1.0, LARGE, "scale of the distortion noise"),
+                float(
+                    "detail_roughness",
+                    0.5,
+                    UNIT,
+                    "roughness of the distortion noise",
+                ),
+                float("phase_offset", 0.0, LARGE, "shifts the waves"),
             ],
             outputs: tex_out(),
             params: vec![
@@ -795,24 +911,56 @@ fn build() -> Vec<NodeDef> {
                 color("color1", [0.8; 3], "brick colour"),
                 color("color2", [0.2; 3], "second brick colour, mixed in by bias"),
                 color("mortar", [0.0; 3], "mortar colour"),
-                float("scale", 5.0, "overall scale"),
-                float("mortar_size", 0.02, "mortar width"),
-                float("mortar_smooth", 0.1, "softness of the mortar's edge"),
+                float("scale", 5.0, TEXTURE_SCALE, "overall scale"),
+                float(
+                    "mortar_size",
+                    0.02,
+                    FloatRange::new(0.0, 0.125),
+                    "mortar width",
+                ),
+                float("mortar_smooth", 0.1, UNIT, "softness of the mortar's edge"),
                 float(
                     "bias",
                     0.0,
+                    FloatRange::new(-1.0, 1.0),
                     "bias of the brick colour between colour 1 and 2, -1 to 1",
                 ),
-                float("brick_width", 0.5, "brick length"),
-                float("row_height", 0.25, "brick height"),
+                float(
+                    "brick_width",
+                    0.5,
+                    FloatRange::new(0.01, 100.0).soft(0.01, 2.0),
+                    "brick length",
+                ),
+                float(
+                    "row_height",
+                    0.25,
+                    FloatRange::new(0.01, 100.0).soft(0.01, 2.0),
+                    "brick height",
+                ),
                 float(
                     "offset",
                     0.5,
+                    UNIT,
                     "offset of alternate rows, as a fraction of a brick",
                 ),
-                float("offset_frequency", 2.0, "every how many rows are offset"),
-                float("squash", 1.0, "scales the width of alternate rows"),
-                float("squash_frequency", 2.0, "every how many rows are squashed"),
+                float(
+                    "offset_frequency",
+                    2.0,
+                    FloatRange::new(1.0, 99.0).soft(1.0, 10.0),
+                    "every how many rows are offset",
+                ),
+                float(
+                    "squash",
+                    1.0,
+                    FloatRange::new(0.0, 99.0).soft(0.0, 10.0),
+                    "scales the width of alternate rows",
+                ),
+                float(
+                    "squash_frequency",
+                    2.0,
+                    FloatRange::new(1.0, 99.0).soft(1.0, 10.0),
+                    "every how many rows are squashed",
+                ),
             ],
             outputs: vec![
                 out("color", Color, ".color", "colour"),
@@ -852,11 +1000,12 @@ fn build() -> Vec<NodeDef> {
             category: "Math",
             doc: "A scalar operation. Safe as in Blender: division by zero, logarithms and roots of invalid arguments give 0.",
             inputs: vec![
-                float("a", 0.5, "first operand"),
-                float("b", 0.5, "second operand"),
+                float("a", 0.5, ANY, "first operand"),
+                float("b", 0.5, ANY, "second operand"),
                 float(
                     "c",
                     0.5,
+                    ANY,
                     "third operand (multiply_add, compare's epsilon, wrap, smooth min/max)",
                 ),
             ],
@@ -879,9 +1028,9 @@ fn build() -> Vec<NodeDef> {
             category: "Math",
             doc: "Limits a value to a range.",
             inputs: vec![
-                float("value", 1.0, "input"),
-                float("min", 0.0, "lower bound"),
-                float("max", 1.0, "upper bound"),
+                float("value", 1.0, ANY, "input"),
+                float("min", 0.0, ANY, "lower bound"),
+                float("max", 1.0, ANY, "upper bound"),
             ],
             outputs: vec![out("result", Float, "", "clamped value")],
             params: vec![choice(
@@ -899,12 +1048,17 @@ fn build() -> Vec<NodeDef> {
             category: "Math",
             doc: "Remaps a value from one range to another.",
             inputs: vec![
-                float("value", 1.0, "input"),
-                float("from_min", 0.0, "input range start"),
-                float("from_max", 1.0, "input range end"),
-                float("to_min", 0.0, "output range start"),
-                float("to_max", 1.0, "output range end"),
-                float("steps", 4.0, "number of steps (stepped)"),
+                float("value", 1.0, ANY, "input"),
+                float("from_min", 0.0, ANY, "input range start"),
+                float("from_max", 1.0, ANY, "input range end"),
+                float("to_min", 0.0, ANY, "output range start"),
+                float("to_max", 1.0, ANY, "output range end"),
+                float(
+                    "steps",
+                    4.0,
+                    FloatRange::new(0.0, f32::INFINITY).soft(0.0, 100.0),
+                    "number of steps (stepped)",
+                ),
             ],
             outputs: vec![out("result", Float, "", "remapped value")],
             params: vec![
@@ -938,7 +1092,7 @@ fn build() -> Vec<NodeDef> {
                     [0.0; 3],
                     "third operand (multiply_add, wrap, faceforward)",
                 ),
-                float("scale", 1.0, "scale factor (scale), IOR (refract)"),
+                float("scale", 1.0, ANY, "scale factor (scale), IOR (refract)"),
             ],
             outputs: vec![
                 out("vector", Vector, ".vector", "vector result"),
@@ -960,9 +1114,9 @@ fn build() -> Vec<NodeDef> {
             category: "Math",
             doc: "Linear interpolation between two numbers.",
             inputs: vec![
-                float("factor", 0.5, "0 gives a, 1 gives b"),
-                float("a", 0.0, "first value"),
-                float("b", 1.0, "second value"),
+                float("factor", 0.5, UNIT, "0 gives a, 1 gives b"),
+                float("a", 0.0, ANY, "first value"),
+                float("b", 1.0, ANY, "second value"),
             ],
             outputs: vec![out("result", Float, "", "mixed value")],
             params: vec![ParamDef {
@@ -980,7 +1134,7 @@ fn build() -> Vec<NodeDef> {
             category: "Math",
             doc: "Linear interpolation between two vectors.",
             inputs: vec![
-                float("factor", 0.5, "0 gives a, 1 gives b"),
+                float("factor", 0.5, UNIT, "0 gives a, 1 gives b"),
                 vector("a", [0.0; 3], "first vector"),
                 vector("b", [0.0; 3], "second vector"),
             ],
@@ -1001,7 +1155,7 @@ fn build() -> Vec<NodeDef> {
             category: "Color",
             doc: "Blends colour b over colour a with a blend mode, by factor.",
             inputs: vec![
-                float("factor", 0.5, "strength of b, 0 to 1"),
+                float("factor", 0.5, UNIT, "strength of b, 0 to 1"),
                 color("a", [0.5; 3], "base colour"),
                 color("b", [0.5; 3], "blended colour"),
             ],
@@ -1025,7 +1179,7 @@ fn build() -> Vec<NodeDef> {
             label: "Color Ramp",
             category: "Color",
             doc: "Maps a value to a colour through stops.",
-            inputs: vec![float("fac", 0.5, "position along the ramp")],
+            inputs: vec![float("fac", 0.5, UNIT, "position along the ramp")],
             outputs: vec![
                 out("color", Color, ".rgb", "colour"),
                 out("alpha", Float, ".a", "alpha"),
@@ -1052,10 +1206,15 @@ fn build() -> Vec<NodeDef> {
             category: "Color",
             doc: "Shifts hue, scales saturation and value.",
             inputs: vec![
-                float("hue", 0.5, "hue shift; 0.5 leaves it"),
-                float("saturation", 1.0, "saturation scale"),
-                float("value", 1.0, "value scale"),
-                float("fac", 1.0, "strength of the change"),
+                float("hue", 0.5, UNIT, "hue shift; 0.5 leaves it"),
+                float(
+                    "saturation",
+                    1.0,
+                    FloatRange::new(0.0, 2.0),
+                    "saturation scale",
+                ),
+                float("value", 1.0, FloatRange::new(0.0, 2.0), "value scale"),
+                float("fac", 1.0, UNIT, "strength of the change"),
                 color("color", [0.8; 3], "input colour"),
             ],
             outputs: vec![out("color", Color, "", "adjusted colour")],
@@ -1072,7 +1231,7 @@ fn build() -> Vec<NodeDef> {
             category: "Color",
             doc: "1 - colour, by factor.",
             inputs: vec![
-                float("fac", 1.0, "strength"),
+                float("fac", 1.0, UNIT, "strength"),
                 color("color", [0.0; 3], "input colour"),
             ],
             outputs: vec![out("color", Color, "", "inverted colour")],
@@ -1088,7 +1247,7 @@ fn build() -> Vec<NodeDef> {
             doc: "Raises the colour to a power.",
             inputs: vec![
                 color("color", [1.0; 3], "input colour"),
-                float("gamma", 1.0, "exponent"),
+                float("gamma", 1.0, FloatRange::new(0.001, 10.0), "exponent"),
             ],
             outputs: vec![out("color", Color, "", "result")],
             params: vec![],
@@ -1103,8 +1262,18 @@ fn build() -> Vec<NodeDef> {
             doc: "Adds brightness and scales contrast about mid grey.",
             inputs: vec![
                 color("color", [1.0; 3], "input colour"),
-                float("bright", 0.0, "added brightness"),
-                float("contrast", 0.0, "contrast change"),
+                float(
+                    "bright",
+                    0.0,
+                    FloatRange::new(-100.0, 100.0).soft(-1.0, 1.0),
+                    "added brightness",
+                ),
+                float(
+                    "contrast",
+                    0.0,
+                    FloatRange::new(-100.0, 100.0).soft(-1.0, 1.0),
+                    "contrast change",
+                ),
             ],
             outputs: vec![out("color", Color, "", "result")],
             params: vec![],
@@ -1147,9 +1316,9 @@ fn build() -> Vec<NodeDef> {
             category: "Converter",
             doc: "Builds a colour from RGB or HSV channels.",
             inputs: vec![
-                float("red", 0.0, "red, or hue"),
-                float("green", 0.0, "green, or saturation"),
-                float("blue", 0.0, "blue, or value"),
+                float("red", 0.0, UNIT, "red, or hue"),
+                float("green", 0.0, UNIT, "green, or saturation"),
+                float("blue", 0.0, UNIT, "blue, or value"),
             ],
             outputs: vec![out("color", Color, "", "colour")],
             params: vec![choice("mode", &["rgb", "hsv"], "channels")],
@@ -1179,9 +1348,9 @@ fn build() -> Vec<NodeDef> {
             category: "Converter",
             doc: "Builds a vector from components.",
             inputs: vec![
-                float("x", 0.0, "x"),
-                float("y", 0.0, "y"),
-                float("z", 0.0, "z"),
+                float("x", 0.0, ANY, "x"),
+                float("y", 0.0, ANY, "y"),
+                float("z", 0.0, ANY, "z"),
             ],
             outputs: vec![out("vector", Vector, "", "vector")],
             params: vec![],
@@ -1221,6 +1390,7 @@ fn build() -> Vec<NodeDef> {
                 float(
                     "strength",
                     1.0,
+                    FloatRange::new(0.0, 10.0).soft(0.0, 1.0),
                     "0 keeps the normal, 1 applies the map fully",
                 ),
                 color(
@@ -1244,10 +1414,16 @@ fn build() -> Vec<NodeDef> {
                 float(
                     "strength",
                     1.0,
+                    UNIT,
                     "0 keeps the normal, 1 applies the bump fully",
                 ),
-                float("distance", 1.0, "height multiplier"),
-                float("height", 0.0, "height; connect a texture"),
+                float(
+                    "distance",
+                    1.0,
+                    FloatRange::new(0.0, 1000.0).soft(0.0, 1.0),
+                    "height multiplier",
+                ),
+                float("height", 0.0, ANY, "height; connect a texture"),
                 implicit("normal", "sp.n", "the shading normal", "normal to perturb"),
             ],
             outputs: vec![out("normal", Vector, "", "world-space normal")],
@@ -1282,6 +1458,7 @@ fn build() -> Vec<NodeDef> {
                 name: "surface",
                 ty: Bsdf,
                 default: Default::Implicit("nd_default_surface(sp)", "the default grey surface"),
+                range: None,
                 doc: "the surface shader",
             }],
             outputs: vec![],
@@ -1481,7 +1658,7 @@ fn principled_inputs() -> Vec<SocketDef> {
     let mut inputs: Vec<SocketDef> = principled::PARAMETERS
         .iter()
         .filter_map(|p| match p.default_value() {
-            ParamValue::Float(x) => Some(float(p.name, x, p.doc)),
+            ParamValue::Float(x) => Some(float(p.name, x, principled_range(p.range), p.doc)),
             ParamValue::Color(c) => Some(color(p.name, c.to_array(), p.doc)),
             ParamValue::Bool(_) => None,
         })
@@ -1493,6 +1670,22 @@ fn principled_inputs() -> Vec<SocketDef> {
         "shading normal (world space)",
     ));
     inputs
+}
+
+/// A principled parameter's socket range, from the table's [`principled::Range`] (the one
+/// declaration of what the parameter accepts): its hard bounds are the ones scene files are
+/// validated against and the WGSL clamps to.
+fn principled_range(range: principled::Range) -> FloatRange {
+    use principled::Range;
+    match range {
+        Range::Unit => UNIT,
+        Range::NonNegative => FloatRange::new(0.0, f32::INFINITY).soft(0.0, 10.0),
+        // clamp_wgsl's bound.
+        Range::Ior => FloatRange::new(1.0, 100.0).soft(1.0, 3.0),
+        // The one finite parameter, the anisotropy's rotation, is in turns.
+        Range::Finite => ANY.soft(0.0, 1.0),
+        Range::Flag => unreachable!("flags are parameters, not sockets"),
+    }
 }
 
 /// The Principled BSDF's parameters: the principled flags.
@@ -1540,5 +1733,62 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         constant_emission,
         varying_emission,
         lobes,
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn every_float_input_declares_a_range_holding_its_default() {
+        let mut checked = 0;
+        for def in library() {
+            for s in &def.inputs {
+                let at = format!("{}.{}", def.kind, s.name);
+                if s.ty != SocketType::Float {
+                    assert!(s.range.is_none(), "{at}: a range on a {}", s.ty.name());
+                    continue;
+                }
+                let r = s.range.unwrap_or_else(|| panic!("{at} declares no range"));
+                assert!(
+                    r.min <= r.soft_min && r.soft_min <= r.soft_max && r.soft_max <= r.max,
+                    "{at}: the soft range lies in the hard one: {r:?}"
+                );
+                assert!(r.soft_min.is_finite() || r.min == r.soft_min, "{at}: {r:?}");
+                let Default::Value(Value::Float(d)) = s.default else {
+                    panic!("{at}: a float input's default is a float");
+                };
+                assert!(
+                    r.contains(d) && r.soft_min <= d && d <= r.soft_max,
+                    "{at}: default {d} outside {r:?}"
+                );
+                checked += 1;
+            }
+        }
+        assert!(checked > 60, "{checked} float inputs");
+    }
+
+    #[test]
+    fn ranges_follow_blender_and_the_principled_table() {
+        let range =
+            |kind: &str, input: &str| find(kind).unwrap().input(input).unwrap().range.unwrap();
+        assert_eq!(range("noise_texture", "scale").min, 0.0);
+        assert_eq!(range("noise_texture", "roughness"), UNIT);
+        assert_eq!(range("fresnel", "ior").min, 1.0);
+        assert_eq!(range("mix_color", "factor"), UNIT);
+        assert_eq!(range("principled_bsdf", "roughness"), UNIT);
+        assert_eq!(range("principled_bsdf", "ior").min, 1.0);
+        assert_eq!(
+            range("principled_bsdf", "emission_strength").max,
+            f32::INFINITY
+        );
+        assert_eq!(range("math", "a"), ANY);
+        assert_eq!(range("noise_texture", "scale").describe(), "[0, 1000]");
+        assert_eq!(
+            range("principled_bsdf", "emission_strength").describe(),
+            "≥ 0"
+        );
+        assert_eq!(ANY.describe(), "any");
     }
 }

@@ -15,32 +15,33 @@
 //! Connections are checked as they are dropped ([`GraphEdit::apply`] on a copy, which
 //! applies the compiler's type rules and refuses cycles) and a refused one leaves its
 //! reason in the editor's message line.
+//!
+//! Float fields keep to their input's declared range ([`FloatRange`]); a muted node is
+//! drawn dimmed under a red header, a reroute as a small node with no labels. The keys
+//! and the selection they act on are in [`keys`].
+
+mod keys;
 
 use std::cell::RefCell;
-use std::collections::BTreeMap;
+use std::collections::{BTreeMap, BTreeSet};
 use std::rc::Rc;
 
 use egui::emath::TSTransform;
-use egui::{Color32, Key, Modifiers, Pos2, RichText, Stroke, Ui};
+use egui::{Color32, Key, Pos2, RichText, Stroke, Ui};
 use egui_snarl::ui::{
     AnyPins, PinInfo, PinShape, PinWireInfo, SnarlPin, SnarlStyle, SnarlViewer, SnarlWidget,
-    get_selected_nodes,
 };
 use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
 
 use super::document::{Command, Document, GestureId, Selection};
 use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
-use crate::material::nodes::{self, ParamKind};
+use crate::material::graph::{REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
+use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
 use crate::scene::Material;
 
 /// The gesture node drags merge under (one drag, one undo step).
 const MOVE_GESTURE: GestureId = 0x6e6f_6465_6d6f_7665;
-
-/// The canvas's egui id (fixed, so snarl's selection can be read back).
-fn canvas_id() -> egui::Id {
-    egui::Id::new("kiln node editor canvas")
-}
 
 /// A socket's colour, as Blender draws it: grey floats, purple vectors, yellow colours,
 /// green shaders (and a blue for Kiln's two-component vectors).
@@ -116,6 +117,12 @@ pub struct NodeEditor {
     /// Set when the view should frame all nodes in the next frame (another material
     /// shown, or Home).
     frame_all: bool,
+    /// Nodes selected with A, over snarl's own selection ([`keys`]).
+    select_all: Option<keys::SelectAll>,
+    /// Part of the canvas's egui id; deselect all (Alt+A) moves to the next.
+    canvas_generation: u64,
+    /// Set when the canvas's id changed: the next frame keeps the view.
+    keep_view: bool,
 }
 
 impl Default for NodeEditor {
@@ -135,6 +142,9 @@ impl Default for NodeEditor {
             pins: PinRects::default(),
             rect: None,
             frame_all: true,
+            select_all: None,
+            canvas_generation: 0,
+            keep_view: false,
         }
     }
 }
@@ -151,6 +161,11 @@ struct Viewer<'a> {
     /// The view to set this frame: the nodes' bounds in canvas coordinates and the
     /// screen rectangle to fit them in.
     frame: Option<(egui::Rect, egui::Rect)>,
+    /// The view to keep this frame (the canvas has a new id, and snarl a new view).
+    view: Option<TSTransform>,
+    /// Nodes selected by the select-all layer and not by snarl: drawn as selected here.
+    layer_selected: BTreeSet<String>,
+    selection_stroke: Stroke,
 }
 
 impl NodeEditor {
@@ -177,6 +192,12 @@ impl NodeEditor {
     pub fn node_position(&self, node: &str) -> Option<Pos2> {
         let p = self.positions.get(node)?;
         Some(self.to_global * Pos2::new(p[0], p[1]))
+    }
+
+    /// A point of the canvas in screen points, as the last frame drew it. (Widgets on the
+    /// canvas report their places to accessibility in canvas coordinates.)
+    pub fn canvas_to_screen(&self, canvas: Pos2) -> Pos2 {
+        self.to_global * canvas
     }
 
     /// The rectangle the canvas took in the last frame.
@@ -211,6 +232,10 @@ impl NodeEditor {
             ui.label(RichText::new(m).color(Color32::from_rgb(255, 170, 60)));
         }
         self.sync(material, &graph);
+        self.refresh_selection(ui.ctx());
+        let layer_selected = self.selected_by_layer(ui.ctx());
+        let view = std::mem::take(&mut self.keep_view).then_some(self.to_global);
+        let canvas_id = self.canvas_id();
 
         let mut viewer = Viewer {
             graph: &graph,
@@ -221,6 +246,9 @@ impl NodeEditor {
             to_global: self.to_global,
             pins: Rc::clone(&self.pins),
             frame: None,
+            view,
+            layer_selected,
+            selection_stroke: Stroke::new(2.0, ui.visuals().selection.stroke.color),
         };
         self.pins.borrow_mut().clear();
         // The canvas fills what is left of the panel (snarl's response covers the whole
@@ -230,7 +258,7 @@ impl NodeEditor {
             viewer.frame = Some((bounds(&graph, &self.positions), canvas));
         }
         SnarlWidget::new()
-            .id(canvas_id())
+            .id(canvas_id)
             .style(style())
             .show(&mut self.snarl, &mut viewer, ui);
         self.rect = Some(canvas);
@@ -450,6 +478,7 @@ impl NodeEditor {
     /// a graph without saved positions also saves the layout of every other node, so the
     /// file keeps what the user saw.
     fn moves(&mut self, graph: &Graph) -> Option<GraphEdit> {
+        self.move_with_layer();
         let mut moved = Vec::new();
         for (_, pos, id) in self.snarl.nodes_pos_ids() {
             let now = [pos.x, pos.y];
@@ -469,65 +498,24 @@ impl NodeEditor {
         Some(GraphEdit::MoveNodes(all))
     }
 
-    /// Node ids of the nodes selected on the canvas.
-    fn selected(&self, ui: &Ui) -> Vec<String> {
-        let mut ids: Vec<String> = get_selected_nodes(canvas_id(), ui.ctx())
-            .into_iter()
-            .filter_map(|n| self.snarl.get_node(n).cloned())
-            .collect();
-        ids.sort();
-        ids.dedup();
-        ids
-    }
-
-    /// Delete (X, Delete), duplicate (Shift+D), copy and paste (Ctrl+C, Ctrl+V) and the
-    /// add menu (Shift+A), while the pointer is over the canvas and no text field has the
-    /// keyboard.
-    fn keyboard(&mut self, ui: &Ui, graph: &Graph, hovered: bool) -> Vec<GraphEdit> {
-        let ctx = ui.ctx();
-        if !hovered || ctx.egui_wants_keyboard_input() {
-            return Vec::new();
+    /// Snarl moves the nodes it has selected together; a node dragged while select all
+    /// holds it takes the other nodes that holds along.
+    fn move_with_layer(&mut self) {
+        let Some(all) = &self.select_all else { return };
+        let dragged = self.snarl.nodes_pos_ids().find_map(|(_, pos, id)| {
+            let was = self.positions.get(id)?;
+            let delta = pos - Pos2::new(was[0], was[1]);
+            (all.ids.contains(id) && delta != egui::Vec2::ZERO).then_some(delta)
+        });
+        let Some(delta) = dragged else { return };
+        for node in self.snarl.nodes_info_mut() {
+            let Some(was) = self.positions.get(node.value.as_str()) else {
+                continue;
+            };
+            if all.ids.contains(node.value.as_str()) && node.pos == Pos2::new(was[0], was[1]) {
+                node.pos += delta;
+            }
         }
-        let mut edits = Vec::new();
-        let pressed =
-            |key: Key, modifiers: Modifiers| ctx.input_mut(|i| i.consume_key(modifiers, key));
-        let copy_event = ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Copy)));
-        let paste_event =
-            ctx.input(|i| i.events.iter().any(|e| matches!(e, egui::Event::Paste(_))));
-        if pressed(Key::Home, Modifiers::NONE) {
-            self.frame_all = true;
-        }
-        if pressed(Key::A, Modifiers::SHIFT) {
-            self.add_menu = ctx.pointer_latest_pos();
-            self.search.clear();
-        }
-        let selected = self.selected(ui);
-        let delete = pressed(Key::X, Modifiers::NONE) || pressed(Key::Delete, Modifiers::NONE);
-        if delete && !selected.is_empty() {
-            edits.push(GraphEdit::Batch(
-                selected
-                    .iter()
-                    .map(|id| GraphEdit::RemoveNode { id: id.clone() })
-                    .collect(),
-            ));
-        }
-        let picked = |ids: &[String]| -> Vec<(String, Node)> {
-            ids.iter()
-                .filter_map(|id| graph.nodes.get(id).map(|n| (id.clone(), n.clone())))
-                .collect()
-        };
-        if pressed(Key::D, Modifiers::SHIFT) && !selected.is_empty() {
-            let (adds, _) = graph_edit::copies(graph, &picked(&selected), [40.0, 40.0]);
-            edits.push(GraphEdit::Batch(adds));
-        }
-        if (copy_event || pressed(Key::C, Modifiers::COMMAND)) && !selected.is_empty() {
-            self.clipboard = picked(&selected);
-        }
-        if (paste_event || pressed(Key::V, Modifiers::COMMAND)) && !self.clipboard.is_empty() {
-            let (adds, _) = graph_edit::copies(graph, &self.clipboard, [60.0, 60.0]);
-            edits.push(GraphEdit::Batch(adds));
-        }
-        edits
     }
 
     /// The add menu opened with Shift+A, as a popup at the pointer.
@@ -633,6 +621,14 @@ fn new_node(graph: &Graph, kind: &str, pos: Pos2) -> GraphEdit {
     }
 }
 
+/// The add menu's "Layout" entries (type, label, doc): nodes the compiler resolves away
+/// rather than library nodes.
+const LAYOUT_NODES: &[(&str, &str, &str)] = &[(
+    REROUTE,
+    "Reroute",
+    "Passes one wire on, to route wires; it carries the type of what is wired into it",
+)];
+
 /// The add-node menu: a search field, then the node library grouped by category (or,
 /// while searching, the matching nodes). With `only`, lists only node types that have a
 /// socket that can take the given socket type (an input when the flag is true). Returns
@@ -680,6 +676,14 @@ fn add_menu(
                 }
             });
         }
+        // Structural nodes, not in the library: they fit any wire.
+        ui.menu_button("Layout", |ui| {
+            for &(kind, label, doc) in LAYOUT_NODES {
+                if ui.button(label).on_hover_text(doc).clicked() {
+                    chosen = Some(kind);
+                }
+            }
+        });
     } else {
         egui::ScrollArea::vertical()
             .max_height(300.0)
@@ -693,6 +697,17 @@ fn add_menu(
                         .clicked()
                     {
                         chosen = Some(def.kind);
+                    }
+                }
+                for &(kind, label, doc) in LAYOUT_NODES.iter().filter(|(kind, label, _)| {
+                    label.to_lowercase().contains(&query) || kind.contains(&query)
+                }) {
+                    if ui
+                        .button(label)
+                        .on_hover_text(format!("Layout — {doc}"))
+                        .clicked()
+                    {
+                        chosen = Some(kind);
                     }
                 }
             });
@@ -726,6 +741,10 @@ impl<'a> Viewer<'a> {
         list.get(index)
             .cloned()
             .unwrap_or(("?".into(), SocketType::Float))
+    }
+
+    fn is_reroute(&self, id: &str) -> bool {
+        self.node(id).is_some_and(|n| n.kind == REROUTE)
     }
 
     fn error_on(&self, id: &str) -> Option<&'a GraphError> {
@@ -781,20 +800,25 @@ impl<'a> Viewer<'a> {
                 _ => Value::Vec3([0.0; 3]),
             },
         };
-        let range = input_range(&node.kind, name);
+        let range = def.and_then(|d| d.input(name)).and_then(|s| s.range);
         let mut changed = None;
         let mut gesture = None;
         match ty {
             SocketType::Float => {
-                let mut x = value.as_f32();
-                let mut drag = egui::DragValue::new(&mut x).speed(0.01).max_decimals(3);
-                if let Some(r) = range.clone() {
-                    drag = drag.range(r);
+                let old = value.as_f32();
+                let mut x = old;
+                let mut r = ui.add(float_field(&mut x, range)).labelled_by(label);
+                if let Some(range) = range {
+                    r = r.on_hover_text(range.describe());
                 }
-                let r = ui.add(drag).labelled_by(label);
                 if r.changed() {
-                    changed = Some(Value::Float(x));
-                    gesture = r.dragged().then(|| r.id.value());
+                    if let (Some(range), true) = (range, r.dragged()) {
+                        x = keep_to_soft_range(x, old, &range);
+                    }
+                    if x != old {
+                        changed = Some(Value::Float(x));
+                        gesture = r.dragged().then(|| r.id.value());
+                    }
                 }
             }
             SocketType::Color => {
@@ -955,25 +979,32 @@ fn ramp_at(stops: &[crate::material::RampStop], t: f32) -> [f32; 3] {
     [prev.color[0], prev.color[1], prev.color[2]]
 }
 
-/// The range a float input's field keeps to: the principled parameters' ranges
-/// (`crate::shader::principled::PARAMETERS`) for the Principled BSDF, [0, 1] for factors.
-fn input_range(kind: &str, input: &str) -> Option<std::ops::RangeInclusive<f32>> {
-    use crate::shader::principled::{PARAMETERS, Range};
-    if kind == "principled_bsdf" {
-        let p = PARAMETERS.iter().find(|p| p.name == input)?;
-        return match p.range {
-            Range::Unit => Some(0.0..=1.0),
-            Range::NonNegative => Some(0.0..=f32::MAX),
-            Range::Ior => Some(1.0..=100.0),
-            Range::Finite | Range::Flag => None,
-        };
+/// The field of a float input: clamped to the declared hard range (typed values too) and
+/// dragged at the speed the soft range sets.
+fn float_field(x: &mut f32, range: Option<FloatRange>) -> egui::DragValue<'_> {
+    let field = egui::DragValue::new(x)
+        .max_decimals(3)
+        // A value loaded from a file is shown as it is (the compiler reports it), not
+        // changed by being shown.
+        .clamp_existing_to_range(false);
+    match range {
+        Some(r) => field.speed(r.drag_speed()).range(r.min..=r.max),
+        None => field.speed(0.01),
     }
-    (input == "fac").then_some(0.0..=1.0)
+}
+
+/// A dragged value kept to the soft range, as Blender's fields: a drag stops at the soft
+/// bounds (widened to hold the value the drag started from), typing reaches the hard ones.
+fn keep_to_soft_range(x: f32, old: f32, range: &FloatRange) -> f32 {
+    x.clamp(range.soft_min.min(old), range.soft_max.max(old))
 }
 
 impl SnarlViewer<String> for Viewer<'_> {
     fn title(&mut self, node: &String) -> String {
         let kind = self.node(node).map_or("", |n| n.kind.as_str());
+        if kind == REROUTE {
+            return String::new();
+        }
         let label = nodes::find(kind).map_or(kind, |d| d.label);
         format!("{label}  ·  {node}")
     }
@@ -990,7 +1021,16 @@ impl SnarlViewer<String> for Viewer<'_> {
         // Node text is not selectable, so a click anywhere on a node reaches the node
         // (to select or drag it), as in Blender.
         ui.style_mut().interaction.selectable_labels = false;
+        if self.is_reroute(&id) {
+            // A reroute is a dot: a header just wide enough to grab it by.
+            ui.add_space(4.0);
+            return;
+        }
         ui.label(self.title(&id));
+        if self.node(&id).is_some_and(|n| n.muted) {
+            ui.label(RichText::new("muted").small().color(Color32::LIGHT_RED))
+                .on_hover_text("M: its outputs pass its first input of their type through");
+        }
         if self.error_on(&id).is_some() {
             ui.label(RichText::new("⚠").color(Color32::LIGHT_RED));
         }
@@ -1013,6 +1053,9 @@ impl SnarlViewer<String> for Viewer<'_> {
         let id = snarl[pin.id.node].clone();
         let (name, ty) = self.socket(&id, Side::Input, pin.id.input);
         ui.style_mut().interaction.selectable_labels = false;
+        if self.is_reroute(&id) {
+            return self.pin(&id, Side::Input, &name, ty);
+        }
         let label = ui.label(&name);
         if pin.remotes.is_empty() && ty != SocketType::Bsdf {
             self.value_ui(ui, &id, &name, ty, label.id);
@@ -1029,7 +1072,9 @@ impl SnarlViewer<String> for Viewer<'_> {
         let id = snarl[pin.id.node].clone();
         let (name, ty) = self.socket(&id, Side::Output, pin.id.output);
         ui.style_mut().interaction.selectable_labels = false;
-        ui.label(&name);
+        if !self.is_reroute(&id) {
+            ui.label(&name);
+        }
         self.pin(&id, Side::Output, &name, ty)
     }
 
@@ -1065,8 +1110,38 @@ impl SnarlViewer<String> for Viewer<'_> {
         _outputs: &[OutPin],
         snarl: &Snarl<String>,
     ) -> egui::Frame {
-        if self.error_on(&snarl[node]).is_some() {
-            default.stroke(Stroke::new(2.0, Color32::RED))
+        let id = &snarl[node];
+        let mut frame = default;
+        if self.is_reroute(id) {
+            frame = frame.inner_margin(2.0).corner_radius(8.0);
+        }
+        if self.node(id).is_some_and(|n| n.muted) {
+            // Dimmed, as Blender draws a muted node.
+            frame.fill = frame.fill.lerp_to_gamma(Color32::BLACK, 0.45);
+        }
+        if self.error_on(id).is_some() {
+            frame.stroke(Stroke::new(2.0, Color32::RED))
+        } else if self.layer_selected.contains(id) {
+            frame.stroke(self.selection_stroke)
+        } else {
+            frame
+        }
+    }
+
+    fn header_frame(
+        &mut self,
+        default: egui::Frame,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        snarl: &Snarl<String>,
+    ) -> egui::Frame {
+        let id = &snarl[node];
+        if self.is_reroute(id) {
+            default.inner_margin(0.0)
+        } else if self.node(id).is_some_and(|n| n.muted) {
+            // A red header, as Blender marks a muted node.
+            default.fill(Color32::from_rgb(0x6e, 0x22, 0x22))
         } else {
             default
         }
@@ -1167,6 +1242,18 @@ impl SnarlViewer<String> for Viewer<'_> {
         let GraphEdit::AddNode { id, node } = new_node(self.graph, kind, pos) else {
             return;
         };
+        if kind == REROUTE {
+            let wire = if from_output {
+                GraphEdit::connect(&source, &socket, &id, REROUTE_INPUT)
+            } else {
+                GraphEdit::connect(&id, REROUTE_OUTPUT, &source, &socket)
+            };
+            self.try_edit(
+                GraphEdit::Batch(vec![GraphEdit::AddNode { id, node }, wire]),
+                None,
+            );
+            return;
+        }
         let Some(def) = nodes::find(kind) else { return };
         let wire = if from_output {
             def.inputs
@@ -1212,6 +1299,9 @@ impl SnarlViewer<String> for Viewer<'_> {
     }
 
     fn current_transform(&mut self, to_global: &mut TSTransform, _snarl: &mut Snarl<String>) {
+        if let Some(view) = self.view.take() {
+            *to_global = view;
+        }
         if let Some((bounds, canvas)) = self.frame.take() {
             *to_global = framing(bounds, canvas);
         }
