@@ -21,6 +21,7 @@ use super::final_render::{FinalRender, RenderState};
 use super::gizmo::{self, Constraint, Mode, Orientation, ViewProjection};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
+use super::node_editor::MaterialDrag;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
 use super::session::{Recovery, SessionStore};
@@ -963,6 +964,15 @@ impl EditorApp {
             ((rect.width() * ppp).round() as u32).max(1),
             ((rect.height() * ppp).round() as u32).max(1),
         ];
+        // A material dropped from the node editor's material list onto an object.
+        if let (Some(dragged), Some(pos)) = (
+            response.dnd_release_payload::<MaterialDrag>(),
+            response.hover_pos(),
+        ) && let Some(object) = self.object_at(pos, rect)
+        {
+            let MaterialDrag(material) = *dragged;
+            self.apply(Command::AssignMaterial { object, material }, None);
+        }
         let tool_was_active = self.tool.is_some();
         self.transform_tool(ui, &response, rect);
         if !tool_was_active && self.tool.is_none() {
@@ -1456,6 +1466,12 @@ impl EditorApp {
 
     /// Selects the object under `pos` (or nothing).
     pub fn pick(&mut self, pos: egui::Pos2, rect: egui::Rect) {
+        self.document.selection = self.object_at(pos, rect).map(Selection::Object);
+    }
+
+    /// The object whose surface is under `pos` in the viewport `rect` (a ray cast through
+    /// the picking BVH), if any.
+    fn object_at(&mut self, pos: egui::Pos2, rect: egui::Rect) -> Option<usize> {
         let key = self.scene_key();
         let scene = self.render_scene();
         if self.picker.as_ref().is_none_or(|(k, _)| *k != key) {
@@ -1463,20 +1479,17 @@ impl EditorApp {
                 Ok(p) => self.picker = Some((key, p)),
                 Err(e) => {
                     self.error = Some(format!("cannot select: {e}"));
-                    return;
+                    return None;
                 }
             }
         }
-        let Some((_, picker)) = &self.picker else {
-            return;
-        };
+        let (_, picker) = self.picker.as_ref()?;
         let u = (pos.x - rect.left()) / rect.width();
         let v = (pos.y - rect.top()) / rect.height();
         let (origin, dir) = camera_ray(&self.view, u, v, rect.width() / rect.height());
-        self.document.selection = picker
+        picker
             .pick(&scene, origin, dir)
             .and_then(|(rendered, _)| self.document.object_of_rendered_instance(rendered))
-            .map(Selection::Object);
     }
 
     /// The selected object's box, drawn over the image in Blender's selection orange.

@@ -6,6 +6,7 @@
 use egui::{RichText, Ui};
 
 use super::document::{Command, Document, Selection};
+use super::node_editor::MaterialDrag;
 
 /// What the outliner keeps between frames: the item being renamed and its text.
 #[derive(Default)]
@@ -76,6 +77,16 @@ impl Outliner {
             let label = ui.selectable_label(selected, text);
             if label.clicked() {
                 actions.push(OutlinerAction::Select(target));
+            }
+            // A material dropped from the node editor's material list.
+            if let (Selection::Object(object), Some(dragged)) =
+                (target, label.dnd_release_payload::<MaterialDrag>())
+            {
+                let MaterialDrag(material) = *dragged;
+                actions.push(OutlinerAction::Apply(Command::AssignMaterial {
+                    object,
+                    material,
+                }));
             }
             if label.double_clicked() && target != Selection::Camera {
                 self.renaming = Some((target, name.clone()));

@@ -123,7 +123,23 @@ pub struct NodeEditor {
     canvas_generation: u64,
     /// Set when the canvas's id changed: the next frame keeps the view.
     keep_view: bool,
+    /// The shown graph's compile: its WGSL size and time, or the error.
+    stats: Option<Result<CompileStats, String>>,
 }
+
+/// What compiling a material's graph gave (the material list's statistics).
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct CompileStats {
+    /// Bytes of the material's WGSL (its function and helpers).
+    pub wgsl_bytes: usize,
+    /// The graph → WGSL compile, naga-checked code included in the kernel later.
+    pub compile: std::time::Duration,
+}
+
+/// The payload of a material dragged from the material list onto an object (the
+/// viewport or the outliner assigns it).
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct MaterialDrag(pub usize);
 
 impl Default for NodeEditor {
     fn default() -> Self {
@@ -145,6 +161,7 @@ impl Default for NodeEditor {
             select_all: None,
             canvas_generation: 0,
             keep_view: false,
+            stats: None,
         }
     }
 }
@@ -175,6 +192,11 @@ impl NodeEditor {
     }
 
     /// The last refused edit's reason, shown above the canvas.
+    /// The shown graph's compile statistics, or its compile error.
+    pub fn stats(&self) -> Option<&Result<CompileStats, String>> {
+        self.stats.as_ref()
+    }
+
     pub fn message(&self) -> Option<&str> {
         self.message.as_deref()
     }
@@ -357,6 +379,11 @@ impl NodeEditor {
             let Some(m) = self.material.filter(|&m| m < materials.len()) else {
                 return;
             };
+            ui.dnd_drag_source(egui::Id::new("material drag"), MaterialDrag(m), |ui| {
+                ui.add(egui::Label::new("✚ Drag").selectable(false))
+            })
+            .response
+            .on_hover_text("Drag onto an object in the viewport or the outliner to assign");
             if ui.button("Duplicate").clicked() {
                 let mut copy = materials[m].clone();
                 copy.name = unique_name(materials, &copy.name);
@@ -412,6 +439,23 @@ impl NodeEditor {
                     None,
                 ));
             }
+            match &self.stats {
+                Some(Ok(stats)) => {
+                    ui.weak(format!(
+                        "WGSL {:.1} KiB · compiled in {:.1} ms",
+                        stats.wgsl_bytes as f64 / 1024.0,
+                        stats.compile.as_secs_f64() * 1e3
+                    ))
+                    .on_hover_text(
+                        "The material's generated code and how long the graph took to compile \
+                         (the kernel it joins compiles in the background)",
+                    );
+                }
+                Some(Err(_)) => {
+                    ui.weak("does not compile");
+                }
+                None => {}
+            }
         });
     }
 
@@ -424,6 +468,15 @@ impl NodeEditor {
         {
             return;
         }
+        let start = std::time::Instant::now();
+        self.stats = Some(
+            crate::material::compile("material", graph, "material")
+                .map(|compiled| CompileStats {
+                    wgsl_bytes: compiled.code.len(),
+                    compile: start.elapsed(),
+                })
+                .map_err(|e| e.message),
+        );
         let laid = graph_edit::layout(graph);
         let mut snarl = Snarl::new();
         let mut ids = BTreeMap::new();
