@@ -212,6 +212,30 @@ fn groups_expand_and_check_their_sockets() {
     );
     let e = compile("looped", &looped, "m").unwrap_err();
     assert!(e.to_string().contains("deeper"), "{e}");
+
+    // A muted group passes its first colour input through, and a muted node inside one
+    // its own.
+    let mut muted = graph.clone();
+    muted.nodes.get_mut("g").unwrap().muted = true;
+    let code = validate_kernel(&muted).unwrap();
+    assert!(!code.contains("node_invert"), "{code}");
+    // The base colour reads the noise's colour.
+    let noise = code
+        .lines()
+        .find_map(|l| l.trim().strip_prefix("let ")?.split_once(" = node_noise("))
+        .map(|(var, _)| var.to_owned())
+        .expect("the noise is computed");
+    assert!(code.contains(&format!("nd_unit3({noise}.color)")), "{code}");
+    let mut inner = graph.clone();
+    inner
+        .groups
+        .get_mut("tint")
+        .unwrap()
+        .nodes
+        .get_mut("inv")
+        .unwrap()
+        .muted = true;
+    assert_eq!(validate_kernel(&inner).unwrap(), code);
 }
 
 #[test]

@@ -504,6 +504,21 @@ impl<'a> Flattener<'a> {
             let def = self.nodes[index].def;
             for (i, socket) in def.inputs.iter().enumerate() {
                 if let Some(input) = node.inputs.get(socket.name) {
+                    // A value set on the input keeps to its range; what reaches it through
+                    // a link (a group's default, a muted node) is computed, and is not
+                    // limited.
+                    if let (Input::Value(Value::Float(x)), Some(range)) = (input, socket.range) {
+                        if !range.contains(*x) {
+                            return Err(self.ctx.err(
+                                Some(&full),
+                                Some(socket.name),
+                                format!(
+                                    "the value {x} lies outside the input's range {}",
+                                    range.describe()
+                                ),
+                            ));
+                        }
+                    }
                     let src = self.source(scope, &full, socket.name, input, 0)?;
                     self.nodes[index].inputs[i] = src;
                 }
@@ -832,14 +847,6 @@ fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
                     };
                     if !finite {
                         return fail("values must be finite".into());
-                    }
-                    if let (Value::Float(x), Some(range)) = (v, socket.range) {
-                        if !range.contains(*x) {
-                            return fail(format!(
-                                "the value {x} lies outside the input's range {}",
-                                range.describe()
-                            ));
-                        }
                     }
                 }
                 Src::Implicit(_, from) => {

@@ -32,9 +32,9 @@ mix. `groups: { \"name\": (inputs: [(name: \"x\", type: float, default: 1.0)], o
 node group, used as `(type: \"group\", params: { \"group\": \"name\" })`; inside, node type
 `group_input` has one output per group input.
 
-A float input's range is the values a constant may take: the compiler reports a value
-outside it, naming node and socket (a link may compute any value; the Principled BSDF
-clamps what it is fed). `(type: \"reroute\", inputs: { \"input\": \"node.output\" })` passes
+A float input's range is the values it may be set to: the compiler reports a value outside
+it, naming node and socket (what a link brings is not limited; the Principled BSDF clamps
+what it is fed). `(type: \"reroute\", inputs: { \"input\": \"node.output\" })` passes
 a wire on with the type of what feeds it (its output is `output`; it compiles to nothing).
 `muted: true` mutes a node: each output passes the node's first input of the same type (a
 link, a value or that input's default), or 0 / black when it has none (a shader output:

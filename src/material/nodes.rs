@@ -47,10 +47,11 @@ pub struct SocketDef {
 /// The values a float input takes, as Blender declares its sockets' `min`/`max` and
 /// `soft_min`/`soft_max`.
 ///
-/// - The hard range `[min, max]` bounds a constant: the compiler rejects a graph whose
-///   constant lies outside it, naming the node and socket (a loaded file is reported, never
-///   silently changed), an edit setting one is refused, and the editor's field clamps to
-///   it. Values a link computes are not limited: every node takes any finite input, as
+/// - The hard range `[min, max]` bounds a value set on the input: the compiler rejects a
+///   graph with one outside it, naming the node and socket (a loaded file is reported,
+///   never silently changed), an edit setting one is refused, and the editor's field
+///   clamps to it. What reaches the input through a link (computed, a group's default, a
+///   muted node's pass-through) is not limited: every node takes any finite input, as
 ///   Blender's do (the Principled BSDF clamps what it is fed to its parameters' ranges).
 /// - The soft range `[soft_min, soft_max]`, inside the hard one, is where dragging the
 ///   field stops (typing reaches the hard range) and what sets the drag's speed.

@@ -16,6 +16,7 @@ use egui_snarl::ui::get_selected_nodes;
 
 use super::NodeEditor;
 use crate::editor::graph_edit::{self, GraphEdit};
+use crate::material::graph::REROUTE;
 use crate::material::{Graph, Node};
 
 /// Nodes selected with A, over snarl's selection.
@@ -127,9 +128,10 @@ impl NodeEditor {
                 .iter()
                 .filter_map(|id| {
                     let node = graph.nodes.get(id)?;
-                    // A node without outputs (the material output) has nothing to pass.
+                    // A node without outputs (the material output) has nothing to pass, a
+                    // reroute passes its input anyway.
                     let outputs = graph_edit::sockets_of(graph, node).ok()?.outputs;
-                    (!outputs.is_empty()).then(|| GraphEdit::SetMuted {
+                    (!outputs.is_empty() && node.kind != REROUTE).then(|| GraphEdit::SetMuted {
                         node: id.clone(),
                         muted: !node.muted,
                     })

@@ -1361,3 +1361,22 @@ impl SnarlViewer<String> for Viewer<'_> {
         self.to_global = *to_global;
     }
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn a_drag_stops_at_the_soft_range_unless_it_started_beyond() {
+        let range = FloatRange::new(0.0, 1000.0).soft(0.0, 100.0);
+        assert_eq!(keep_to_soft_range(130.0, 99.0, &range), 100.0);
+        assert_eq!(keep_to_soft_range(-3.0, 1.0, &range), 0.0);
+        // Typed to 500 (beyond the soft range), a drag from there comes back freely and
+        // goes no further out.
+        assert_eq!(keep_to_soft_range(480.0, 500.0, &range), 480.0);
+        assert_eq!(keep_to_soft_range(510.0, 500.0, &range), 500.0);
+        // The drag speed follows the soft range, in small steps for wide ones.
+        assert_eq!(nodes::UNIT.drag_speed(), 1.0 / 400.0);
+        assert_eq!(nodes::ANY.drag_speed(), 0.05);
+    }
+}

@@ -105,6 +105,20 @@ fn a_muted_mix_passes_its_first_colour_input() {
 }
 
 #[test]
+fn a_value_passed_through_a_muted_node_is_not_held_to_the_consumers_range() {
+    // 5 suits the muted math node's input, not the colour ramp's factor it reaches.
+    let mut math = Node::new("math").input("a", 5.0);
+    math.muted = true;
+    let mut g = noise_into_base_color(Some((
+        "ramp",
+        Node::new("color_ramp").input("fac", link("math", "value")),
+        "color",
+    )));
+    g.add("math", math);
+    code(&g);
+}
+
+#[test]
 fn a_muted_node_without_an_input_of_the_output_type_gives_its_zero_or_implicit_default() {
     // The noise texture has no colour input: black.
     let mut g = noise_into_base_color(None);
