@@ -154,22 +154,7 @@ fn clicking_the_viewport_selects_the_object_under_the_pointer() {
         .state()
         .viewport_rect()
         .expect("the viewport was laid out");
-    let view = *harness.state().view();
-    // Where the tall block's centre appears in the viewport.
-    let centre: Vec3 = harness.state().document().scene().instances[7]
-        .transform
-        .translation
-        .into();
-    let (right, up, forward) = view.frame();
-    let tan_half = (view.fov_y_degrees.to_radians() * 0.5).tan();
-    let rel = centre - view.position;
-    let z = rel.dot(forward);
-    let x = rel.dot(right) / z / (tan_half * rect.width() / rect.height());
-    let y = rel.dot(up) / z / tan_half;
-    let pos = egui::pos2(
-        rect.left() + (x + 1.0) * 0.5 * rect.width(),
-        rect.top() + (1.0 - y) * 0.5 * rect.height(),
-    );
+    let pos = on_screen(&harness, 7, rect);
     for pressed in [true, false] {
         harness.event(egui::Event::PointerMoved(pos));
         harness.event(egui::Event::PointerButton {
@@ -187,6 +172,72 @@ fn clicking_the_viewport_selects_the_object_under_the_pointer() {
     );
     // The inspector shows the selected object under its name, beside the outliner's row.
     assert_eq!(harness.query_all_by_label("block.001").count(), 2);
+}
+
+/// Where the centre of object `object` appears in the viewport `rect`.
+fn on_screen(harness: &Harness<'_, EditorApp>, object: usize, rect: egui::Rect) -> egui::Pos2 {
+    let view = *harness.state().view();
+    let centre: Vec3 = harness.state().document().scene().instances[object]
+        .transform
+        .translation
+        .into();
+    let (right, up, forward) = view.frame();
+    let tan_half = (view.fov_y_degrees.to_radians() * 0.5).tan();
+    let rel = centre - view.position;
+    let z = rel.dot(forward);
+    let x = rel.dot(right) / z / (tan_half * rect.width() / rect.height());
+    let y = rel.dot(up) / z / tan_half;
+    egui::pos2(
+        rect.left() + (x + 1.0) * 0.5 * rect.width(),
+        rect.top() + (1.0 - y) * 0.5 * rect.height(),
+    )
+}
+
+/// Drags with the primary button from `from` to `to` in a few frames.
+fn drag(harness: &mut Harness<'_, EditorApp>, from: egui::Pos2, to: egui::Pos2) {
+    pointer(harness, from, Some(true));
+    for t in [0.1, 0.5, 1.0] {
+        pointer(harness, from + (to - from) * t, None);
+    }
+    pointer(harness, to, Some(false));
+    harness.step();
+}
+
+#[test]
+fn a_material_dragged_onto_an_object_in_the_outliner_or_the_viewport_is_assigned() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    // Selecting the left wall shows its material, red, in the node editor's list.
+    harness.get_by_label("left wall").click();
+    harness.step();
+    let red = 1;
+    assert_eq!(harness.state().node_editor().material(), Some(red));
+    assert!(harness.query_by_label("fixed parameters").is_some());
+    let stats = harness.state().node_editor().stats().cloned();
+    assert!(
+        matches!(stats, Some(Ok(s)) if s.wgsl_bytes > 0),
+        "the editor measures the graph's compile: {stats:?}"
+    );
+
+    let chip = harness.get_by_label("✚ Drag").rect().center();
+    let row = harness.get_by_label("block").rect().center();
+    drag(&mut harness, chip, row);
+    assert_eq!(
+        harness.state().document().scene().instances[6].material,
+        red
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(harness.state().document().scene().instances[6].material, 0);
+
+    let rect = harness.state().viewport_rect().unwrap();
+    let tall_block = on_screen(&harness, 7, rect);
+    let chip = harness.get_by_label("✚ Drag").rect().center();
+    drag(&mut harness, chip, tall_block);
+    assert_eq!(
+        harness.state().document().scene().instances[7].material,
+        red
+    );
 }
 
 #[test]

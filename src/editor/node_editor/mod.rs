@@ -440,16 +440,20 @@ impl NodeEditor {
                 ));
             }
             match &self.stats {
+                // A material of fixed parameters runs no generated code (until edited).
+                _ if materials[m].graph.is_none() => {
+                    ui.weak("fixed parameters")
+                        .on_hover_text("No generated code: its first graph edit makes one");
+                }
                 Some(Ok(stats)) => {
-                    ui.weak(format!(
-                        "WGSL {:.1} KiB · compiled in {:.1} ms",
-                        stats.wgsl_bytes as f64 / 1024.0,
-                        stats.compile.as_secs_f64() * 1e3
-                    ))
-                    .on_hover_text(
-                        "The material's generated code and how long the graph took to compile \
-                         (the kernel it joins compiles in the background)",
-                    );
+                    // The time in the tooltip: a number that changes each frame would
+                    // make the bar flicker (and snapshots differ).
+                    ui.weak(format!("WGSL {:.1} KiB", stats.wgsl_bytes as f64 / 1024.0))
+                        .on_hover_text(format!(
+                            "The material's generated code; the graph compiled in {:.1} ms (the \
+                         kernel it joins compiles in the background)",
+                            stats.compile.as_secs_f64() * 1e3
+                        ));
                 }
                 Some(Err(_)) => {
                     ui.weak("does not compile");
