@@ -248,6 +248,7 @@ fn edit(
         state_dir: kiln::editor::session::SessionStore::default_dir(),
         autosave_every: kiln::editor::AUTOSAVE_EVERY,
         quit_when_done,
+        thumbnails: true,
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
     if let Some(error) = report.error {

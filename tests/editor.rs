@@ -241,6 +241,56 @@ fn a_material_dragged_onto_an_object_in_the_outliner_or_the_viewport_is_assigned
 }
 
 #[test]
+fn material_thumbnails_show_each_material_on_a_sphere_and_follow_its_edits() {
+    let mut harness = start(Setup {
+        thumbnails: true,
+        ..Setup::default()
+    });
+    let thumbnail = |app: &EditorApp, i: usize| -> Option<egui::ColorImage> {
+        let material = &app.document().scene().materials[i];
+        app.thumbnails()?.image(i, material).cloned()
+    };
+    let started = std::time::Instant::now();
+    step_until(&mut harness, "a thumbnail of every material", |app| {
+        (0..4).all(|i| thumbnail(app, i).is_some())
+    });
+    println!("4 thumbnails in {:?}", started.elapsed());
+    let (white, red, green) = (0, 1, 2);
+    let centre = |image: &egui::ColorImage| image[(32, 34)];
+    let corner = |image: &egui::ColorImage| image[(1, 1)];
+    let [w, r, g] = [white, red, green].map(|i| thumbnail(harness.state(), i).unwrap());
+    // The sphere takes its material's colour; around it is the same sky.
+    assert!(centre(&r).r() > 2 * centre(&r).g(), "red: {:?}", centre(&r));
+    assert!(centre(&g).g() > centre(&g).r(), "green: {:?}", centre(&g));
+    assert!(
+        centre(&w).r().abs_diff(centre(&w).g()) < 40,
+        "white: {:?}",
+        centre(&w)
+    );
+    assert_eq!(
+        corner(&r),
+        corner(&g),
+        "the sky is the same behind every sphere"
+    );
+    assert_eq!(harness.state().thumbnails().unwrap().error(), None);
+
+    // An edit of the red material (made metallic in the inspector) makes its thumbnail
+    // stale until it is rendered again, differently.
+    harness.get_by_label("left wall").click();
+    harness.step();
+    set_value(&mut harness, "Metallic", 1.0);
+    assert!(
+        thumbnail(harness.state(), red).is_none(),
+        "stale after the edit"
+    );
+    step_until(&mut harness, "the edited material's thumbnail", |app| {
+        thumbnail(app, red).is_some()
+    });
+    let metal = thumbnail(harness.state(), red).unwrap();
+    assert_ne!(metal.pixels, r.pixels, "the thumbnail shows the edit");
+}
+
+#[test]
 fn save_reopen_gives_the_same_document_and_unsaved_changes_prompt() {
     let dir = tempfile::tempdir().unwrap();
     let path: PathBuf = dir.path().join("edited.kiln");

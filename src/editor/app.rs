@@ -26,6 +26,7 @@ use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
 use super::session::{Recovery, SessionStore};
 use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
+use super::thumbnails::Thumbnails;
 use super::viewport::{Target, ViewportRenderer, ViewportStatus};
 
 /// Samples per pixel the viewport accumulates before it stops (Blender's viewport default
@@ -49,6 +50,9 @@ pub struct EditorOptions {
     /// Close the window once the viewport holds `sample_limit` samples (smoke tests,
     /// scripted screenshots); [`RunReport`] says what it rendered.
     pub quit_when_done: bool,
+    /// Render material thumbnails for the material list (tests that do not look at them
+    /// leave the device to the viewport).
+    pub thumbnails: bool,
 }
 
 /// What an editor session rendered, for the caller of [`super::run`].
@@ -125,6 +129,10 @@ pub struct EditorApp {
     gpu: Option<Arc<GpuContext>>,
     render_state: Option<egui_wgpu::RenderState>,
     viewport: Option<ViewportRenderer>,
+    /// The material list's thumbnails, and the document state they were last asked for
+    /// (document serial, revision, whether the viewport was building a kernel).
+    thumbnails: Option<Thumbnails>,
+    thumbnails_key: Option<(u64, u64, bool)>,
     texture: Option<(u64, egui::TextureId)>,
     dialogs: Box<dyn FileDialogs>,
     plugins: PluginHost,
@@ -216,6 +224,10 @@ impl EditorApp {
             let egui_ctx = cc.egui_ctx.clone();
             ViewportRenderer::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
         });
+        let thumbnails = gpu.as_ref().filter(|_| options.thumbnails).map(|ctx| {
+            let egui_ctx = cc.egui_ctx.clone();
+            Thumbnails::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
+        });
         let view = document.scene().camera;
         let session = options.state_dir.clone().map(SessionStore::new);
         if let (Some(store), Some(path)) = (&session, document.path()) {
@@ -230,6 +242,8 @@ impl EditorApp {
             gpu,
             render_state: cc.wgpu_render_state.clone(),
             viewport,
+            thumbnails,
+            thumbnails_key: None,
             texture: None,
             dialogs: options.dialogs,
             plugins: options.plugins,
@@ -298,6 +312,11 @@ impl EditorApp {
     }
 
     /// The node editor's state (the material it shows, where it drew its pins).
+    /// The material thumbnails, when the app renders them.
+    pub fn thumbnails(&self) -> Option<&Thumbnails> {
+        self.thumbnails.as_ref()
+    }
+
     pub fn node_editor(&self) -> &super::node_editor::NodeEditor {
         &self.node_editor
     }
@@ -1465,6 +1484,22 @@ impl EditorApp {
     }
 
     /// Selects the object under `pos` (or nothing).
+    /// Asks for thumbnails of the document's materials when they may have changed, and
+    /// pauses them while the viewport builds a kernel (one device, one queue).
+    fn update_thumbnails(&mut self, ctx: &egui::Context) {
+        let building = self.viewport_status().is_some_and(|s| s.building);
+        let Some(thumbnails) = self.thumbnails.as_mut() else {
+            return;
+        };
+        thumbnails.poll(ctx);
+        let key = (self.document_serial, self.document.revision(), building);
+        if self.thumbnails_key != Some(key) {
+            self.thumbnails_key = Some(key);
+            let materials = &self.document.scene().materials;
+            thumbnails.request((!building).then_some(materials.as_slice()));
+        }
+    }
+
     pub fn pick(&mut self, pos: egui::Pos2, rect: egui::Rect) {
         self.document.selection = self.object_at(pos, rect).map(Selection::Object);
     }
@@ -1776,7 +1811,9 @@ impl eframe::App for EditorApp {
             .resizable(true)
             .default_size(340.0)
             .show(ui, |ui| {
-                for (command, gesture) in self.node_editor.ui(ui, &self.document) {
+                self.update_thumbnails(ui.ctx());
+                let thumbnails = self.thumbnails.as_ref();
+                for (command, gesture) in self.node_editor.ui(ui, &self.document, thumbnails) {
                     self.apply(command, gesture);
                 }
             });

@@ -30,6 +30,7 @@ pub mod outliner;
 pub mod pick;
 pub mod session;
 pub mod settings_panel;
+pub mod thumbnails;
 pub mod viewport;
 
 pub use app::{AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, RunReport};

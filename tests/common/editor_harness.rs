@@ -26,6 +26,8 @@ pub struct Setup {
     pub autosave_every: Duration,
     /// The window's size in points.
     pub size: egui::Vec2,
+    /// Material thumbnails (off unless a test looks at them: they share the device).
+    pub thumbnails: bool,
 }
 
 impl Default for Setup {
@@ -36,6 +38,7 @@ impl Default for Setup {
             state_dir: None,
             autosave_every: kiln::editor::AUTOSAVE_EVERY,
             size: egui::vec2(1280.0, 800.0),
+            thumbnails: false,
         }
     }
 }
@@ -52,6 +55,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         state_dir,
         autosave_every,
         size,
+        thumbnails,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -67,6 +71,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     state_dir,
                     autosave_every,
                     quit_when_done: false,
+                    thumbnails,
                 },
             )
         })

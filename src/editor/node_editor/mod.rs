@@ -35,6 +35,7 @@ use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
 
 use super::document::{Command, Document, GestureId, Selection};
 use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
+use super::thumbnails::Thumbnails;
 use crate::material::graph::{REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
@@ -229,10 +230,17 @@ impl NodeEditor {
 
     /// Draws the material list and the shown material's graph; returns the commands the
     /// user's edits make, each with its gesture.
-    pub fn ui(&mut self, ui: &mut Ui, document: &Document) -> Vec<(Command, Option<GestureId>)> {
+    /// Draws the material list (with `thumbnails`, when the app renders them) and the
+    /// shown material's graph; returns the commands the user's edits make.
+    pub fn ui(
+        &mut self,
+        ui: &mut Ui,
+        document: &Document,
+        thumbnails: Option<&Thumbnails>,
+    ) -> Vec<(Command, Option<GestureId>)> {
         let mut commands = Vec::new();
         self.follow_selection(document);
-        self.material_bar(ui, document, &mut commands);
+        self.material_bar(ui, document, thumbnails, &mut commands);
         let Some(material) = self.material else {
             ui.label("No material.");
             return commands;
@@ -341,9 +349,15 @@ impl NodeEditor {
         &mut self,
         ui: &mut Ui,
         document: &Document,
+        thumbnails: Option<&Thumbnails>,
         commands: &mut Vec<(Command, Option<GestureId>)>,
     ) {
         let materials = &document.scene().materials;
+        let thumbnail = |i: usize, side: f32| {
+            thumbnails
+                .and_then(|t| t.texture(i, &materials[i]))
+                .map(|texture| egui::Image::new((texture.id(), egui::vec2(side, side))))
+        };
         ui.horizontal(|ui| {
             let label = ui.label("Material");
             let current = self
@@ -354,10 +368,16 @@ impl NodeEditor {
                 .selected_text(current)
                 .show_ui(ui, |ui| {
                     for (i, m) in materials.iter().enumerate() {
-                        if ui
-                            .selectable_label(self.material == Some(i), m.name.as_str())
-                            .clicked()
-                        {
+                        let clicked = ui
+                            .horizontal(|ui| {
+                                if let Some(image) = thumbnail(i, 20.0) {
+                                    ui.add(image);
+                                }
+                                ui.selectable_label(self.material == Some(i), m.name.as_str())
+                                    .clicked()
+                            })
+                            .inner;
+                        if clicked {
                             self.material = Some(i);
                         }
                     }
@@ -380,6 +400,10 @@ impl NodeEditor {
                 return;
             };
             ui.dnd_drag_source(egui::Id::new("material drag"), MaterialDrag(m), |ui| {
+                // The material's thumbnail is its handle, as in Blender's asset lists.
+                if let Some(image) = thumbnail(m, 22.0) {
+                    ui.add(image.sense(egui::Sense::hover()));
+                }
                 ui.add(egui::Label::new("✚ Drag").selectable(false))
             })
             .response
