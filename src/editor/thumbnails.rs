@@ -196,14 +196,8 @@ fn work(ctx: &Arc<GpuContext>, shared: &Shared, repaint: &dyn Fn()) {
             }
         };
         let scene = preview_scene(&materials, index);
-        let start = std::time::Instant::now();
         match render(ctx, &mut renderer, scene) {
             Ok(image) => {
-                tracing::debug!(
-                    material = materials[index].name,
-                    ms = start.elapsed().as_secs_f64() * 1e3,
-                    "thumbnail rendered"
-                );
                 if rendered.len() <= index {
                     rendered.resize(index + 1, None);
                 }
