@@ -283,9 +283,11 @@ fn material_thumbnails_show_each_material_on_a_sphere_and_follow_its_edits() {
         thumbnail(harness.state(), red).is_none(),
         "stale after the edit"
     );
+    let edited = std::time::Instant::now();
     step_until(&mut harness, "the edited material's thumbnail", |app| {
         thumbnail(app, red).is_some()
     });
+    println!("the edited material's thumbnail in {:?}", edited.elapsed());
     let metal = thumbnail(harness.state(), red).unwrap();
     assert_ne!(metal.pixels, r.pixels, "the thumbnail shows the edit");
 }
