@@ -169,6 +169,8 @@ pub struct EditorApp {
     title: String,
     /// Frames drawn since `log_start`, for the debug log of the frame rate.
     frames_logged: u32,
+    /// Time spent in the app's code over those frames.
+    app_time: Duration,
     log_start: Instant,
     viewport_rect: Option<egui::Rect>,
     status_rect: Option<egui::Rect>,
@@ -280,6 +282,7 @@ impl EditorApp {
             allow_close: false,
             title: String::new(),
             frames_logged: 0,
+            app_time: Duration::ZERO,
             log_start: Instant::now(),
             viewport_rect: None,
             status_rect: None,
@@ -1773,15 +1776,17 @@ impl EditorApp {
 
 impl eframe::App for EditorApp {
     fn ui(&mut self, ui: &mut Ui, _frame: &mut eframe::Frame) {
-        let ctx = ui.ctx().clone();
         let now = Instant::now();
         self.frames_logged += 1;
         if now.duration_since(self.log_start).as_secs_f32() >= 2.0 {
-            // For measuring (KILN_LOG=kiln=debug): frames drawn and the viewport's rate.
+            // For measuring (KILN_LOG=kiln=debug): frames drawn, the time the app's own
+            // code took per frame (the rest is egui's tessellation and painting), and
+            // the viewport's rate.
             let seconds = now.duration_since(self.log_start).as_secs_f32();
             let status = self.viewport_status().unwrap_or_default();
             tracing::debug!(
                 fps = self.frames_logged as f32 / seconds,
+                app_ms = self.app_time.as_secs_f64() * 1e3 / self.frames_logged as f64,
                 samples = status.samples,
                 samples_per_second = status.samples_per_second(),
                 width = status.size[0],
@@ -1789,8 +1794,42 @@ impl eframe::App for EditorApp {
                 "editor frames"
             );
             self.frames_logged = 0;
+            self.app_time = Duration::ZERO;
             self.log_start = now;
         }
+        self.frame(ui);
+        self.app_time += now.elapsed();
+    }
+
+    fn on_exit(&mut self) {
+        if let Some(report) = &self.report {
+            let status = self.viewport_status().unwrap_or_default();
+            *report.lock().unwrap_or_else(|e| e.into_inner()) = RunReport {
+                samples: status.samples,
+                samples_per_second: status.samples_per_second(),
+                size: status.size,
+                adapter: self.gpu.as_ref().map(|g| g.describe()).unwrap_or_default(),
+                error: status.error.or_else(|| {
+                    self.gpu
+                        .is_none()
+                        .then(|| "no GPU device for the viewport".to_owned())
+                }),
+            };
+        }
+        // A normal close: the autosave is not needed for recovery.
+        if let Some(job) = self.autosave_job.take() {
+            let _ = job.join();
+        }
+        if let Some(store) = &self.session {
+            store.clear_autosave();
+        }
+    }
+}
+
+impl EditorApp {
+    /// One frame of the window.
+    fn frame(&mut self, ui: &mut Ui) {
+        let ctx = ui.ctx().clone();
 
         if ctx.input(|i| i.viewport().close_requested())
             && self.document.is_dirty()
@@ -1833,30 +1872,6 @@ impl eframe::App for EditorApp {
         if self.autosave_job.is_some() || self.document.is_dirty() {
             // Come back for the autosave even when nothing else asks for a frame.
             ctx.request_repaint_after(self.autosave_every.min(Duration::from_secs(5)));
-        }
-    }
-
-    fn on_exit(&mut self) {
-        if let Some(report) = &self.report {
-            let status = self.viewport_status().unwrap_or_default();
-            *report.lock().unwrap_or_else(|e| e.into_inner()) = RunReport {
-                samples: status.samples,
-                samples_per_second: status.samples_per_second(),
-                size: status.size,
-                adapter: self.gpu.as_ref().map(|g| g.describe()).unwrap_or_default(),
-                error: status.error.or_else(|| {
-                    self.gpu
-                        .is_none()
-                        .then(|| "no GPU device for the viewport".to_owned())
-                }),
-            };
-        }
-        // A normal close: the autosave is not needed for recovery.
-        if let Some(job) = self.autosave_job.take() {
-            let _ = job.join();
-        }
-        if let Some(store) = &self.session {
-            store.clear_autosave();
         }
     }
 }
