@@ -586,6 +586,23 @@ impl EditorApp {
         match save_document(&mut self.document, &path) {
             Ok(()) => {
                 self.remember(&path);
+                // Nothing is lost silently: an edited graph that does not compile stays
+                // in the document, but the file keeps the material's last valid graph.
+                let uncompiled: Vec<String> = self
+                    .document
+                    .uncompiled_graphs()
+                    .map(|(m, e)| {
+                        let name = &self.document.scene().materials[m].name;
+                        format!("\"{name}\" ({})", e.message)
+                    })
+                    .collect();
+                if !uncompiled.is_empty() {
+                    self.error = Some(format!(
+                        "Saved {}, with the last graph that compiled for {}: fix the graph and save again to keep the edit",
+                        path.display(),
+                        uncompiled.join(", ")
+                    ));
+                }
                 true
             }
             Err(e) => {

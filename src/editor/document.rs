@@ -510,6 +510,12 @@ impl Document {
         self.pending_graphs.get(&material).map(|(_, e)| e)
     }
 
+    /// The materials whose edited graph does not compile, with why: a saved file holds
+    /// the last graph of each that compiled (a file must load), so saving says so.
+    pub fn uncompiled_graphs(&self) -> impl Iterator<Item = (usize, &GraphError)> {
+        self.pending_graphs.iter().map(|(&m, (_, e))| (m, e))
+    }
+
     /// Bumped by every applied, undone or redone command.
     pub fn revision(&self) -> u64 {
         self.revision
@@ -1400,6 +1406,8 @@ mod tests {
         .unwrap();
         let error = doc.graph_error(0).expect("no output is a compile error");
         assert!(!error.message.is_empty());
+        let uncompiled: Vec<usize> = doc.uncompiled_graphs().map(|(m, _)| m).collect();
+        assert_eq!(uncompiled, [0], "saving warns about this material");
         assert_eq!(
             doc.scene().materials[0],
             before,
@@ -1412,6 +1420,7 @@ mod tests {
         );
         assert!(doc.undo());
         assert!(doc.graph_error(0).is_none());
+        assert_eq!(doc.uncompiled_graphs().count(), 0);
         assert_eq!(doc.material_graph(0).unwrap(), start);
         assert_eq!(doc.scene().materials[0], before);
     }
