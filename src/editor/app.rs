@@ -359,6 +359,12 @@ impl EditorApp {
         &self.recent
     }
 
+    /// Applies `command` to the document as a panel would (one undo step; a refused one
+    /// is reported in the window): scripted edits, tests and benchmarks.
+    pub fn apply_command(&mut self, command: Command) {
+        self.apply(command, None);
+    }
+
     /// Applies a command, reporting a refused one in the window.
     fn apply(&mut self, command: Command, gesture: Option<GestureId>) {
         if let Err(e) = self.document.apply(command, gesture) {

@@ -481,8 +481,9 @@ pub fn estimated_height(graph: &Graph, node: &Node) -> f32 {
 }
 
 /// The width the layout reserves for a node: the widest of its title and its rows (an
-/// input's label and inline value beside an output's label). Snarl sizes nodes to their
-/// contents; this errs wide so that laid-out columns never overlap.
+/// input's label and inline value, the parameters' column snarl draws between inputs and
+/// outputs, an output's label). Snarl sizes nodes to their contents; this errs wide so
+/// that laid-out columns never overlap.
 pub fn estimated_width(graph: &Graph, node: &Node) -> f32 {
     const CHAR: f32 = 8.0;
     // An inline value (a number field, a colour swatch) and the pin's margins.
@@ -496,8 +497,26 @@ pub fn estimated_width(graph: &Graph, node: &Node) -> f32 {
             .unwrap_or(0) as f32
             * CHAR
     };
+    let chars = |s: &str| s.chars().count() as f32 * CHAR;
+    let body = nodes::find(&node.kind).map_or(0.0, |def| {
+        def.params
+            .iter()
+            .map(|p| {
+                let widget = match p.kind {
+                    // A combo box as wide as its longest option, with its arrow.
+                    ParamKind::Enum(options) => {
+                        options.iter().map(|o| chars(o)).fold(0.0, f32::max) + 48.0
+                    }
+                    ParamKind::Bool(_) => 24.0,
+                    ParamKind::Ramp => 160.0,
+                    ParamKind::File => 200.0,
+                };
+                chars(p.name) + widget + 16.0
+            })
+            .fold(0.0, f32::max)
+    });
     let title = (node.kind.chars().count() + 12) as f32 * CHAR;
-    let rows = label(&sockets.inputs) + WIDGET + label(&sockets.outputs) + 40.0;
+    let rows = label(&sockets.inputs) + WIDGET + body + label(&sockets.outputs) + 40.0;
     title.max(rows).max(NODE_WIDTH)
 }
 

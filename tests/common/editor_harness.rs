@@ -28,6 +28,8 @@ pub struct Setup {
     pub size: egui::Vec2,
     /// Material thumbnails (off unless a test looks at them: they share the device).
     pub thumbnails: bool,
+    /// The file to open (None: the bundled Cornell box).
+    pub file: Option<PathBuf>,
 }
 
 impl Default for Setup {
@@ -39,6 +41,7 @@ impl Default for Setup {
             autosave_every: kiln::editor::AUTOSAVE_EVERY,
             size: egui::vec2(1280.0, 800.0),
             thumbnails: false,
+            file: None,
         }
     }
 }
@@ -56,6 +59,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         autosave_every,
         size,
         thumbnails,
+        file,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -64,7 +68,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
             EditorApp::new(
                 cc,
                 EditorOptions {
-                    file: None,
+                    file,
                     dialogs: Box::new(dialogs),
                     plugins,
                     sample_limit: SAMPLE_LIMIT,

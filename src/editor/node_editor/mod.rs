@@ -228,10 +228,9 @@ impl NodeEditor {
         self.rect
     }
 
-    /// Draws the material list and the shown material's graph; returns the commands the
-    /// user's edits make, each with its gesture.
     /// Draws the material list (with `thumbnails`, when the app renders them) and the
-    /// shown material's graph; returns the commands the user's edits make.
+    /// shown material's graph; returns the commands the user's edits make, each with its
+    /// gesture.
     pub fn ui(
         &mut self,
         ui: &mut Ui,
