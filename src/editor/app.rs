@@ -1782,7 +1782,10 @@ impl eframe::App for EditorApp {
             .resizable(true)
             .default_size(340.0)
             .show(ui, |ui| {
-                for (command, gesture) in self.node_editor.ui(ui, &self.document) {
+                for (command, gesture) in
+                    self.node_editor
+                        .ui(ui, &self.document, self.dialogs.as_mut())
+                {
                     self.apply(command, gesture);
                 }
             });
