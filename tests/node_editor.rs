@@ -585,7 +585,10 @@ fn a_colour_ramp_takes_stops_added_moved_and_deleted_each_undone_in_one_step() {
     let moved = stops(harness.state(), "color_ramp").unwrap();
     assert_eq!(moved.len(), 3, "{moved:?}");
     assert!((moved[1].position - 0.75).abs() < 0.01, "{moved:?}");
-    assert_eq!(moved[1].color, added[1].color, "a moved stop keeps its colour");
+    assert_eq!(
+        moved[1].color, added[1].color,
+        "a moved stop keeps its colour"
+    );
     assert!(moved.windows(2).all(|w| w[0].position <= w[1].position));
 
     // Dragged past the end, it stops at 1 and the stops stay sorted.
@@ -609,7 +612,11 @@ fn a_colour_ramp_takes_stops_added_moved_and_deleted_each_undone_in_one_step() {
         "one drag, one undo step"
     );
 
-    // The selected stop (the moved one) is deleted with the button.
+    // A click on the moved stop's marker selects it; the button deletes it.
+    click_at(
+        &mut harness,
+        egui::pos2(at(moved[1].position), markers.center().y),
+    );
     harness.get_by_label("Delete stop").click_accesskit();
     steps(&mut harness, 3);
     let deleted = stops(harness.state(), "color_ramp").unwrap();
@@ -656,7 +663,16 @@ fn an_image_texture_reads_a_picked_or_dropped_image_and_shows_a_broken_one_as_it
         "image",
         "Image Texture",
     );
+    drag(
+        &mut harness,
+        ("image_texture", "color"),
+        ("surface", "base_color"),
+    );
     let material = harness.state().node_editor().material().unwrap();
+    assert_eq!(
+        graph(harness.state()).nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("image_texture", "color"))
+    );
     assert!(
         harness.state().document().graph_error(material).is_some(),
         "an image texture without a file does not compile"

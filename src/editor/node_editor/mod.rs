@@ -594,8 +594,7 @@ impl NodeEditor {
         let mut adds = Vec::new();
         let mut pos = self.to_global.inverse() * at;
         for file in files.iter().filter(|f| files::is_image(f)) {
-            let GraphEdit::AddNode { id, mut node } = new_node(&scratch, IMAGE_TEXTURE, pos)
-            else {
+            let GraphEdit::AddNode { id, mut node } = new_node(&scratch, IMAGE_TEXTURE, pos) else {
                 continue;
             };
             node.params.insert(
@@ -1047,11 +1046,7 @@ impl<'a> Viewer<'a> {
                         if let Some(Param::Text(t)) = current {
                             label.on_hover_text(t.as_str());
                         }
-                        if ui
-                            .button("Open…")
-                            .on_hover_text(p.doc)
-                            .clicked()
-                        {
+                        if ui.button("Open…").on_hover_text(p.doc).clicked() {
                             self.pick_file = Some((id.to_owned(), p.name.to_owned()));
                         }
                     });

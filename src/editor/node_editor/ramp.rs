@@ -153,9 +153,8 @@ pub fn ramp_ui(
     // The bar: a click adds a stop where it lands.
     let (bar, bar_response) = ui.allocate_exact_size(BAR, Sense::click());
     let bar_response = bar_response.on_hover_text("Click to add a stop here");
-    bar_response.widget_info(|| {
-        egui::WidgetInfo::labeled(egui::WidgetType::Other, true, "color ramp")
-    });
+    bar_response
+        .widget_info(|| egui::WidgetInfo::labeled(egui::WidgetType::Other, true, "color ramp"));
     paint_gradient(ui, bar, &stops, mode);
     let t_at = |x: f32| (x - bar.left()) / bar.width();
     if bar_response.clicked() {
@@ -184,9 +183,15 @@ pub fn ramp_ui(
             .map(|(i, _)| i)
     };
     if strip_response.drag_started() || strip_response.clicked() {
-        // Where the button went down: a drag starts some points away from it.
+        // Where the button went down (a drag starts some points away from it), in the
+        // coordinates of the layer the ramp is drawn on (the canvas's, scaled and moved).
+        let from_global = ui
+            .ctx()
+            .layer_transform_from_global(ui.layer_id())
+            .unwrap_or_default();
         let pressed = ui
             .input(|i| i.pointer.press_origin())
+            .map(|p| from_global * p)
             .or(strip_response.interact_pointer_pos());
         if let Some(i) = pressed.and_then(nearest) {
             state.selected = i;
@@ -379,8 +384,14 @@ mod tests {
     #[test]
     fn the_ramp_blends_as_the_compiled_one() {
         let stops = vec![stop(0.2, 0.0), stop(0.6, 1.0)];
-        assert_eq!(ramp_at(&stops, 0.0, Interpolation::Linear), stop(0.0, 0.0).color);
-        assert_eq!(ramp_at(&stops, 0.9, Interpolation::Linear), stop(0.0, 1.0).color);
+        assert_eq!(
+            ramp_at(&stops, 0.0, Interpolation::Linear),
+            stop(0.0, 0.0).color
+        );
+        assert_eq!(
+            ramp_at(&stops, 0.9, Interpolation::Linear),
+            stop(0.0, 1.0).color
+        );
         assert!((ramp_at(&stops, 0.3, Interpolation::Linear)[0] - 0.25).abs() < 1e-6);
         assert!((ramp_at(&stops, 0.3, Interpolation::Ease)[0] - 0.15625).abs() < 1e-6);
         assert_eq!(ramp_at(&stops, 0.5, Interpolation::Constant)[0], 0.0);
