@@ -218,18 +218,21 @@ pub fn ramp_ui(
     let stop = &stops[selected];
     ui.horizontal(|ui| {
         let mut color = stop.color;
-        let label = ui.label("stop color");
+        // One label for the stop's two fields, to keep the row as narrow as the bar.
+        let label = ui.label("stop");
         let r = ui
             .color_edit_button_rgba_unmultiplied(&mut color)
             .labelled_by(label.id)
-            .on_hover_text("Linear RGB (scene-referred) and alpha; the picker shows it as sRGB");
+            .on_hover_text(
+                "The stop's colour: linear RGB (scene-referred) and alpha; the picker shows \
+                 it as sRGB",
+            );
         if r.changed() {
             let mut new = stops.clone();
             new[selected].color = color;
             changed = Some((new, Some(r.id.value())));
         }
         let mut position = stop.position;
-        let label = ui.label("stop position");
         let r = ui
             .add(
                 egui::DragValue::new(&mut position)
@@ -237,7 +240,8 @@ pub fn ramp_ui(
                     .speed(0.005)
                     .max_decimals(3),
             )
-            .labelled_by(label.id);
+            .labelled_by(label.id)
+            .on_hover_text("The stop's position along the ramp, 0 to 1");
         if r.changed() && position != stop.position {
             let (new, index) = move_stop(&stops, selected, position);
             state.selected = index;
