@@ -1,12 +1,13 @@
 //! The node editor driven like a user, headless on lavapipe (as tests/editor.rs): add a
 //! node through the search menu, draw wires by dragging between pins, edit a value, see a
-//! refused wire's reason, undo and redo back and forth, and save and reopen.
+//! refused wire's reason, undo and redo back and forth, and save and reopen; every socket
+//! label of every library node shows whole; edit a colour ramp; pick and drop images.
 
 use egui::accesskit::{self, Role};
 use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
-use kiln::material::{Graph, Input, Link};
+use kiln::material::{Graph, Input, Link, Node, Param, RampStop};
 
 #[path = "common/editor_harness.rs"]
 mod editor_harness;
@@ -430,4 +431,321 @@ fn ranges_mute_reroute_and_select_all_on_the_canvas() {
     );
     let material = harness.state().node_editor().material().unwrap();
     assert!(harness.state().document().graph_error(material).is_none());
+}
+
+/// A small PNG in `dir`.
+fn png(dir: &std::path::Path, name: &str) -> std::path::PathBuf {
+    let path = dir.join(name);
+    image::RgbaImage::from_pixel(2, 2, image::Rgba([200, 100, 50, 255]))
+        .save(&path)
+        .unwrap();
+    path
+}
+
+/// Widget `n`'s rectangle in screen points (accessibility reports the canvas's widgets
+/// in canvas coordinates).
+fn screen_rect(harness: &Harness<'_, EditorApp>, n: &egui_kittest::Node<'_>) -> egui::Rect {
+    let node_editor = harness.state().node_editor();
+    let r = n.rect();
+    egui::Rect::from_min_max(
+        node_editor.canvas_to_screen(r.min),
+        node_editor.canvas_to_screen(r.max),
+    )
+}
+
+#[test]
+fn every_socket_label_of_every_library_node_shows_whole_beside_its_pin() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = png(dir.path(), "texture.png");
+    let mut all = Graph::default();
+    for def in kiln::material::nodes::library() {
+        let mut node = Node::new(def.kind);
+        if def.kind == "image_texture" {
+            node.params.insert(
+                "file".into(),
+                Param::Text(image.to_string_lossy().into_owned()),
+            );
+        }
+        all.nodes.insert(def.kind.to_owned(), node);
+    }
+    let mut scene = kiln::scene::default_scene().unwrap();
+    scene.materials[0] = kiln::scene::Material::from_graph("every node", all).unwrap();
+    let path = dir.path().join("every_node.kiln");
+    kiln::scene::save_scene(&scene, &path, &[]).unwrap();
+
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.state_mut().open(path);
+    steps(&mut harness, 4);
+    assert_eq!(harness.state().node_editor().material(), Some(0));
+
+    let mut checked = 0;
+    for def in kiln::material::nodes::library() {
+        let node = harness
+            .state()
+            .node_editor()
+            .node_rect(def.kind)
+            .unwrap_or_else(|| panic!("node {} is drawn", def.kind));
+        let sockets = def
+            .inputs
+            .iter()
+            .map(|s| (s.name, true))
+            .chain(def.outputs.iter().map(|s| (s.name, false)));
+        for (socket, input) in sockets {
+            let pin = harness
+                .state()
+                .node_editor()
+                .pin_rect(def.kind, socket, input)
+                .unwrap_or_else(|| panic!("pin {}.{socket} is drawn", def.kind));
+            // The label of this socket: the one of its name on the pin's row, nearest the
+            // pin.
+            let label = harness
+                .get_all_by_role_and_label(Role::Label, socket)
+                .map(|n| screen_rect(&harness, &n))
+                .filter(|r| (r.center().y - pin.center().y).abs() < pin.height())
+                .min_by(|a, b| {
+                    let d = |r: &egui::Rect| (r.center().x - pin.center().x).abs();
+                    d(a).total_cmp(&d(b))
+                })
+                .unwrap_or_else(|| panic!("a label {}.{socket} beside its pin", def.kind));
+            assert!(
+                node.contains_rect(label),
+                "label {}.{socket} at {label:?} lies inside its node at {node:?}",
+                def.kind
+            );
+            let gap = if input {
+                label.left() - pin.right()
+            } else {
+                pin.left() - label.right()
+            };
+            assert!(
+                gap >= 3.0,
+                "label {}.{socket} at {label:?} keeps a margin to its pin at {pin:?}: {gap}",
+                def.kind
+            );
+            checked += 1;
+        }
+    }
+    assert!(checked > 100, "{checked} labels");
+}
+
+/// The colour ramp's stops on node `node` (None while it has the default ones).
+fn stops(app: &EditorApp, node: &str) -> Option<Vec<RampStop>> {
+    match graph(app).nodes[node].params.get("stops") {
+        Some(Param::Ramp(stops)) => Some(stops.clone()),
+        None => None,
+        Some(other) => panic!("stops are a ramp: {other:?}"),
+    }
+}
+
+/// A click with the primary button at `at`.
+fn click_at(harness: &mut Harness<'_, EditorApp>, at: egui::Pos2) {
+    harness.event(egui::Event::PointerMoved(at));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event(egui::Event::PointerButton {
+            pos: at,
+            button: egui::PointerButton::Primary,
+            pressed,
+            modifiers: egui::Modifiers::NONE,
+        });
+        harness.step();
+    }
+    steps(harness, 2);
+}
+
+#[test]
+fn a_colour_ramp_takes_stops_added_moved_and_deleted_each_undone_in_one_step() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.get_by_label("block").click();
+    steps(&mut harness, 3);
+    add_from_menu(&mut harness, egui::vec2(30.0, 40.0), "ramp", "Color Ramp");
+    let start = graph(harness.state());
+    assert_eq!(start.nodes["color_ramp"].kind, "color_ramp");
+    assert_eq!(stops(harness.state(), "color_ramp"), None);
+
+    // A click a quarter along the bar adds a stop there, of the ramp's colour there.
+    let bar = screen_rect(&harness, &harness.get_by_label("color ramp"));
+    let at = |t: f32| bar.left() + bar.width() * t;
+    click_at(&mut harness, egui::pos2(at(0.25), bar.center().y));
+    let added = stops(harness.state(), "color_ramp").expect("a stop was added");
+    assert_eq!(added.len(), 3, "{added:?}");
+    assert!((added[1].position - 0.25).abs() < 0.01, "{added:?}");
+    assert!(
+        (added[1].color[0] - added[1].position).abs() < 1e-4,
+        "black to white: grey as bright as it is far along: {added:?}"
+    );
+
+    // Dragging its marker to three quarters moves it there (one undo step).
+    let markers = screen_rect(&harness, &harness.get_by_label("color ramp stops"));
+    mouse_drag(
+        &mut harness,
+        egui::pos2(at(added[1].position), markers.center().y),
+        egui::vec2(at(0.75) - at(added[1].position), 0.0),
+    );
+    let moved = stops(harness.state(), "color_ramp").unwrap();
+    assert_eq!(moved.len(), 3, "{moved:?}");
+    assert!((moved[1].position - 0.75).abs() < 0.01, "{moved:?}");
+    assert_eq!(
+        moved[1].color, added[1].color,
+        "a moved stop keeps its colour"
+    );
+    assert!(moved.windows(2).all(|w| w[0].position <= w[1].position));
+
+    // Dragged past the end, it stops at 1 and the stops stay sorted.
+    mouse_drag(
+        &mut harness,
+        egui::pos2(at(moved[1].position), markers.center().y),
+        egui::vec2(bar.width(), 0.0),
+    );
+    let clamped = stops(harness.state(), "color_ramp").unwrap();
+    assert_eq!(clamped.len(), 3, "{clamped:?}");
+    assert!(clamped.windows(2).all(|w| w[0].position <= w[1].position));
+    assert_eq!(clamped.iter().filter(|s| s.position == 1.0).count(), 2);
+    let undo_once = |harness: &mut Harness<'_, EditorApp>| {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        steps(harness, 2);
+    };
+    undo_once(&mut harness);
+    assert_eq!(
+        stops(harness.state(), "color_ramp").unwrap(),
+        moved,
+        "one drag, one undo step"
+    );
+
+    // A click on the moved stop's marker selects it; the button deletes it.
+    click_at(
+        &mut harness,
+        egui::pos2(at(moved[1].position), markers.center().y),
+    );
+    harness.get_by_label("Delete stop").click_accesskit();
+    steps(&mut harness, 3);
+    let deleted = stops(harness.state(), "color_ramp").unwrap();
+    assert_eq!(deleted, vec![moved[0].clone(), moved[2].clone()]);
+
+    // Each edit undoes in one step, back to the start.
+    undo_once(&mut harness);
+    assert_eq!(stops(harness.state(), "color_ramp").unwrap(), moved);
+    undo_once(&mut harness);
+    assert_eq!(stops(harness.state(), "color_ramp").unwrap(), added);
+    undo_once(&mut harness);
+    assert_eq!(graph(harness.state()), start);
+}
+
+/// A file dropped on the window, as a platform reports it.
+#[derive(Debug)]
+struct Dropped(std::path::PathBuf);
+
+impl egui::DroppedFile for Dropped {
+    fn path(&self) -> &std::path::Path {
+        &self.0
+    }
+
+    fn bytes(&self) -> Result<Vec<u8>, String> {
+        std::fs::read(&self.0).map_err(|e| e.to_string())
+    }
+}
+
+#[test]
+fn an_image_texture_reads_a_picked_or_dropped_image_and_shows_a_broken_one_as_its_error() {
+    let dir = tempfile::tempdir().unwrap();
+    let image = png(dir.path(), "bricks.png");
+    let broken = dir.path().join("broken.png");
+    std::fs::write(&broken, b"not a png").unwrap();
+    let mut harness = harness(ScriptedDialogs {
+        image: vec![image.clone(), broken.clone()].into(),
+        ..ScriptedDialogs::default()
+    });
+    harness.get_by_label("block").click();
+    steps(&mut harness, 3);
+    add_from_menu(
+        &mut harness,
+        egui::vec2(30.0, 40.0),
+        "image",
+        "Image Texture",
+    );
+    drag(
+        &mut harness,
+        ("image_texture", "color"),
+        ("surface", "base_color"),
+    );
+    let material = harness.state().node_editor().material().unwrap();
+    assert_eq!(
+        graph(harness.state()).nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("image_texture", "color"))
+    );
+    assert!(
+        harness.state().document().graph_error(material).is_some(),
+        "an image texture without a file does not compile"
+    );
+
+    // Open… asks the dialogs for an image: the node reads it and the material compiles.
+    harness.get_by_label("Open…").click_accesskit();
+    steps(&mut harness, 3);
+    let file = |app: &EditorApp, node: &str| graph(app).nodes[node].params.get("file").cloned();
+    assert_eq!(
+        file(harness.state(), "image_texture"),
+        Some(Param::Text(image.to_string_lossy().into_owned()))
+    );
+    assert!(
+        harness.state().document().graph_error(material).is_none(),
+        "{:?}",
+        harness.state().document().graph_error(material)
+    );
+    assert!(harness.query_by_label("file: bricks.png").is_some());
+    let compiled = harness.state().document().scene().materials[material].clone();
+
+    // A file that does not load is the node's error; the graph keeps it and the viewport
+    // the last material that compiled.
+    harness.get_by_label("Open…").click_accesskit();
+    steps(&mut harness, 3);
+    assert_eq!(
+        file(harness.state(), "image_texture"),
+        Some(Param::Text(broken.to_string_lossy().into_owned()))
+    );
+    let error = harness
+        .state()
+        .document()
+        .graph_error(material)
+        .expect("a broken image is an error")
+        .clone();
+    assert_eq!(error.node.as_deref(), Some("image_texture"), "{error:?}");
+    assert!(error.message.contains("broken.png"), "{error:?}");
+    assert_eq!(
+        harness.state().document().scene().materials[material].graph,
+        compiled.graph
+    );
+
+    // An image dropped on the canvas becomes an image texture reading it, where it fell.
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    let at = canvas.left_top() + egui::vec2(60.0, 120.0);
+    harness.event(egui::Event::PointerMoved(at));
+    harness.step();
+    let before = graph(harness.state());
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(image.clone())));
+    // Not an image: not the node editor's.
+    harness
+        .input_mut()
+        .dropped_files
+        .push(std::sync::Arc::new(Dropped(dir.path().join("notes.txt"))));
+    steps(&mut harness, 3);
+    let dropped = graph(harness.state());
+    assert_eq!(dropped.nodes.len(), before.nodes.len() + 1);
+    let node = &dropped.nodes["image_texture_2"];
+    assert_eq!(node.kind, "image_texture");
+    assert_eq!(
+        node.params.get("file"),
+        Some(&Param::Text(image.to_string_lossy().into_owned()))
+    );
+    let drawn = harness
+        .state()
+        .node_editor()
+        .node_position("image_texture_2")
+        .unwrap();
+    assert!(
+        (drawn - at).length() < 1.0,
+        "the node's corner is where the file fell: {drawn:?} vs {at:?}"
+    );
 }

@@ -112,7 +112,11 @@ fn frame_time_with_200_nodes() {
         .material()
         .and_then(|m| harness.state().document().material_graph(m))
         .expect("the graph is shown");
-    assert_eq!(shown.nodes.len(), 201, "199 math nodes, the BSDF and the output");
+    assert_eq!(
+        shown.nodes.len(),
+        201,
+        "199 math nodes, the BSDF and the output"
+    );
     // Frames of the canvas with every node drawn (zoomed out to frame all), and while a
     // value changes (each change rebuilds the canvas from the document).
     let mut idle = Vec::new();

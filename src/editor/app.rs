@@ -1875,7 +1875,10 @@ impl EditorApp {
             .show(ui, |ui| {
                 self.update_thumbnails(ui.ctx());
                 let thumbnails = self.thumbnails.as_ref();
-                for (command, gesture) in self.node_editor.ui(ui, &self.document, thumbnails) {
+                let dialogs = self.dialogs.as_mut();
+                for (command, gesture) in
+                    self.node_editor.ui(ui, &self.document, thumbnails, dialogs)
+                {
                     self.apply(command, gesture);
                 }
             });

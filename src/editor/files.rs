@@ -21,6 +21,19 @@ pub trait FileDialogs {
     fn export_path(&mut self, extensions: &[String]) -> Option<PathBuf>;
     /// An equirectangular environment map (`.hdr`, `.exr`).
     fn environment_path(&mut self) -> Option<PathBuf>;
+    /// An image for an image-texture node (any of [`IMAGE_EXTENSIONS`]).
+    fn image_path(&mut self) -> Option<PathBuf>;
+}
+
+/// The extensions of the images a texture reads, as dialogs offer them and a file
+/// dropped on the node editor is recognised by.
+pub const IMAGE_EXTENSIONS: &[&str] = &["png", "jpg", "jpeg", "exr", "hdr"];
+
+/// Whether `path` names an image a texture can read (by its extension).
+pub fn is_image(path: &Path) -> bool {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .is_some_and(|e| IMAGE_EXTENSIONS.iter().any(|x| x.eq_ignore_ascii_case(e)))
 }
 
 /// The platform's native dialogs (`rfd`).
@@ -90,6 +103,17 @@ impl FileDialogs for NativeDialogs {
             .add_filter("HDR images", &["hdr", "exr"])
             .pick_file()
     }
+
+    fn image_path(&mut self) -> Option<PathBuf> {
+        rfd::FileDialog::new()
+            .set_title("Image Texture")
+            .add_filter("Images", IMAGE_EXTENSIONS)
+            .add_filter("PNG", &["png"])
+            .add_filter("JPEG", &["jpg", "jpeg"])
+            .add_filter("OpenEXR", &["exr"])
+            .add_filter("Radiance HDR", &["hdr"])
+            .pick_file()
+    }
 }
 
 /// Dialogs that answer from a queue of paths, for tests and scripted sessions; an empty
@@ -101,6 +125,7 @@ pub struct ScriptedDialogs {
     pub import: std::collections::VecDeque<PathBuf>,
     pub export: std::collections::VecDeque<PathBuf>,
     pub environment: std::collections::VecDeque<PathBuf>,
+    pub image: std::collections::VecDeque<PathBuf>,
 }
 
 impl FileDialogs for ScriptedDialogs {
@@ -122,6 +147,10 @@ impl FileDialogs for ScriptedDialogs {
 
     fn environment_path(&mut self) -> Option<PathBuf> {
         self.environment.pop_front()
+    }
+
+    fn image_path(&mut self) -> Option<PathBuf> {
+        self.image.pop_front()
     }
 }
 

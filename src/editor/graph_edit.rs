@@ -497,31 +497,41 @@ pub fn estimated_width(graph: &Graph, node: &Node) -> f32 {
             .unwrap_or(0) as f32
             * CHAR
     };
-    let chars = |s: &str| s.chars().count() as f32 * CHAR;
-    let body = nodes::find(&node.kind).map_or(0.0, |def| {
-        def.params
+    let title = (node.kind.chars().count() + 12) as f32 * CHAR;
+    // The parameters sit in a column between the inputs and the outputs.
+    let body = nodes::find(&node.kind).map_or(0.0, |d| {
+        d.params
             .iter()
-            .map(|p| {
-                let widget = match p.kind {
-                    // A combo box as wide as its longest option, with its arrow.
-                    ParamKind::Enum(options) => {
-                        options.iter().map(|o| chars(o)).fold(0.0, f32::max) + 48.0
-                    }
-                    ParamKind::Bool(_) => 24.0,
-                    ParamKind::Ramp => 160.0,
-                    ParamKind::File => 200.0,
-                };
-                chars(p.name) + widget + 16.0
+            .map(|p| match &p.kind {
+                // The name, and a dropdown as wide as its longest option.
+                nodes::ParamKind::Enum(options) => {
+                    let longest = options.iter().map(|o| o.chars().count()).max();
+                    (p.name.chars().count() + longest.unwrap_or(0)) as f32 * CHAR + 50.0
+                }
+                nodes::ParamKind::Bool(_) => p.name.chars().count() as f32 * CHAR + 30.0,
+                // The ramp editor's row of the selected stop.
+                nodes::ParamKind::Ramp => 240.0,
+                // A file name and the button to pick another.
+                nodes::ParamKind::File => 260.0,
             })
             .fold(0.0, f32::max)
     });
-    let title = (node.kind.chars().count() + 12) as f32 * CHAR;
     let rows = label(&sockets.inputs) + WIDGET + body + label(&sockets.outputs) + 40.0;
     title.max(rows).max(NODE_WIDTH)
 }
 
+/// The rows a node's parameters take (a ramp editor four: its name, its bar and markers,
+/// its stop's fields).
 fn node_param_rows(node: &Node) -> usize {
-    nodes::find(&node.kind).map_or(node.params.len(), |d| d.params.len())
+    nodes::find(&node.kind).map_or(node.params.len(), |d| {
+        d.params
+            .iter()
+            .map(|p| match p.kind {
+                nodes::ParamKind::Ramp => 4,
+                _ => 1,
+            })
+            .sum()
+    })
 }
 
 /// Where every node of `graph` is drawn: its saved position, or for nodes without one an

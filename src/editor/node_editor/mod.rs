@@ -21,25 +21,33 @@
 //! and the selection they act on are in [`keys`].
 
 mod keys;
+mod ramp;
 
 use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
+use std::path::PathBuf;
 use std::rc::Rc;
 
 use egui::emath::TSTransform;
 use egui::{Color32, Key, Pos2, RichText, Stroke, Ui};
 use egui_snarl::ui::{
-    AnyPins, PinInfo, PinShape, PinWireInfo, SnarlPin, SnarlStyle, SnarlViewer, SnarlWidget,
+    AnyPins, PinInfo, PinPlacement, PinShape, PinWireInfo, SnarlPin, SnarlStyle, SnarlViewer,
+    SnarlWidget,
 };
 use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
 
 use super::document::{Command, Document, GestureId, Selection};
+use super::files::{self, FileDialogs};
 use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
 use super::thumbnails::Thumbnails;
 use crate::material::graph::{REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
 use crate::scene::Material;
+
+/// The node type a dropped image becomes, and its parameter naming the file.
+const IMAGE_TEXTURE: &str = "image_texture";
+const IMAGE_FILE_PARAM: &str = "file";
 
 /// The gesture node drags merge under (one drag, one undo step).
 const MOVE_GESTURE: GestureId = 0x6e6f_6465_6d6f_7665;
@@ -114,6 +122,8 @@ pub struct NodeEditor {
     rename: String,
     to_global: TSTransform,
     pins: PinRects,
+    /// Where each node was drawn in the last frame, in canvas coordinates.
+    node_rects: BTreeMap<String, egui::Rect>,
     rect: Option<egui::Rect>,
     /// Set when the view should frame all nodes in the next frame (another material
     /// shown, or Home).
@@ -157,6 +167,7 @@ impl Default for NodeEditor {
             rename: String::new(),
             to_global: TSTransform::IDENTITY,
             pins: PinRects::default(),
+            node_rects: BTreeMap::new(),
             rect: None,
             frame_all: true,
             select_all: None,
@@ -184,6 +195,11 @@ struct Viewer<'a> {
     /// Nodes selected by the select-all layer and not by snarl: drawn as selected here.
     layer_selected: BTreeSet<String>,
     selection_stroke: Stroke,
+    /// The file parameter (node, parameter) whose "Open…" was clicked: the editor asks
+    /// its dialogs for a file after drawing.
+    pick_file: Option<(String, String)>,
+    /// Where each node was drawn, in canvas coordinates.
+    node_rects: BTreeMap<String, egui::Rect>,
 }
 
 impl NodeEditor {
@@ -205,10 +221,21 @@ impl NodeEditor {
     /// Where the pin of `socket` on node `node` (an input when `input`) was drawn in the
     /// last frame, in screen points.
     pub fn pin_position(&self, node: &str, socket: &str, input: bool) -> Option<Pos2> {
+        Some(self.pin_rect(node, socket, input)?.center())
+    }
+
+    /// The rectangle the pin of `socket` on node `node` (an input when `input`) took in
+    /// the last frame, in screen points.
+    pub fn pin_rect(&self, node: &str, socket: &str, input: bool) -> Option<egui::Rect> {
         let side = if input { Side::Input } else { Side::Output };
         let rects = self.pins.borrow();
         let rect = rects.get(&(node.to_owned(), side, socket.to_owned()))?;
-        Some(self.to_global * rect.center())
+        Some(self.to_global * *rect)
+    }
+
+    /// The rectangle node `node` took in the last frame (its frame), in screen points.
+    pub fn node_rect(&self, node: &str) -> Option<egui::Rect> {
+        Some(self.to_global * *self.node_rects.get(node)?)
     }
 
     /// Where node `node` is drawn, in screen points (its top-left corner).
@@ -230,12 +257,13 @@ impl NodeEditor {
 
     /// Draws the material list (with `thumbnails`, when the app renders them) and the
     /// shown material's graph; returns the commands the user's edits make, each with its
-    /// gesture.
+    /// gesture. `dialogs` answers an image parameter's "Open…".
     pub fn ui(
         &mut self,
         ui: &mut Ui,
         document: &Document,
         thumbnails: Option<&Thumbnails>,
+        dialogs: &mut dyn FileDialogs,
     ) -> Vec<(Command, Option<GestureId>)> {
         let mut commands = Vec::new();
         self.follow_selection(document);
@@ -278,6 +306,8 @@ impl NodeEditor {
             view,
             layer_selected,
             selection_stroke: Stroke::new(2.0, ui.visuals().selection.stroke.color),
+            pick_file: None,
+            node_rects: BTreeMap::new(),
         };
         self.pins.borrow_mut().clear();
         // The canvas fills what is left of the panel (snarl's response covers the whole
@@ -292,6 +322,7 @@ impl NodeEditor {
             .show(&mut self.snarl, &mut viewer, ui);
         self.rect = Some(canvas);
         self.to_global = viewer.to_global;
+        self.node_rects = std::mem::take(&mut viewer.node_rects);
         let mut edits = std::mem::take(&mut viewer.edits);
         if let Some(m) = viewer.message.take() {
             self.message = Some(m);
@@ -299,6 +330,18 @@ impl NodeEditor {
             self.message = None;
         }
 
+        if let Some((node, param)) = viewer.pick_file.take() {
+            if let Some(path) = dialogs.image_path() {
+                edits.push((
+                    GraphEdit::SetParam {
+                        node,
+                        param,
+                        value: Some(Param::Text(path.to_string_lossy().into_owned())),
+                    },
+                    None,
+                ));
+            }
+        }
         if let Some(moves) = self.moves(&graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
@@ -318,6 +361,25 @@ impl NodeEditor {
                 .into_iter()
                 .map(|e| (e, None)),
         );
+        // Images dropped over the canvas become image-texture nodes there. Some platforms
+        // report no pointer while a file is dragged in from outside: a drop with no
+        // pointer known lands in the canvas's middle.
+        let drop_at = match ui.ctx().pointer_hover_pos() {
+            Some(p) => canvas.contains(p).then_some(p),
+            None => Some(canvas.center()),
+        };
+        if let Some(at) = drop_at {
+            let dropped: Vec<PathBuf> = ui.ctx().input(|i| {
+                i.raw
+                    .dropped_files
+                    .iter()
+                    .map(|f| f.path().to_owned())
+                    .collect()
+            });
+            if let Some(edit) = self.dropped_images(&graph, &dropped, at) {
+                edits.push((edit, None));
+            }
+        }
         commands.extend(
             edits
                 .into_iter()
@@ -598,6 +660,32 @@ impl NodeEditor {
         }
     }
 
+    /// The edit that adds an image-texture node reading each image of `files` (dropped on
+    /// the canvas at screen point `at`; the others are not the node editor's), one below
+    /// the other, as one undo step. An image that does not load shows its error on its
+    /// node, as a missing image does.
+    pub fn dropped_images(&self, graph: &Graph, files: &[PathBuf], at: Pos2) -> Option<GraphEdit> {
+        let mut scratch = graph.clone();
+        let mut adds = Vec::new();
+        let mut pos = self.to_global.inverse() * at;
+        for file in files.iter().filter(|f| files::is_image(f)) {
+            let GraphEdit::AddNode { id, mut node } = new_node(&scratch, IMAGE_TEXTURE, pos) else {
+                continue;
+            };
+            node.params.insert(
+                IMAGE_FILE_PARAM.to_owned(),
+                Param::Text(file.to_string_lossy().into_owned()),
+            );
+            pos.y += graph_edit::estimated_height(&scratch, &node) + 20.0;
+            let add = GraphEdit::AddNode { id, node };
+            // Applied to a copy so that the next node gets a fresh id of its own.
+            if add.clone().apply(&mut scratch).is_ok() {
+                adds.push(add);
+            }
+        }
+        (!adds.is_empty()).then_some(GraphEdit::Batch(adds))
+    }
+
     /// The add menu opened with Shift+A, as a popup at the pointer.
     fn add_menu_popup(&mut self, ui: &Ui, graph: &Graph) -> Vec<GraphEdit> {
         let Some(at) = self.add_menu else {
@@ -684,12 +772,21 @@ fn unique_name(materials: &[Material], base: &str) -> String {
         .expect("a free name exists")
 }
 
+/// Snarl's style for the canvas. Pins sit on the node's edge, as Blender's: snarl 0.12
+/// reserves the room of a pin drawn inside the node wrongly on the output side (its
+/// right-to-left row grows past the node's edge, and each output row starts further right
+/// than the last, so that output labels run under their pins and out of the node, clipped
+/// away). A pin on the edge needs no room reserved inside.
 fn style() -> SnarlStyle {
     SnarlStyle {
         collapsible: Some(true),
+        pin_placement: Some(PinPlacement::Edge),
         ..SnarlStyle::new()
     }
 }
+
+/// The width an error message on a node wraps at.
+const ERROR_WIDTH: f32 = 240.0;
 
 /// The edit adding a node of type `kind` at canvas position `pos`.
 fn new_node(graph: &Graph, kind: &str, pos: Pos2) -> GraphEdit {
@@ -947,8 +1044,8 @@ impl<'a> Viewer<'a> {
         }
     }
 
-    /// A node's parameters: dropdowns for enums, checkboxes for flags, and what a ramp or
-    /// a file holds.
+    /// A node's parameters: dropdowns for enums, checkboxes for flags, the colour-ramp
+    /// editor ([`ramp`]), and a file's name with a button to pick another.
     fn params_ui(&mut self, ui: &mut Ui, id: &str) {
         let Some(node) = self.node(id) else { return };
         let Some(def) = nodes::find(&node.kind) else {
@@ -958,6 +1055,7 @@ impl<'a> Viewer<'a> {
             return;
         };
         let mut edit = None;
+        let mut gesture = None;
         for p in &def.params {
             let current = node.params.get(p.name);
             match &p.kind {
@@ -994,9 +1092,22 @@ impl<'a> Viewer<'a> {
                     }
                 }
                 ParamKind::Ramp => {
-                    if let Some(Param::Ramp(stops)) = current {
-                        ramp_preview(ui, stops);
-                    }
+                    let stops = match current {
+                        Some(Param::Ramp(stops)) => stops.clone(),
+                        _ => ramp::default_stops(),
+                    };
+                    let mode = match node.params.get("interpolation") {
+                        Some(Param::Text(choice)) => ramp::Interpolation::from_choice(choice),
+                        _ => ramp::Interpolation::Linear,
+                    };
+                    let ramp_id = egui::Id::new(("kiln color ramp", id, p.name));
+                    ui.vertical(|ui| {
+                        ui.label(p.name).on_hover_text(p.doc);
+                        if let Some((new, g)) = ramp::ramp_ui(ui, ramp_id, &stops, mode) {
+                            edit = Some((p.name, Param::Ramp(new)));
+                            gesture = g;
+                        }
+                    });
                 }
                 ParamKind::File => {
                     let file = match current {
@@ -1005,7 +1116,15 @@ impl<'a> Viewer<'a> {
                             .map_or(t.clone(), |f| f.to_string_lossy().into_owned()),
                         _ => "(no image)".to_owned(),
                     };
-                    ui.label(format!("{}: {file}", p.name)).on_hover_text(p.doc);
+                    ui.horizontal(|ui| {
+                        let label = ui.label(format!("{}: {file}", p.name));
+                        if let Some(Param::Text(t)) = current {
+                            label.on_hover_text(t.as_str());
+                        }
+                        if ui.button("Open…").on_hover_text(p.doc).clicked() {
+                            self.pick_file = Some((id.to_owned(), p.name.to_owned()));
+                        }
+                    });
                 }
             }
         }
@@ -1016,47 +1135,10 @@ impl<'a> Viewer<'a> {
                     param: param.to_owned(),
                     value: Some(value),
                 },
-                None,
+                gesture,
             );
         }
     }
-}
-
-/// Draws a colour ramp's stops as a gradient strip.
-fn ramp_preview(ui: &mut Ui, stops: &[crate::material::RampStop]) {
-    let (rect, _) = ui.allocate_exact_size(egui::vec2(160.0, 14.0), egui::Sense::hover());
-    let painter = ui.painter_at(rect);
-    let steps = 32;
-    for i in 0..steps {
-        let t = (i as f32 + 0.5) / steps as f32;
-        let c = ramp_at(stops, t);
-        let x0 = rect.left() + rect.width() * i as f32 / steps as f32;
-        let x1 = rect.left() + rect.width() * (i + 1) as f32 / steps as f32;
-        painter.rect_filled(
-            egui::Rect::from_x_y_ranges(x0..=x1, rect.y_range()),
-            0.0,
-            egui::Rgba::from_rgb(c[0], c[1], c[2]),
-        );
-    }
-}
-
-/// The ramp's colour at `t` (linear interpolation between stops).
-fn ramp_at(stops: &[crate::material::RampStop], t: f32) -> [f32; 3] {
-    let Some(first) = stops.first() else {
-        return [0.0; 3];
-    };
-    let mut prev = first;
-    if t <= first.position {
-        return [first.color[0], first.color[1], first.color[2]];
-    }
-    for s in stops {
-        if t <= s.position {
-            let w = ((t - prev.position) / (s.position - prev.position).max(1e-6)).clamp(0.0, 1.0);
-            return std::array::from_fn(|i| prev.color[i] + (s.color[i] - prev.color[i]) * w);
-        }
-        prev = s;
-    }
-    [prev.color[0], prev.color[1], prev.color[2]]
 }
 
 /// The field of a float input: clamped to the declared hard range (typed values too) and
@@ -1174,9 +1256,19 @@ impl SnarlViewer<String> for Viewer<'_> {
         snarl: &mut Snarl<String>,
     ) {
         let id = snarl[node].clone();
+        // The body takes the width its content needs: snarl gives it the room the last
+        // frame measured, so text wrapped to that room would never widen the node.
+        ui.style_mut().wrap_mode = Some(egui::TextWrapMode::Extend);
         ui.vertical(|ui| {
             if let Some(e) = self.error_on(&id) {
-                ui.label(RichText::new(&e.message).color(Color32::LIGHT_RED));
+                // An error wraps at a width of its own instead.
+                let galley = ui.painter().layout(
+                    e.message.clone(),
+                    egui::TextStyle::Body.resolve(ui.style()),
+                    Color32::LIGHT_RED,
+                    ERROR_WIDTH,
+                );
+                ui.label(galley);
             }
             self.params_ui(ui, &id);
         });
@@ -1376,6 +1468,16 @@ impl SnarlViewer<String> for Viewer<'_> {
             self.try_edit(GraphEdit::RemoveNode { id }, None);
             ui.close();
         }
+    }
+
+    fn final_node_rect(
+        &mut self,
+        node: NodeId,
+        rect: egui::Rect,
+        _ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        self.node_rects.insert(snarl[node].clone(), rect);
     }
 
     fn current_transform(&mut self, to_global: &mut TSTransform, _snarl: &mut Snarl<String>) {
