@@ -49,23 +49,7 @@ fn pin(harness: &Harness<'_, EditorApp>, node: &str, socket: &str, input: bool) 
 fn drag(harness: &mut Harness<'_, EditorApp>, from: (&str, &str), to: (&str, &str)) {
     let from = pin(harness, from.0, from.1, false);
     let to = pin(harness, to.0, to.1, true);
-    let button = |pos, pressed| egui::Event::PointerButton {
-        pos,
-        button: egui::PointerButton::Primary,
-        pressed,
-        modifiers: egui::Modifiers::NONE,
-    };
-    harness.event(egui::Event::PointerMoved(from));
-    harness.step();
-    harness.event(button(from, true));
-    harness.step();
-    for i in 1..=8 {
-        let t = i as f32 / 8.0;
-        harness.event(egui::Event::PointerMoved(from + (to - from) * t));
-        harness.step();
-    }
-    harness.event(button(to, false));
-    steps(harness, 3);
+    mouse_drag(harness, from, to - from);
 }
 
 /// Shift+clicks the header of the noise texture node: snarl selects with Shift+click (a

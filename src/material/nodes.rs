@@ -1551,22 +1551,27 @@ fn fold_invert(inputs: &[Value], _: Params) -> Option<Vec<Value>> {
 
 // ---------------------------------------------------------------- generated code
 
+/// The stops of a colour ramp whose node sets none: black to white.
+pub fn default_ramp_stops() -> Vec<RampStop> {
+    vec![
+        RampStop {
+            position: 0.0,
+            color: [0.0, 0.0, 0.0, 1.0],
+        },
+        RampStop {
+            position: 1.0,
+            color: [1.0; 4],
+        },
+    ]
+}
+
 /// The ramp's stops become a helper function of the factor: a chain of comparisons,
 /// each mixing two stops with `nd_ramp_mix`.
 fn generate_color_ramp(e: &mut dyn Emit) -> Result<String, GraphError> {
     let params = e.params();
     let mut stops: Vec<RampStop> = match params.get("stops") {
         Some(Param::Ramp(s)) => s.clone(),
-        _ => vec![
-            RampStop {
-                position: 0.0,
-                color: [0.0, 0.0, 0.0, 1.0],
-            },
-            RampStop {
-                position: 1.0,
-                color: [1.0; 4],
-            },
-        ],
+        _ => default_ramp_stops(),
     };
     stops.sort_by(|a, b| a.position.total_cmp(&b.position));
     let mode = params.choice("interpolation");

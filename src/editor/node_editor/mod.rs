@@ -1094,7 +1094,7 @@ impl<'a> Viewer<'a> {
                 ParamKind::Ramp => {
                     let stops = match current {
                         Some(Param::Ramp(stops)) => stops.clone(),
-                        _ => ramp::default_stops(),
+                        _ => nodes::default_ramp_stops(),
                     };
                     let mode = match node.params.get("interpolation") {
                         Some(Param::Text(choice)) => ramp::Interpolation::from_choice(choice),

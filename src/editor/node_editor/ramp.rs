@@ -35,20 +35,6 @@ impl Interpolation {
     }
 }
 
-/// The stops a ramp has when its node sets none: black to white, as the compiler's.
-pub fn default_stops() -> Vec<RampStop> {
-    vec![
-        RampStop {
-            position: 0.0,
-            color: [0.0, 0.0, 0.0, 1.0],
-        },
-        RampStop {
-            position: 1.0,
-            color: [1.0; 4],
-        },
-    ]
-}
-
 /// The ramp's colour at `t`, as the compiled ramp computes it (`nd_ramp_mix`): the
 /// first stop's colour up to it, the last's after it, blended by `mode` between. `stops`
 /// must be sorted by position.
@@ -142,7 +128,7 @@ pub fn ramp_ui(
     mode: Interpolation,
 ) -> Option<(Vec<RampStop>, Option<GestureId>)> {
     let stops = if stops.is_empty() {
-        default_stops()
+        crate::material::nodes::default_ramp_stops()
     } else {
         sorted(stops)
     };
