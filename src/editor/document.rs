@@ -274,30 +274,7 @@ impl Document {
         path: Option<PathBuf>,
         images: Vec<(String, std::sync::Arc<Vec<u8>>)>,
     ) -> Self {
-        let mut taken: std::collections::HashSet<String> = (scene.instances.iter())
-            .map(|i| i.name.clone())
-            .chain(scene.lights.iter().map(|l| l.name.clone()))
-            .collect();
-        let mut name_after = |base: &str| {
-            let name = std::iter::once(base.to_owned())
-                .chain((1..).map(|n| format!("{base}.{n:03}")))
-                .find(|n| !taken.contains(n))
-                .expect("some suffix is free");
-            taken.insert(name.clone());
-            name
-        };
-        for i in 0..scene.instances.len() {
-            if scene.instances[i].name.is_empty() {
-                let base = &scene.meshes[scene.instances[i].mesh].name;
-                let base = if base.is_empty() { "object" } else { base };
-                scene.instances[i].name = name_after(base);
-            }
-        }
-        for light in &mut scene.lights {
-            if light.name.is_empty() {
-                light.name = name_after(light_kind(&light.light));
-            }
-        }
+        name_unnamed(&mut scene);
         Self {
             scene,
             images,
@@ -383,7 +360,7 @@ impl Document {
     /// A name not yet taken among the objects and lights, from `base` with Blender's
     /// numeric suffixes (`block` → `block.001`, `block.001` → `block.002`).
     pub fn unique_name(&self, base: &str) -> String {
-        suffixed(base, |n| self.name_taken(n))
+        free_name(base, |n| self.name_taken(n))
     }
 
     fn name_taken(&self, name: &str) -> bool {
@@ -437,13 +414,11 @@ impl Document {
     /// to the document, its objects and lights named as a newly opened document would
     /// name them, made unique.
     pub fn append(&self, scene: Scene, images: Vec<(String, std::sync::Arc<Vec<u8>>)>) -> Command {
-        let mut scene = Document::new(scene, None, Vec::new()).scene;
+        let mut scene = scene;
+        name_unnamed(&mut scene);
         let mut taken = std::collections::HashSet::new();
         let mut unique = |name: &mut String| {
-            let free = |n: &str| !self.name_taken(n) && !taken.contains(n);
-            if !free(name) {
-                *name = suffixed(name, |n| !free(n));
-            }
+            *name = free_name(name, |n| self.name_taken(n) || taken.contains(n));
             taken.insert(name.clone());
         };
         for instance in &mut scene.instances {
@@ -473,11 +448,7 @@ impl Document {
 
     /// A material name not yet taken, from `base` with Blender's numeric suffixes.
     pub fn unique_material_name(&self, base: &str) -> String {
-        let taken = |n: &str| self.scene.materials.iter().any(|m| m.name == n);
-        std::iter::once(base.to_owned())
-            .chain((1..).map(|i| format!("{base}.{i:03}")))
-            .find(|n| !taken(n))
-            .expect("some suffix is free")
+        free_name(base, |n| self.scene.materials.iter().any(|m| m.name == n))
     }
 
     /// The command that adds `light` at the end of the lights, named after its kind.
@@ -1080,20 +1051,47 @@ impl Document {
     }
 }
 
-/// The stem of `base` (`block.001` → `block`) if `taken` does not hold it, otherwise the
-/// first of its Blender suffixes (`block.001`, `block.002`, …) that `taken` does not hold.
-fn suffixed(base: &str, taken: impl Fn(&str) -> bool) -> String {
+/// Names the objects and lights `scene` left unnamed: objects after their mesh, lights
+/// after their kind ("Point", "Sun"), made unique with Blender's `.001` suffixes.
+fn name_unnamed(scene: &mut Scene) {
+    let mut taken: std::collections::HashSet<String> = (scene.instances.iter())
+        .map(|i| i.name.clone())
+        .chain(scene.lights.iter().map(|l| l.name.clone()))
+        .collect();
+    let mut name_after = |base: &str| {
+        let name = free_name(base, |n| taken.contains(n));
+        taken.insert(name.clone());
+        name
+    };
+    for i in 0..scene.instances.len() {
+        if scene.instances[i].name.is_empty() {
+            let base = &scene.meshes[scene.instances[i].mesh].name;
+            let base = if base.is_empty() { "object" } else { base };
+            scene.instances[i].name = name_after(base);
+        }
+    }
+    for light in &mut scene.lights {
+        if light.name.is_empty() {
+            light.name = name_after(light_kind(&light.light));
+        }
+    }
+}
+
+/// `base` if `taken` does not hold it, otherwise the first of its stem and the stem's
+/// Blender suffixes (`block.001` → `block`, `block.001`, `block.002`, …) that it does not
+/// hold: the one rule for naming objects, lights and materials.
+fn free_name(base: &str, taken: impl Fn(&str) -> bool) -> String {
+    if !taken(base) {
+        return base.to_owned();
+    }
     let stem = match base.rsplit_once('.') {
         Some((stem, digits)) if digits.len() == 3 && digits.bytes().all(|b| b.is_ascii_digit()) => {
             stem
         }
         _ => base,
     };
-    if !taken(stem) {
-        return stem.to_owned();
-    }
-    (1..)
-        .map(|i| format!("{stem}.{i:03}"))
+    std::iter::once(stem.to_owned())
+        .chain((1..).map(|i| format!("{stem}.{i:03}")))
         .find(|n| !taken(n))
         .expect("some suffix is free")
 }

@@ -446,7 +446,7 @@ impl NodeEditor {
                 .response
                 .labelled_by(label.id);
             if ui.button("New").clicked() {
-                let name = unique_name(materials, "Material");
+                let name = document.unique_material_name("Material");
                 commands.push((
                     Command::AddMaterial {
                         index: materials.len(),
@@ -471,7 +471,7 @@ impl NodeEditor {
             .on_hover_text("Drag onto an object in the viewport or the outliner to assign");
             if ui.button("Duplicate").clicked() {
                 let mut copy = materials[m].clone();
-                copy.name = unique_name(materials, &copy.name);
+                copy.name = document.unique_material_name(&copy.name);
                 commands.push((
                     Command::AddMaterial {
                         index: materials.len(),
@@ -754,22 +754,6 @@ fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
         canvas.top() + margin - bounds.top() * scale
     };
     TSTransform::new(egui::vec2(x, y), scale)
-}
-
-/// A material name not in `materials`: `base`, or with Blender's `.001` suffixes.
-fn unique_name(materials: &[Material], base: &str) -> String {
-    let taken = |n: &str| materials.iter().any(|m| m.name == n);
-    if !taken(base) {
-        return base.to_owned();
-    }
-    let stem = match base.rsplit_once('.') {
-        Some((stem, n)) if n.len() == 3 && n.chars().all(|c| c.is_ascii_digit()) => stem,
-        _ => base,
-    };
-    (1..)
-        .map(|n| format!("{stem}.{n:03}"))
-        .find(|n| !taken(n))
-        .expect("a free name exists")
 }
 
 /// Snarl's style for the canvas. Pins sit on the node's edge, as Blender's: snarl 0.12
