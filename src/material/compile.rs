@@ -571,17 +571,20 @@ impl<'a> Flattener<'a> {
             }
             GROUP => {
                 let (_, group) = self.group(&full, target)?;
+                let no_output = || {
+                    self.ctx.err(
+                        Some(at),
+                        Some(socket),
+                        format!(
+                            "link to \"{link}\": the group has no output \"{}\"",
+                            link.socket
+                        ),
+                    )
+                };
                 if target.muted {
-                    let Some(out) = group.outputs.iter().find(|s| s.name == link.socket) else {
-                        return Err(self.ctx.err(
-                            Some(at),
-                            Some(socket),
-                            format!(
-                                "link to \"{link}\": the group has no output \"{}\"",
-                                link.socket
-                            ),
-                        ));
-                    };
+                    let out = (group.outputs.iter())
+                        .find(|s| s.name == link.socket)
+                        .ok_or_else(no_output)?;
                     let inputs = group.inputs.iter().map(|s| {
                         let declared = s.default.clone().map_or_else(|| zero(s.ty), Src::Const);
                         (s.name.as_str(), s.ty, declared)
@@ -596,16 +599,7 @@ impl<'a> Flattener<'a> {
                         hops,
                     );
                 }
-                let Some(inner) = group.links.get(&link.socket) else {
-                    return Err(self.ctx.err(
-                        Some(at),
-                        Some(socket),
-                        format!(
-                            "link to \"{link}\": the group has no output \"{}\"",
-                            link.socket
-                        ),
-                    ));
-                };
+                let inner = group.links.get(&link.socket).ok_or_else(no_output)?;
                 let inner_scope = Scope {
                     prefix: format!("{full}/"),
                     nodes: &group.nodes,
