@@ -8,7 +8,7 @@ use glam::Vec3;
 use kiln::editor::display::DisplayPipeline;
 use kiln::film::output::ViewSettings;
 use kiln::film::tonemap::{Tonemap, to_srgb8};
-use kiln::render::GpuContext;
+use kiln::render::{GpuContext, map_and_read};
 use wgpu::util::DeviceExt;
 
 const WIDTH: u32 = 64;
@@ -119,12 +119,7 @@ fn read_texture(ctx: &GpuContext, texture: &wgpu::Texture, [width, height]: [u32
         },
     );
     ctx.queue.submit([encoder.finish()]);
-    let slice = staging.slice(..);
-    slice.map_async(wgpu::MapMode::Read, |r| r.expect("mapping the readback"));
-    ctx.device
-        .poll(wgpu::PollType::wait_indefinitely())
-        .expect("the copy completes");
-    let data = slice.get_mapped_range().expect("the mapped readback");
+    let data = map_and_read(ctx, &staging).expect("the copy reads back");
     (0..height as usize)
         .flat_map(|y| {
             let row = y * padded as usize;

@@ -24,6 +24,7 @@ mod update;
 pub use context::{Backend, GpuContext, GpuError};
 pub use export::export_film;
 pub use film_pieces::memory_check;
+pub use readback::map_and_read;
 pub use renderer::{
     Aovs, BuildInfo, Pacing, Progress, RenderControl, RenderError, RenderSettings, RenderStats,
     Renderer,
