@@ -196,30 +196,27 @@ fn work(ctx: &Arc<GpuContext>, shared: &Shared, repaint: &dyn Fn()) {
             }
         };
         let scene = preview_scene(&materials, index);
-        match render(ctx, &mut renderer, scene) {
+        let result = render(ctx, &mut renderer, scene);
+        // Marked done either way: a failed thumbnail is not retried until its material
+        // changes.
+        if rendered.len() <= index {
+            rendered.resize(index + 1, None);
+        }
+        let material = materials[index].clone();
+        rendered[index] = Some(material.clone());
+        let mut state = lock(shared);
+        match result {
             Ok(image) => {
-                if rendered.len() <= index {
-                    rendered.resize(index + 1, None);
-                }
-                rendered[index] = Some(materials[index].clone());
-                let mut state = lock(shared);
                 state.error = None;
                 state.done.push(Rendered {
                     index,
-                    material: materials[index].clone(),
+                    material,
                     image,
                 });
             }
-            Err(e) => {
-                // Not retried until the materials change.
-                if rendered.len() <= index {
-                    rendered.resize(index + 1, None);
-                }
-                rendered[index] = Some(materials[index].clone());
-                lock(shared).error =
-                    Some(format!("thumbnail of \"{}\": {e}", materials[index].name));
-            }
+            Err(e) => state.error = Some(format!("thumbnail of \"{}\": {e}", material.name)),
         }
+        drop(state);
         repaint();
     }
 }
