@@ -156,14 +156,7 @@ fn clicking_the_viewport_selects_the_object_under_the_pointer() {
         .expect("the viewport was laid out");
     let pos = on_screen(&harness, 7, rect);
     for pressed in [true, false] {
-        harness.event(egui::Event::PointerMoved(pos));
-        harness.event(egui::Event::PointerButton {
-            pos,
-            button: egui::PointerButton::Primary,
-            pressed,
-            modifiers: egui::Modifiers::NONE,
-        });
-        harness.step();
+        pointer(&mut harness, pos, Some(pressed));
     }
     harness.step();
     assert_eq!(
