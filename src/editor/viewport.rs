@@ -281,17 +281,14 @@ fn build_renderer(
     size: [u32; 2],
 ) -> Result<Renderer, String> {
     let scene = &target.scene;
+    // The scene's settings (bounces, seed) at the viewport's size and sample limit, with
+    // the unspecialised kernel so that edits rarely need another.
     let settings = RenderSettings {
         width: size[0],
         height: size[1],
         samples_per_pixel: target.sample_limit,
-        max_bounces: scene.settings.max_bounces,
-        seed: scene.settings.seed,
-        light_sampling: true,
-        page_bytes: None,
         specialize: false,
-        aovs: false,
-        film_piece_bytes: None,
+        ..RenderSettings::from_scene(scene)
     };
     let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)
         .map_err(|e| format!("the viewport cannot render this scene: {e}"))?;
