@@ -39,6 +39,24 @@ pub enum RenderAction {
     Export,
 }
 
+/// A row "label  [field]" of a whole-number setting; returns the gesture when it changed.
+fn count_row(
+    ui: &mut Ui,
+    label: &str,
+    field: DragValue<'_>,
+    tooltip: &str,
+) -> Option<Option<GestureId>> {
+    let label = ui.label(label);
+    let label = if tooltip.is_empty() {
+        label
+    } else {
+        label.on_hover_text(tooltip)
+    };
+    let r = ui.add(field).labelled_by(label.id);
+    ui.end_row();
+    r.changed().then(|| gesture(&r))
+}
+
 /// The Render tab. `render` is the state of the last final render, if any.
 pub fn render_tab_ui(
     ui: &mut Ui,
@@ -77,49 +95,22 @@ pub fn render_tab_ui(
             ("Resolution X", &mut settings.width),
             ("Resolution Y", &mut settings.height),
         ] {
-            let label = ui.label(name);
-            let r = ui
-                .add(DragValue::new(value).range(1..=32768).suffix(" px"))
-                .labelled_by(label.id);
-            if r.changed() {
-                changed = Some(gesture(&r));
-            }
-            ui.end_row();
+            let field = DragValue::new(value).range(1..=32768).suffix(" px");
+            changed = count_row(ui, name, field, "").or(changed);
         }
     });
     section(ui, "Sampling", |ui| {
-        let label = ui.label("Samples");
-        let r = ui
-            .add(DragValue::new(&mut settings.samples_per_pixel).range(1..=1 << 20))
-            .labelled_by(label.id);
-        if r.changed() {
-            changed = Some(gesture(&r));
-        }
-        ui.end_row();
-        let label = ui.label("Max Bounces");
-        let r = ui
-            .add(DragValue::new(&mut settings.max_bounces).range(0..=1024))
-            .labelled_by(label.id);
-        if r.changed() {
-            changed = Some(gesture(&r));
-        }
-        ui.end_row();
-        let label = ui
-            .label("Seed")
-            .on_hover_text("The same seed renders the same image; another gives other noise.");
-        let r = ui
-            .add(DragValue::new(&mut settings.seed))
-            .labelled_by(label.id);
-        if r.changed() {
-            changed = Some(gesture(&r));
-        }
-        ui.end_row();
-        let label = ui
-            .label("Viewport Samples")
-            .on_hover_text("The viewport stops refining after this many samples per pixel.");
-        ui.add(DragValue::new(&mut options.viewport_samples).range(1..=65536))
-            .labelled_by(label.id);
-        ui.end_row();
+        let samples = DragValue::new(&mut settings.samples_per_pixel).range(1..=1 << 20);
+        changed = count_row(ui, "Samples", samples, "").or(changed);
+        let bounces = DragValue::new(&mut settings.max_bounces).range(0..=1024);
+        changed = count_row(ui, "Max Bounces", bounces, "").or(changed);
+        let seed = DragValue::new(&mut settings.seed);
+        let tooltip = "The same seed renders the same image; another gives other noise.";
+        changed = count_row(ui, "Seed", seed, tooltip).or(changed);
+        // The editor's own setting, not the document's: no command.
+        let viewport = DragValue::new(&mut options.viewport_samples).range(1..=65536);
+        let tooltip = "The viewport stops refining after this many samples per pixel.";
+        count_row(ui, "Viewport Samples", viewport, tooltip);
     });
     if let Some(gesture) = changed.filter(|_| settings != before) {
         actions.push(RenderAction::Edit(Edit {
