@@ -130,7 +130,7 @@ pub struct EditorApp {
     render_state: Option<egui_wgpu::RenderState>,
     viewport: Option<ViewportRenderer>,
     /// The material list's thumbnails, and the document state they were last asked for
-    /// (document serial, revision, whether the viewport was building a kernel).
+    /// (document serial, image revision, whether the viewport was building a kernel).
     thumbnails: Option<Thumbnails>,
     thumbnails_key: Option<(u64, u64, bool)>,
     texture: Option<(u64, egui::TextureId)>,
@@ -1518,7 +1518,12 @@ impl EditorApp {
             return;
         };
         thumbnails.poll(ctx);
-        let key = (self.document_serial, self.document.revision(), building);
+        // The image revision: moving nodes or renaming changes no thumbnail.
+        let key = (
+            self.document_serial,
+            self.document.image_revision(),
+            building,
+        );
         if self.thumbnails_key != Some(key) {
             self.thumbnails_key = Some(key);
             let materials = &self.document.scene().materials;

@@ -113,12 +113,14 @@ impl Thumbnails {
         }
     }
 
-    /// The thumbnail of material `index` if one was rendered of `material` as it is now.
-    pub fn texture(&self, index: usize, material: &Material) -> Option<&egui::TextureHandle> {
-        self.shown(index, material).map(|s| &s.texture)
+    /// The latest thumbnail of material `index`: while an edited material renders again,
+    /// its previous look, as Blender's previews do.
+    pub fn texture(&self, index: usize) -> Option<&egui::TextureHandle> {
+        Some(&self.textures.get(index)?.as_ref()?.texture)
     }
 
-    /// The pixels of [`Thumbnails::texture`].
+    /// The pixels of the thumbnail of material `index` if it was rendered of `material`
+    /// as it is now.
     pub fn image(&self, index: usize, material: &Material) -> Option<&egui::ColorImage> {
         self.shown(index, material).map(|s| &s.image)
     }

@@ -416,7 +416,7 @@ impl NodeEditor {
         let materials = &document.scene().materials;
         let thumbnail = |i: usize, side: f32| {
             thumbnails
-                .and_then(|t| t.texture(i, &materials[i]))
+                .and_then(|t| t.texture(i))
                 .map(|texture| egui::Image::new((texture.id(), egui::vec2(side, side))))
         };
         ui.horizontal(|ui| {
