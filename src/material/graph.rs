@@ -285,6 +285,35 @@ impl Graph {
         self
     }
 
+    /// Whether `other` computes the same as this graph: equal but for where nodes are
+    /// drawn (which the compiler ignores), so a moved node needs no new compile.
+    pub fn same_but_layout(&self, other: &Graph) -> bool {
+        fn nodes_match(a: &BTreeMap<String, Node>, b: &BTreeMap<String, Node>) -> bool {
+            a.len() == b.len()
+                && a.iter().zip(b).all(|((ka, na), (kb, nb))| {
+                    ka == kb
+                        && na.kind == nb.kind
+                        && na.params == nb.params
+                        && na.inputs == nb.inputs
+                        && na.muted == nb.muted
+                })
+        }
+        self.output == other.output
+            && nodes_match(&self.nodes, &other.nodes)
+            && self.groups.len() == other.groups.len()
+            && self
+                .groups
+                .iter()
+                .zip(&other.groups)
+                .all(|((ka, a), (kb, b))| {
+                    ka == kb
+                        && a.inputs == b.inputs
+                        && a.outputs == b.outputs
+                        && a.links == b.links
+                        && nodes_match(&a.nodes, &b.nodes)
+                })
+    }
+
     /// The files its image-texture nodes read, in the graph and its groups: resolved
     /// against the file's folder on loading, renamed on saving and on merging scenes.
     pub fn image_files_mut(&mut self) -> impl Iterator<Item = &mut String> {

@@ -270,4 +270,20 @@ mod tests {
         assert!(muted.contains("muted: true"), "{muted}");
         assert_eq!(parse_material(&muted, "m.kmat").unwrap().1, graph);
     }
+
+    #[test]
+    fn graphs_that_differ_only_in_layout_compute_the_same() {
+        let mut graph = Graph::default();
+        graph.add("value", Node::new("value"));
+        let mut moved = graph.clone();
+        moved.nodes.get_mut("value").unwrap().position = Some([10.0, 20.0]);
+        assert!(graph.same_but_layout(&moved));
+        let mut muted = moved.clone();
+        muted.nodes.get_mut("value").unwrap().muted = true;
+        assert!(!graph.same_but_layout(&muted));
+        let mut renamed = graph.clone();
+        let node = renamed.nodes.remove("value").unwrap();
+        renamed.add("other", node);
+        assert!(!graph.same_but_layout(&renamed));
+    }
 }

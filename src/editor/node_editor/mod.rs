@@ -147,6 +147,17 @@ pub struct CompileStats {
     pub compile: std::time::Duration,
 }
 
+/// Compiles `graph` for the material list's statistics (its error when it does not).
+fn compile_stats(graph: &Graph) -> Result<CompileStats, String> {
+    let start = std::time::Instant::now();
+    crate::material::compile("material", graph, "material")
+        .map(|compiled| CompileStats {
+            wgsl_bytes: compiled.code.len(),
+            compile: start.elapsed(),
+        })
+        .map_err(|e| e.message)
+}
+
 /// The payload of a material dragged from the material list onto an object (the
 /// viewport or the outliner assigns it).
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -557,15 +568,11 @@ impl NodeEditor {
         {
             return;
         }
-        let start = std::time::Instant::now();
-        self.stats = Some(
-            crate::material::compile("material", graph, "material")
-                .map(|compiled| CompileStats {
-                    wgsl_bytes: compiled.code.len(),
-                    compile: start.elapsed(),
-                })
-                .map_err(|e| e.message),
-        );
+        let moved_only =
+            (self.shown.as_ref()).is_some_and(|(m, g)| *m == material && g.same_but_layout(graph));
+        if !moved_only {
+            self.stats = Some(compile_stats(graph));
+        }
         let laid = graph_edit::layout(graph);
         let mut snarl = Snarl::new();
         let mut ids = BTreeMap::new();
