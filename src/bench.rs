@@ -9,7 +9,7 @@ use anyhow::Result;
 use glam::{Affine3A, Vec3};
 
 use crate::accel::build_scene_accel;
-use crate::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer};
+use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Material, Scene, shapes};
 
 #[derive(clap::Args, Debug)]
@@ -86,7 +86,7 @@ fn measure(
     name: &str,
     scene: &Scene,
     args: &BenchArgs,
-    specialize: bool,
+    kernel: KernelKind,
 ) -> Result<Row> {
     // The BVH on its own, so its time is not mixed with upload.
     let t = Instant::now();
@@ -96,7 +96,7 @@ fn measure(
         width: args.size,
         height: args.size,
         samples_per_pixel: u32::MAX,
-        specialize,
+        kernel,
         ..RenderSettings::from_scene(scene)
     };
     let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)?;
@@ -169,16 +169,20 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     )?;
     writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|")?;
     for (name, scene) in &scenes {
-        for specialize in [true, false] {
-            let row = measure(&ctx, name, scene, args, specialize)?;
+        for kernel in [
+            KernelKind::Specialized,
+            KernelKind::General,
+            KernelKind::Interpreted,
+        ] {
+            let row = measure(&ctx, name, scene, args, kernel)?;
             writeln!(
                 out,
                 "| {} | {} | {} | {:.1} ms | {:.0} ms | {:.0} ms | {:.3} | {:.2} |",
                 row.name,
-                if specialize {
-                    "specialised"
-                } else {
-                    "everything"
+                match kernel {
+                    KernelKind::Specialized => "specialised",
+                    KernelKind::General => "everything",
+                    KernelKind::Interpreted => "interpreted",
                 },
                 row.triangles,
                 row.bvh.as_secs_f64() * 1e3,

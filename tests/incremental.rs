@@ -15,7 +15,7 @@ use kiln::material::graph::{Input, Value};
 use kiln::material::parse_material;
 use kiln::render::materials::scene_materials;
 use kiln::render::{
-    GpuContext, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
+    GpuContext, KernelKind, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
 };
 use kiln::scene::{self, Light, Material, Scene};
 
@@ -35,7 +35,11 @@ fn scene() -> Scene {
 
 fn render_settings(specialize: bool) -> RenderSettings {
     RenderSettings {
-        specialize,
+        kernel: if specialize {
+            KernelKind::Specialized
+        } else {
+            KernelKind::General
+        },
         max_bounces: 4,
         ..settings(SIZE, SIZE, SAMPLES)
     }
@@ -154,8 +158,8 @@ fn marble_scene(scale: f32) -> Scene {
 #[test]
 fn live_constants_keep_a_graphs_code_when_only_its_values_change() {
     let (a, b) = (marble_scene(1.2), marble_scene(3.5));
-    let live = |s: &Scene| scene_materials(s, true).expect("compiles");
-    let inline = |s: &Scene| scene_materials(s, false).expect("compiles");
+    let live = |s: &Scene| scene_materials(s, KernelKind::General).expect("compiles");
+    let inline = |s: &Scene| scene_materials(s, KernelKind::Specialized).expect("compiles");
     assert_eq!(live(&a).wgsl, live(&b).wgsl, "live code depends on a value");
     assert_ne!(live(&a).parameters, live(&b).parameters);
     assert!(

@@ -5,6 +5,7 @@ mod common;
 
 use common::{gpu, mean, render, rmse, settings};
 use kiln::accel::build_scene_accel;
+use kiln::render::KernelKind;
 use kiln::render::gpu_scene::GpuScene;
 use kiln::scene::{Material, Scene, default_scene};
 use kiln::shader::features::features_wgsl;
@@ -74,7 +75,7 @@ fn specialised_and_everything_kernels_render_the_same_image() {
     for scene in scenes {
         let mut s = settings(48, 32, 16);
         let special = render(&gpu(), &scene, s).radiance();
-        s.specialize = false;
+        s.kernel = KernelKind::General;
         let everything = render(&gpu(), &scene, s).radiance();
         let error = rmse(&special, &everything) / mean(&everything).max_element() as f64;
         assert!(error < 1e-4, "images differ: relative RMSE {error}");

@@ -26,6 +26,7 @@ fn target(scene: Scene, revision: u64, size: [u32; 2]) -> Target {
         // Never reached: the viewport keeps accumulating.
         sample_limit: 1 << 20,
         view: Default::default(),
+        compile_after: None,
     }
 }
 

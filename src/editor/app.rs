@@ -12,7 +12,7 @@ use egui::{Color32, Key, KeyboardShortcut, Modifiers, PointerButton, RichText, S
 use glam::Vec3;
 
 use crate::plugin::PluginHost;
-use crate::render::GpuContext;
+use crate::render::{GpuContext, KernelKind};
 use crate::scene::{Camera, Scene};
 
 use super::document::{Command, Document, GestureId, Selection};
@@ -53,7 +53,15 @@ pub struct EditorOptions {
     /// Render material thumbnails for the material list (tests that do not look at them
     /// leave the device to the viewport).
     pub thumbnails: bool,
+    /// After a graph edit, the viewport renders with the graphs interpreted (a first
+    /// image at once); once the scene has been still this long, it compiles them in the
+    /// background for faster sampling ([`super::viewport::Target::compile_after`]). None
+    /// keeps them interpreted (tests that count builds).
+    pub compile_after: Option<Duration>,
 }
+
+/// How long the scene stays still before the viewport compiles its graphs.
+pub const COMPILE_AFTER: Duration = Duration::from_millis(1500);
 
 /// What an editor session rendered, for the caller of [`super::run`].
 #[derive(Clone, Debug, Default)]
@@ -255,6 +263,7 @@ impl EditorApp {
             options: ViewOptions {
                 viewport_samples: options.sample_limit.max(1),
                 export_options: String::new(),
+                compile_after: options.compile_after,
             },
             tab: Tab::Object,
             final_render: None,
@@ -990,6 +999,13 @@ impl EditorApp {
                     if status.building {
                         ui.label(RichText::new("· preparing…").weak());
                     }
+                    if status.kernel == Some(KernelKind::Interpreted) {
+                        ui.label(RichText::new("· graphs interpreted").weak()).on_hover_text(
+                            "Material graphs run through the interpreter, so that every graph \
+                             edit shows at once; they are compiled for faster sampling once \
+                             the scene is still.",
+                        );
+                    }
                 }
                 if let Some(gpu) = &self.gpu {
                     ui.separator();
@@ -1034,6 +1050,7 @@ impl EditorApp {
             size,
             sample_limit: self.options.viewport_samples,
             view: self.document.scene().settings.view,
+            compile_after: self.options.compile_after,
         };
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_gray(30));

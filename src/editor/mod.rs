@@ -33,7 +33,9 @@ pub mod settings_panel;
 pub mod thumbnails;
 pub mod viewport;
 
-pub use app::{AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, RunReport};
+pub use app::{
+    AUTOSAVE_EVERY, COMPILE_AFTER, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, RunReport,
+};
 pub use document::{Command, Document, Selection};
 pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};
 

@@ -16,7 +16,7 @@ use std::time::Duration;
 use glam::{Affine3A, Vec3};
 
 use crate::film::output::{ViewSettings, to_srgb_image};
-use crate::render::{GpuContext, Pacing, RenderControl, RenderSettings, Renderer};
+use crate::render::{GpuContext, KernelKind, Pacing, RenderControl, RenderSettings, Renderer};
 use crate::scene::{Camera, Light, Material, Scene, shapes};
 
 /// Side of a thumbnail in pixels.
@@ -236,9 +236,9 @@ fn render(
     };
     if !updated {
         let settings = RenderSettings {
-            // The editor's kernel: live constants, every lobe; usually already compiled
-            // for the viewport.
-            specialize: false,
+            // The editor's kernel: interpreted graphs, every lobe; usually already
+            // compiled for the viewport.
+            kernel: KernelKind::Interpreted,
             ..RenderSettings::from_scene(&scene)
         };
         let mut renderer =

@@ -29,7 +29,7 @@ use std::time::{Duration, Instant};
 
 use crate::film::output::ViewSettings;
 use crate::render::{
-    GpuContext, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
+    GpuContext, KernelKind, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
 };
 use crate::scene::{Camera, Scene};
 
@@ -48,6 +48,11 @@ pub struct Target {
     pub sample_limit: u32,
     /// Exposure and view transform of the display pass (no restart when they change).
     pub view: ViewSettings,
+    /// Graph materials are interpreted in the viewport (any graph edit is a buffer write,
+    /// [`KernelKind::Interpreted`]); once the scene has been still this long, renderers
+    /// with the graphs compiled (which sample faster) are built in the background and
+    /// replace them. None keeps the interpreted ones.
+    pub compile_after: Option<Duration>,
 }
 
 impl Target {
@@ -100,6 +105,11 @@ pub struct ViewportStatus {
     /// Side in pixels of the tiles the full image's passes are cut into at present
     /// (adapted so that one dispatch takes about [`DISPATCH_BUDGET_US`]).
     pub tile_size: u32,
+    /// How the shown image's kernel holds the graph materials.
+    pub kernel: Option<KernelKind>,
+    /// Interpreted renderers replaced by compiled ones built in the background
+    /// ([`Target::compile_after`]); not counted in `renderer_builds`.
+    pub compiled_swaps: u64,
 }
 
 impl ViewportStatus {
@@ -262,32 +272,53 @@ struct Build {
     result: mpsc::Receiver<Result<Built, String>>,
 }
 
-/// Builds the renderers for `target` (on the build thread).
-fn build_renderers(ctx: &Arc<GpuContext>, target: &Target) -> Result<Built, String> {
+/// Compiled renderers being built to replace interpreted ones ([`Target::compile_after`]).
+struct Compile {
+    build: Build,
+}
+
+/// Builds the renderers for `target` with kernels of kind `kernel` (on the build thread).
+fn build_renderers(
+    ctx: &Arc<GpuContext>,
+    target: &Target,
+    kernel: KernelKind,
+) -> Result<Built, String> {
     let divisor = coarse_divisor(target.size);
     let coarse_size = target.size.map(|v| (v / divisor).max(1));
-    let full = build_renderer(ctx, target, target.size)?;
+    let full = build_renderer(ctx, target, target.size, kernel)?;
     let coarse = if divisor > 1 {
-        Some(build_renderer(ctx, target, coarse_size)?)
+        Some(build_renderer(ctx, target, coarse_size, kernel)?)
     } else {
         None
     };
     Ok(Built { full, coarse })
 }
 
+/// The kernel a new renderer for `scene` starts with: the interpreting one when the scene
+/// has graph materials it can run (then no graph edit needs a compile), else the general
+/// one (every lobe and light type, so that a parameter or light edit rarely needs one).
+fn first_kernel(scene: &Scene) -> KernelKind {
+    let graphs = scene.materials.iter().any(|m| m.graph.is_some());
+    if graphs && crate::render::materials::interprets(scene) {
+        KernelKind::Interpreted
+    } else {
+        KernelKind::General
+    }
+}
+
 fn build_renderer(
     ctx: &Arc<GpuContext>,
     target: &Target,
     size: [u32; 2],
+    kernel: KernelKind,
 ) -> Result<Renderer, String> {
     let scene = &target.scene;
-    // The scene's settings (bounces, seed) at the viewport's size and sample limit, with
-    // the unspecialised kernel so that edits rarely need another.
+    // The scene's settings (bounces, seed) at the viewport's size and sample limit.
     let settings = RenderSettings {
         width: size[0],
         height: size[1],
         samples_per_pixel: target.sample_limit,
-        specialize: false,
+        kernel,
         ..RenderSettings::from_scene(scene)
     };
     let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)
@@ -319,6 +350,11 @@ struct Worker {
     /// The newest target, waiting while a build runs, and when it was posted.
     waiting: Option<(Target, Instant)>,
     build: Option<Build>,
+    /// Compiled renderers for the current target, replacing the interpreted layers when
+    /// ready; unlike `build`, it holds no target back.
+    compile: Option<Compile>,
+    /// The scene revision whose compiled build failed: not tried again.
+    compile_failed: Option<u64>,
     /// A target whose build failed: not tried again until the scene or size changes.
     failed: Option<(u64, [u32; 2])>,
     started: Instant,
@@ -347,6 +383,8 @@ impl Worker {
             current: None,
             waiting: None,
             build: None,
+            compile: None,
+            compile_failed: None,
             failed: None,
             started: Instant::now(),
             last_change: Instant::now(),
@@ -369,14 +407,20 @@ impl Worker {
                 let mut slot = lock(&self.shared.target);
                 while slot.is_none()
                     && self.done()
+                    && !self.compile_due()
                     && !self.shared.built.load(Ordering::Relaxed)
                     && !self.shared.shutdown.load(Ordering::Relaxed)
                 {
-                    slot = self
-                        .shared
-                        .wake
-                        .wait(slot)
-                        .unwrap_or_else(|e| e.into_inner());
+                    // Woken by a target or a finished build; or, while compiled
+                    // renderers are due, when the scene has been still long enough.
+                    slot = match self.compile_wait() {
+                        Some(wait) => {
+                            (self.shared.wake.wait_timeout(slot, wait))
+                                .unwrap_or_else(|e| e.into_inner())
+                                .0
+                        }
+                        None => (self.shared.wake.wait(slot)).unwrap_or_else(|e| e.into_inner()),
+                    };
                 }
                 let next = slot.take();
                 // Consumed here, not where a result is taken: a build thread sets it after
@@ -399,6 +443,10 @@ impl Worker {
                     self.retarget(target, posted);
                 }
             }
+            self.finish_compile();
+            if self.compile_due() {
+                self.start_compile();
+            }
             if !self.done() {
                 self.render_pass();
             }
@@ -413,6 +461,99 @@ impl Worker {
     /// Starts building renderers for `target` on a thread of its own; the layers keep
     /// rendering what they render until it is done.
     fn start_build(&mut self, target: Target, posted: Instant) {
+        let kernel = first_kernel(&target.scene);
+        if let Some(build) = self.spawn_build(target, posted, kernel) {
+            self.build = Some(build);
+            self.publish(|s| s.building = true);
+        }
+    }
+
+    /// The kernel of the layers on screen.
+    fn kernel(&self) -> Option<KernelKind> {
+        self.full.as_ref().map(|l| l.renderer.settings().kernel)
+    }
+
+    /// How long until compiled renderers are due for the current target, if they will be.
+    fn compile_wait(&self) -> Option<Duration> {
+        let target = self.current.as_ref()?;
+        let after = target.compile_after?;
+        let wanted = self.kernel() == Some(KernelKind::Interpreted)
+            && self.build.is_none()
+            && self.compile.is_none()
+            && self.compile_failed != Some(target.scene_revision);
+        wanted.then(|| after.saturating_sub(self.last_change.elapsed()))
+    }
+
+    /// Whether to start building compiled renderers now.
+    fn compile_due(&self) -> bool {
+        self.compile_wait().is_some_and(|w| w.is_zero())
+    }
+
+    fn start_compile(&mut self) {
+        let Some(target) = self.current.clone() else {
+            return;
+        };
+        if let Some(build) = self.spawn_build(target, Instant::now(), KernelKind::General) {
+            self.compile = Some(Compile { build });
+        }
+    }
+
+    /// Swaps in compiled renderers that finished for the current target; drops them if
+    /// the target moved on meanwhile (the next still moment starts another build).
+    fn finish_compile(&mut self) {
+        let Some(compile) = &self.compile else {
+            return;
+        };
+        let result = match compile.build.result.try_recv() {
+            Ok(result) => result,
+            Err(mpsc::TryRecvError::Empty) => return,
+            Err(mpsc::TryRecvError::Disconnected) => {
+                Err("the viewport's build thread stopped without a renderer".into())
+            }
+        };
+        let Some(Compile { build }) = self.compile.take() else {
+            return;
+        };
+        let current = match &self.current {
+            Some(c) if self.kernel() == Some(KernelKind::Interpreted) => c,
+            _ => return,
+        };
+        let still = build.target.scene_revision == current.scene_revision
+            && build.target.size == current.size;
+        match result {
+            Ok(built) if still => {
+                let camera = current.camera;
+                let kernels = [Some(&built.full), built.coarse.as_ref()]
+                    .into_iter()
+                    .flatten()
+                    .filter(|r| r.build_info.kernel_compiled)
+                    .count() as u64;
+                let mut full = built.full;
+                let mut coarse = built.coarse;
+                for r in [Some(&mut full), coarse.as_mut()].into_iter().flatten() {
+                    r.set_camera(&camera);
+                }
+                // Accumulation starts over with the faster kernel (from its coarse
+                // film, as after any change).
+                self.full = Some(self.layer(full));
+                self.coarse = coarse.map(|r| self.layer(r));
+                self.started = Instant::now();
+                self.publish(|s| {
+                    s.compiled_swaps += 1;
+                    s.kernel_builds += kernels;
+                    s.kernel = Some(KernelKind::General);
+                });
+            }
+            Ok(_) => {}
+            Err(message) => {
+                tracing::warn!("compiled viewport renderers failed, keeping the interpreted ones: {message}");
+                self.compile_failed = Some(build.target.scene_revision);
+            }
+        }
+    }
+
+    /// Spawns a thread building renderers of kind `kernel` for `target`.
+    fn spawn_build(&mut self, target: Target, posted: Instant, kernel: KernelKind) -> Option<Build> {
         let (tx, rx) = mpsc::channel();
         let ctx = Arc::clone(&self.ctx);
         let shared = Arc::clone(&self.shared);
@@ -421,7 +562,7 @@ impl Worker {
         let spawned = std::thread::Builder::new()
             .name("kiln viewport build".into())
             .spawn(move || {
-                let built = build_renderers(&ctx, &job);
+                let built = build_renderers(&ctx, &job, kernel);
                 // The worker may have gone (the window closed): then nobody wants it.
                 let _ = tx.send(built);
                 let _slot = lock(&shared.target);
@@ -431,18 +572,16 @@ impl Worker {
                 repaint();
             });
         match spawned {
-            Ok(_) => {
-                self.build = Some(Build {
-                    target,
-                    posted,
-                    result: rx,
-                });
-                self.publish(|s| s.building = true);
-            }
+            Ok(_) => Some(Build {
+                target,
+                posted,
+                result: rx,
+            }),
             Err(e) => {
                 let message =
                     format!("could not start a thread to build the viewport's renderer: {e}");
                 self.publish(|s| s.error = Some(message));
+                None
             }
         }
     }
@@ -469,6 +608,7 @@ impl Worker {
                     .flatten()
                     .filter(|r| r.build_info.kernel_compiled)
                     .count() as u64;
+                let kernel = built.full.settings().kernel;
                 self.full = Some(self.layer(built.full));
                 self.coarse = built.coarse.map(|r| self.layer(r));
                 self.failed = None;
@@ -477,6 +617,7 @@ impl Worker {
                     s.kernel_builds += kernels;
                     s.error = None;
                     s.building = false;
+                    s.kernel = Some(kernel);
                 });
                 self.current = Some(target);
                 self.restart(posted);

@@ -23,7 +23,7 @@ use thiserror::Error;
 
 use super::graph::{
     Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, REROUTE,
-    REROUTE_INPUT, REROUTE_OUTPUT, SocketType, Value,
+    REROUTE_INPUT, REROUTE_OUTPUT, RampStop, SocketType, Value,
 };
 use super::nodes::{self, Code, Default, Emit, MATERIAL_OUTPUT, NodeDef, ParamKind, Params};
 
@@ -1140,6 +1140,52 @@ fn convert(expr: String, from: SocketType, to: SocketType) -> String {
     }
 }
 
+/// A constant of an input of type `ty` as an element of `material_params`: a float in x,
+/// a vec2 in xy, a vector or colour in xyz.
+fn packed_constant(v: &Value, ty: SocketType) -> [f32; 4] {
+    match ty {
+        SocketType::Float => [v.as_f32(), 0.0, 0.0, 0.0],
+        SocketType::Vec2 => {
+            let [x, y, _] = match v {
+                Value::Float(x) => [*x; 3],
+                _ => v.as_vec3(),
+            };
+            [x, y, 0.0, 0.0]
+        }
+        SocketType::Vector | SocketType::Color | SocketType::Bsdf => {
+            let [x, y, z] = v.as_vec3();
+            [x, y, z, 0.0]
+        }
+    }
+}
+
+/// The components of a `vec4<f32>` that hold a value of type `ty` ([`packed_constant`]).
+fn swizzle(ty: SocketType) -> &'static str {
+    match ty {
+        SocketType::Float => ".x",
+        SocketType::Vec2 => ".xy",
+        SocketType::Vector | SocketType::Color | SocketType::Bsdf => ".xyz",
+    }
+}
+
+/// A node's template with each `{name}` replaced by `value(name)`.
+fn fill_template(template: &str, mut value: impl FnMut(&str) -> String) -> String {
+    let mut code = String::new();
+    let mut rest = template;
+    while let Some(start) = rest.find('{') {
+        code.push_str(&rest[..start]);
+        // The library's templates close every brace (a test compiles every node).
+        let end = rest[start..]
+            .find('}')
+            .map(|e| start + e)
+            .expect("template brace");
+        code.push_str(&value(&rest[start + 1..end]));
+        rest = &rest[end + 1..];
+    }
+    code.push_str(rest);
+    code
+}
+
 /// Identifiers called as functions in a template: `name(`.
 fn called_functions(code: &str) -> Vec<String> {
     let mut out = Vec::new();
@@ -1190,23 +1236,9 @@ impl Emitter<'_> {
         let Some((base, values)) = self.live.as_mut() else {
             return literal(v, ty);
         };
-        let (value, swizzle) = match ty {
-            SocketType::Float => ([v.as_f32(), 0.0, 0.0, 0.0], "x"),
-            SocketType::Vec2 => {
-                let [x, y, _] = match v {
-                    Value::Float(x) => [*x; 3],
-                    _ => v.as_vec3(),
-                };
-                ([x, y, 0.0, 0.0], "xy")
-            }
-            SocketType::Vector | SocketType::Color | SocketType::Bsdf => {
-                let [x, y, z] = v.as_vec3();
-                ([x, y, z, 0.0], "xyz")
-            }
-        };
         let index = *base + values.len() as u32;
-        values.push(value);
-        format!("material_params[{index}u].{swizzle}")
+        values.push(packed_constant(v, ty));
+        format!("material_params[{index}u]{}", swizzle(ty))
     }
 
     /// The WGSL expression of input `i` of node `n`, in the input's type.
@@ -1257,25 +1289,15 @@ impl Emitter<'_> {
         let node = &self.flat[n];
         match node.def.code {
             Code::Template(t) => {
-                let mut code = String::new();
-                let mut rest = t;
-                while let Some(start) = rest.find('{') {
-                    code.push_str(&rest[..start]);
-                    let end = rest[start..]
-                        .find('}')
-                        .map(|e| start + e)
-                        .expect("template brace");
-                    let name = &rest[start + 1..end];
-                    let value = match node.def.inputs.iter().position(|s| s.name == name) {
+                let def = node.def;
+                let code = fill_template(t, |name| {
+                    match def.inputs.iter().position(|s| s.name == name) {
                         Some(i) => self.input_expr(n, i),
-                        None => self.param_expr(n, name).unwrap_or_else(|| {
-                            panic!("template of {} names {name}", node.def.kind)
-                        }),
-                    };
-                    code.push_str(&value);
-                    rest = &rest[end + 1..];
-                }
-                code.push_str(rest);
+                        None => self
+                            .param_expr(n, name)
+                            .unwrap_or_else(|| panic!("template of {} names {name}", def.kind)),
+                    }
+                });
                 self.calls.extend(called_functions(t));
                 Ok(code)
             }
@@ -1308,8 +1330,50 @@ impl Emit for NodeEmitter<'_, '_> {
         self.emitter.input_expr(self.n, i)
     }
 
-    fn params(&self) -> Params<'_> {
-        params(&self.emitter.flat[self.n])
+    fn param(&mut self, name: &str) -> String {
+        let n = self.n;
+        // Generated code names the parameters of its own declaration.
+        (self.emitter.param_expr(n, name))
+            .unwrap_or_else(|| panic!("{} has no parameter {name}", self.emitter.flat[n].def.kind))
+    }
+
+    /// The stops become a helper function of the factor: a chain of comparisons, each
+    /// mixing two stops with `nd_ramp_mix`.
+    fn ramp(&mut self, param: &str, t: &str, mode: &str) -> String {
+        let mut stops: Vec<RampStop> = match self.emitter.flat[self.n].params.get(param) {
+            Some(Param::Ramp(s)) => s.clone(),
+            _ => nodes::default_ramp_stops(),
+        };
+        stops.sort_by(|a, b| a.position.total_cmp(&b.position));
+        let name = self.helper_name(param);
+        let c = |s: &RampStop| {
+            format!(
+                "vec4<f32>({:?}, {:?}, {:?}, {:?})",
+                s.color[0], s.color[1], s.color[2], s.color[3]
+            )
+        };
+        let mut f = format!("fn {name}(t: f32) -> vec4<f32> {{\n");
+        let _ = writeln!(
+            f,
+            "    if (!(t > {:?})) {{ return {}; }}",
+            stops[0].position,
+            c(&stops[0])
+        );
+        for w in stops.windows(2) {
+            let _ = writeln!(
+                f,
+                "    if (t <= {:?}) {{ return nd_ramp_mix({}, {}, {:?}, {:?}, t, {mode}); }}",
+                w[1].position,
+                c(&w[0]),
+                c(&w[1]),
+                w[0].position,
+                w[1].position
+            );
+        }
+        // The compiler refuses an empty stop list (check_param), and the default has two.
+        let _ = writeln!(f, "    return {};\n}}\n", c(stops.last().expect("stops")));
+        self.add_helper(&name, f);
+        format!("{name}({t})")
     }
 
     fn helper_name(&self, what: &str) -> String {
@@ -1362,5 +1426,10 @@ pub fn link(node: &str, socket: &str) -> Input {
 
 // The tests name library nodes, which this file does not (a test checks): they live in
 // `compile/tests.rs`.
+mod program;
 #[cfg(test)]
 mod tests;
+
+pub use program::{
+    INTERPRETER_REGISTERS, Interpreter, Program, ProgramError, compile_program, interpreter,
+};

@@ -12,7 +12,6 @@
 //! The functions the templates call live in `shaders/nodes/`.
 
 use std::collections::BTreeMap;
-use std::fmt::Write as _;
 use std::sync::OnceLock;
 
 use super::compile::{GraphError, MaterialTraits};
@@ -22,6 +21,11 @@ use crate::shader::principled::{self, ParamValue};
 /// The node a material renders: the root of compilation, part of the graph model rather
 /// than a node the library could do without.
 pub const MATERIAL_OUTPUT: &str = "material_output";
+
+/// The bump node: the one node that evaluates an input (its height) as a function of the
+/// shading point ([`Emit::input_function`]), so the editor's interpreter
+/// (`compile::interpreter`) runs it as a subroutine instead of through its code.
+pub const BUMP: &str = "bump";
 
 /// What an unconnected input reads: a constant, or a property of the shading point.
 #[derive(Clone, Debug)]
@@ -173,8 +177,13 @@ pub type SurfaceTraits = fn(&dyn Fn(&str) -> Option<Value>, Params) -> MaterialT
 pub trait Emit {
     /// The WGSL expression of input `name`, in the input's type.
     fn input(&mut self, name: &str) -> String;
-    /// The node's parameters.
-    fn params(&self) -> Params<'_>;
+    /// The WGSL expression of parameter `name`: an enum's option index (`3u`), a flag
+    /// (`true`), an image's texture index; compiled constants, or reads of the program
+    /// where the material is interpreted.
+    fn param(&mut self, name: &str) -> String;
+    /// The WGSL expression of the colour ramp of parameter `param` (its stops) at `t`,
+    /// interpolated by mode `mode` (an expression of `nd_ramp_mix`'s modes).
+    fn ramp(&mut self, param: &str, t: &str, mode: &str) -> String;
     /// A helper function name unique to this node in the material: `<material>_<what><n>`.
     fn helper_name(&self, what: &str) -> String;
     /// Adds the helper function `code`, called `name`, unless the material has it already.
@@ -1407,7 +1416,7 @@ fn build() -> Vec<NodeDef> {
             code: Code::Template("nd_normal_map({strength}, {color}, sp)"),
         },
         NodeDef {
-            kind: "bump",
+            kind: BUMP,
             label: "Bump",
             category: "Vector",
             doc: "Perturbs the shading normal by the slope of a height field, found by evaluating the height at two displaced points.",
@@ -1565,47 +1574,12 @@ pub fn default_ramp_stops() -> Vec<RampStop> {
     ]
 }
 
-/// The ramp's stops become a helper function of the factor: a chain of comparisons,
-/// each mixing two stops with `nd_ramp_mix`.
+/// The ramp's stops, interpolated at the factor (`Emit::ramp`).
 fn generate_color_ramp(e: &mut dyn Emit) -> Result<String, GraphError> {
-    let params = e.params();
-    let mut stops: Vec<RampStop> = match params.get("stops") {
-        Some(Param::Ramp(s)) => s.clone(),
-        _ => default_ramp_stops(),
-    };
-    stops.sort_by(|a, b| a.position.total_cmp(&b.position));
-    let mode = params.choice("interpolation");
-    let name = e.helper_name("ramp");
-    let c = |s: &RampStop| {
-        format!(
-            "vec4<f32>({:?}, {:?}, {:?}, {:?})",
-            s.color[0], s.color[1], s.color[2], s.color[3]
-        )
-    };
-    let mut f = format!("fn {name}(t: f32) -> vec4<f32> {{\n");
-    let _ = writeln!(
-        f,
-        "    if (!(t > {:?})) {{ return {}; }}",
-        stops[0].position,
-        c(&stops[0])
-    );
-    for w in stops.windows(2) {
-        let _ = writeln!(
-            f,
-            "    if (t <= {:?}) {{ return nd_ramp_mix({}, {}, {:?}, {:?}, t, {mode}u); }}",
-            w[1].position,
-            c(&w[0]),
-            c(&w[1]),
-            w[0].position,
-            w[1].position
-        );
-    }
-    // The compiler refuses an empty stop list (check_param), and the default has two.
-    let _ = writeln!(f, "    return {};\n}}\n", c(stops.last().expect("stops")));
-    e.add_helper(&name, f);
-    e.call(&["nd_ramp_mix"]);
+    let mode = e.param("interpolation");
     let fac = e.input("fac");
-    Ok(format!("{name}({fac})"))
+    e.call(&["nd_ramp_mix"]);
+    Ok(e.ramp("stops", &fac, &mode))
 }
 
 /// The height input becomes a function of the shading point, evaluated at the point and
@@ -1617,7 +1591,7 @@ fn generate_bump(e: &mut dyn Emit) -> Result<String, GraphError> {
     };
     let strength = e.input("strength");
     let distance = e.input("distance");
-    let invert = e.params().flag("invert");
+    let invert = e.param("invert");
     e.call(&[
         "frame_from_normal_tangent",
         "nd_bump",
@@ -1638,7 +1612,7 @@ fn generate_principled_bsdf(e: &mut dyn Emit) -> Result<String, GraphError> {
     let mut fields = Vec::new();
     for p in &principled::PARAMETERS {
         fields.push(match p.default_value() {
-            ParamValue::Bool(_) => e.params().flag(p.name).to_string(),
+            ParamValue::Bool(_) => e.param(p.name),
             ParamValue::Float(d) => p.range.clamp_wgsl(p.kind, &e.input(p.name), d),
             ParamValue::Color(_) => p.range.clamp_wgsl(p.kind, &e.input(p.name), 0.0),
         });

@@ -26,7 +26,7 @@ pub use export::export_film;
 pub use film_pieces::memory_check;
 pub use readback::map_and_read;
 pub use renderer::{
-    Aovs, BuildInfo, Pacing, Progress, RenderControl, RenderError, RenderSettings, RenderStats,
-    Renderer,
+    Aovs, BuildInfo, KernelKind, Pacing, Progress, RenderControl, RenderError, RenderSettings,
+    RenderStats, Renderer,
 };
 pub use update::{UpdateError, Updated};

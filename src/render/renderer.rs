@@ -128,15 +128,31 @@ pub struct RenderSettings {
     /// Page size in bytes of the paged scene arrays (BVH nodes, triangles); default: the
     /// largest binding the adapter allows. Tests lower it to exercise paging.
     pub page_bytes: Option<u64>,
-    /// Compile only the lobes and light types the scene uses (the default); off builds
-    /// the kernel with everything, for comparison.
-    pub specialize: bool,
+    /// What the kernel is specialised to: final renders compile only what the scene uses,
+    /// the editor a kernel that takes edits without a compile.
+    pub kernel: KernelKind,
     /// Also render the albedo, normal and depth AOVs ([`Renderer::read_aovs`]).
     pub aovs: bool,
     /// Largest film buffer in bytes; default: the largest binding the adapter allows. A
     /// film beyond it is split into pieces of whole rows; tests lower it to split small
     /// films.
     pub film_piece_bytes: Option<u64>,
+}
+
+/// What a kernel is specialised to, from the fastest to build on to the fastest to edit.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelKind {
+    /// Only the lobes and light types the scene uses, each graph material compiled with
+    /// its constants folded in: final renders (the default).
+    Specialized,
+    /// Every lobe and light type, graph materials compiled with their constants read from
+    /// a buffer: a value edit is a buffer write, other edits of a graph a compile.
+    General,
+    /// Every lobe and light type, graph materials run by an interpreter from a buffer
+    /// ([`crate::material::compile::compile_program`]): any edit of a graph is a buffer
+    /// write (the editor). Graphs the interpreter cannot run are compiled as in
+    /// [`KernelKind::General`].
+    Interpreted,
 }
 
 impl RenderSettings {
@@ -149,7 +165,7 @@ impl RenderSettings {
             seed: scene.settings.seed,
             light_sampling: true,
             page_bytes: None,
-            specialize: true,
+            kernel: KernelKind::Specialized,
             aovs: false,
             film_piece_bytes: None,
         }
@@ -265,10 +281,9 @@ pub(super) fn kernel_features(
         ..scene_features
     };
     // `everything` keeps the bindings, so one layout serves both kernels.
-    if settings.specialize {
-        features
-    } else {
-        features.everything()
+    match settings.kernel {
+        KernelKind::Specialized => features,
+        KernelKind::General | KernelKind::Interpreted => features.everything(),
     }
 }
 
@@ -359,7 +374,7 @@ impl Renderer {
         let layout = scene_bind_group_layout(device, &features);
         // The unspecialised kernel (the editor's) reads the graphs' constants from a
         // buffer, so that a value edit is a write, not a kernel.
-        let materials = super::materials::scene_materials(scene, !settings.specialize)?;
+        let materials = super::materials::scene_materials(scene, settings.kernel)?;
         if !materials.parameters.is_empty() {
             ctx.queue.write_buffer(
                 &gpu_scene.material_params,

@@ -247,7 +247,7 @@ impl Renderer {
         if packed as u64 != self.gpu_scene.materials.size() {
             return Err(UpdateError::rebuild("the material count changed"));
         }
-        let compiled = super::materials::scene_materials(scene, !self.settings.specialize)
+        let compiled = super::materials::scene_materials(scene, self.settings.kernel)
             .map_err(RenderError::from)?;
         if compiled.wgsl != self.materials_wgsl {
             return Err(UpdateError::kernel("a material graph's code changed"));

@@ -30,6 +30,8 @@ pub struct Setup {
     pub thumbnails: bool,
     /// The file to open (None: the bundled Cornell box).
     pub file: Option<PathBuf>,
+    /// When the viewport compiles interpreted graphs (None: never; tests count builds).
+    pub compile_after: Option<Duration>,
 }
 
 impl Default for Setup {
@@ -42,6 +44,7 @@ impl Default for Setup {
             size: egui::vec2(1280.0, 800.0),
             thumbnails: false,
             file: None,
+            compile_after: None,
         }
     }
 }
@@ -60,6 +63,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         size,
         thumbnails,
         file,
+        compile_after,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -76,6 +80,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     autosave_every,
                     quit_when_done: false,
                     thumbnails,
+                    compile_after,
                 },
             )
         })

@@ -9,7 +9,7 @@ use std::sync::Arc;
 
 use glam::{Affine3A, Vec3};
 use kiln::film::Film;
-use kiln::render::{GpuContext, RenderControl, RenderSettings, Renderer};
+use kiln::render::{GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use kiln::scene::{Camera, Material, Scene, shapes};
 
 /// The test adapter: whatever wgpu picks (lavapipe in CI).
@@ -26,7 +26,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         seed: 1,
         light_sampling: true,
         page_bytes: None,
-        specialize: true,
+        kernel: KernelKind::Specialized,
         aovs: false,
         film_piece_bytes: None,
     }

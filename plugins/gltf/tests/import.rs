@@ -526,7 +526,7 @@ fn base_colour_at_vertex_colour(kmat: &str, color: [f32; 4]) -> [f32; 3] {
         seed: 1,
         light_sampling: true,
         page_bytes: None,
-        specialize: true,
+        kernel: kiln::render::KernelKind::Specialized,
         aovs: false,
         film_piece_bytes: None,
     };
