@@ -52,7 +52,10 @@ fn relative_rmse(a: &[f64], b: &[f64]) -> f64 {
 
 fn interpreted(scene: &Scene) -> bool {
     let materials = scene_materials(scene, KernelKind::Interpreted).expect("compiles");
-    materials.wgsl.iter().any(|(_, code)| code.contains("fn nd_interpret("))
+    materials
+        .wgsl
+        .iter()
+        .any(|(_, code)| code.contains("fn nd_interpret("))
 }
 
 /// The showcase's marble with an invert node between its ramp and the base colour: a
@@ -62,7 +65,12 @@ fn with_inverted_marble(scene: &Scene) -> Scene {
     let i = (edited.materials.iter())
         .position(|m| m.name == "marble")
         .expect("the showcase has marble");
-    let mut graph = edited.materials[i].graph.as_ref().expect("a graph").graph.clone();
+    let mut graph = edited.materials[i]
+        .graph
+        .as_ref()
+        .expect("a graph")
+        .graph
+        .clone();
     let (surface, base) = graph
         .nodes
         .iter()
@@ -123,10 +131,7 @@ fn interpreted_graphs_render_what_their_compiled_code_renders() {
         ),
         &reference,
     );
-    assert!(
-        edit > 10.0 * error,
-        "the edit shows: relative RMSE {edit}"
-    );
+    assert!(edit > 10.0 * error, "the edit shows: relative RMSE {edit}");
 }
 
 #[test]
@@ -139,7 +144,10 @@ fn a_topology_edit_is_a_parameter_write_in_the_interpreting_kernel() {
         scene_materials(&new, KernelKind::Interpreted).unwrap(),
     );
     assert_eq!(a.wgsl, b.wgsl, "the interpreter's code depends on a graph");
-    assert_ne!(a.parameters, b.parameters, "the program is in the parameters");
+    assert_ne!(
+        a.parameters, b.parameters,
+        "the program is in the parameters"
+    );
     // The compiled kernels differ: there the edit is a compile.
     assert_ne!(
         scene_materials(&old, KernelKind::General).unwrap().wgsl,
@@ -154,7 +162,14 @@ fn a_topology_edit_is_a_parameter_write_in_the_interpreting_kernel() {
     assert!(updated.materials, "{updated:?}");
     renderer.clear_film();
     let after = radiance(&mut renderer);
-    assert_eq!(ctx.pipelines_compiled(), compiled, "the update compiled a kernel");
+    assert_eq!(
+        ctx.pipelines_compiled(),
+        compiled,
+        "the update compiled a kernel"
+    );
     let fresh = radiance(&mut Renderer::new(Arc::clone(&ctx), &new, s).expect("renderer"));
-    assert_eq!(after, fresh, "the updated renderer renders what a fresh one does");
+    assert_eq!(
+        after, fresh,
+        "the updated renderer renders what a fresh one does"
+    );
 }

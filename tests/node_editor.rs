@@ -733,3 +733,96 @@ fn an_image_texture_reads_a_picked_or_dropped_image_and_shows_a_broken_one_as_it
         "the node's corner is where the file fell: {drawn:?} vs {at:?}"
     );
 }
+
+/// A scene file: the Cornell box with its short block made of the bundled marble graph.
+fn marble_box(dir: &std::path::Path) -> std::path::PathBuf {
+    let mut scene = kiln::scene::default_scene().unwrap();
+    let text = std::fs::read_to_string("assets/materials/marble.kmat").unwrap();
+    let (_, graph) = kiln::material::parse_material(&text, "marble.kmat").unwrap();
+    let block = scene.instances[6].material;
+    scene.materials[block] = kiln::scene::Material::from_graph("marble", graph).unwrap();
+    let path = dir.join("marble box.kiln");
+    kiln::scene::save_scene(&scene, &path, &[]).unwrap();
+    path
+}
+
+#[test]
+fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_background() {
+    use kiln::editor::graph_edit::GraphEdit;
+    use kiln::editor::{Command, viewport::ViewportStatus};
+    use kiln::render::KernelKind;
+
+    let dir = tempfile::tempdir().unwrap();
+    let mut harness = start(Setup {
+        file: Some(marble_box(dir.path())),
+        compile_after: Some(std::time::Duration::from_millis(300)),
+        // Enough that the viewport is still accumulating while the compile runs.
+        sample_limit: 100_000,
+        ..Setup::default()
+    });
+    let status =
+        |h: &Harness<'_, EditorApp>| -> ViewportStatus { h.state().viewport_status().unwrap() };
+    step_until(&mut harness, "the interpreted first image", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.samples >= 1 && s.kernel == Some(KernelKind::Interpreted))
+    });
+    // Still: the compiled kernel is built in the background while frames keep coming.
+    step_until(&mut harness, "the background compile", |app| {
+        app.viewport_status().is_some_and(|s| s.compiling)
+    });
+    let compiling = status(&harness);
+    step_until(&mut harness, "the compiled renderers", |app| {
+        app.viewport_status().is_some_and(|s| s.compiled_swaps >= 1)
+    });
+    let compiled = status(&harness);
+    assert_eq!(compiled.kernel, Some(KernelKind::General));
+    assert!(
+        compiled.passes > compiling.passes,
+        "the interpreted image kept accumulating while the kernel compiled ({} passes)",
+        compiling.passes
+    );
+    assert_eq!(compiled.renderer_builds, compiling.renderer_builds);
+
+    // A topology edit: an invert node between the marble's ramp and its base colour.
+    let app = harness.state();
+    let material = app.document().scene().instances[6].material;
+    let graph = app.document().material_graph(material).unwrap();
+    let Input::Link(from) = graph.nodes["surface"].inputs["base_color"].clone() else {
+        panic!("marble's base colour is linked");
+    };
+    let edit = GraphEdit::Batch(vec![
+        GraphEdit::AddNode {
+            id: "inverted".into(),
+            node: Node::new("invert").input("color", Input::Link(from)),
+        },
+        GraphEdit::connect("inverted", "color", "surface", "base_color"),
+    ]);
+    let before = status(&harness);
+    let posted = std::time::Instant::now();
+    harness
+        .state_mut()
+        .apply_command(Command::EditGraph { material, edit });
+    step_until(&mut harness, "the edit's first image", |app| {
+        app.viewport_status().is_some_and(|s| {
+            s.restarts > before.restarts && s.shown_restart == s.restarts && s.samples >= 1
+        })
+    });
+    let edited = status(&harness);
+    eprintln!(
+        "topology edit → first image: {:?} (viewport latency {:?})",
+        posted.elapsed(),
+        edited.last_edit_latency
+    );
+    // The interpreting kernel was built before: the edit compiled nothing.
+    assert_eq!(edited.kernel, Some(KernelKind::Interpreted));
+    assert_eq!(
+        edited.kernel_builds, before.kernel_builds,
+        "no kernel compiled"
+    );
+    // And once still again, the edited graph is compiled in the background too.
+    step_until(&mut harness, "the edited graph compiled", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.compiled_swaps > edited.compiled_swaps)
+    });
+    assert_eq!(status(&harness).kernel, Some(KernelKind::General));
+}

@@ -1000,11 +1000,12 @@ impl EditorApp {
                         ui.label(RichText::new("· preparing…").weak());
                     }
                     if status.kernel == Some(KernelKind::Interpreted) {
-                        ui.label(RichText::new("· graphs interpreted").weak()).on_hover_text(
-                            "Material graphs run through the interpreter, so that every graph \
+                        ui.label(RichText::new("· graphs interpreted").weak())
+                            .on_hover_text(
+                                "Material graphs run through the interpreter, so that every graph \
                              edit shows at once; they are compiled for faster sampling once \
                              the scene is still.",
-                        );
+                            );
                     }
                 }
                 if let Some(gpu) = &self.gpu {

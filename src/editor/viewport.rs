@@ -107,8 +107,11 @@ pub struct ViewportStatus {
     pub tile_size: u32,
     /// How the shown image's kernel holds the graph materials.
     pub kernel: Option<KernelKind>,
-    /// Interpreted renderers replaced by compiled ones built in the background
-    /// ([`Target::compile_after`]); not counted in `renderer_builds`.
+    /// True while compiled renderers are being built to replace the interpreted ones
+    /// ([`Target::compile_after`]); the interpreted ones keep accumulating meanwhile.
+    pub compiling: bool,
+    /// Interpreted renderers replaced by compiled ones; not counted in
+    /// `renderer_builds`.
     pub compiled_swaps: u64,
 }
 
@@ -477,7 +480,10 @@ impl Worker {
     fn compile_wait(&self) -> Option<Duration> {
         let target = self.current.as_ref()?;
         let after = target.compile_after?;
+        // Not before the interpreted image has a full-size sample: the compile would
+        // compete with it for the device and the CPU.
         let wanted = self.kernel() == Some(KernelKind::Interpreted)
+            && self.full.as_ref().is_some_and(|f| f.samples > 0)
             && self.build.is_none()
             && self.compile.is_none()
             && self.compile_failed != Some(target.scene_revision);
@@ -495,6 +501,7 @@ impl Worker {
         };
         if let Some(build) = self.spawn_build(target, Instant::now(), KernelKind::General) {
             self.compile = Some(Compile { build });
+            self.publish(|s| s.compiling = true);
         }
     }
 
@@ -514,6 +521,7 @@ impl Worker {
         let Some(Compile { build }) = self.compile.take() else {
             return;
         };
+        self.publish(|s| s.compiling = false);
         let current = match &self.current {
             Some(c) if self.kernel() == Some(KernelKind::Interpreted) => c,
             _ => return,
@@ -546,14 +554,21 @@ impl Worker {
             }
             Ok(_) => {}
             Err(message) => {
-                tracing::warn!("compiled viewport renderers failed, keeping the interpreted ones: {message}");
+                tracing::warn!(
+                    "compiled viewport renderers failed, keeping the interpreted ones: {message}"
+                );
                 self.compile_failed = Some(build.target.scene_revision);
             }
         }
     }
 
     /// Spawns a thread building renderers of kind `kernel` for `target`.
-    fn spawn_build(&mut self, target: Target, posted: Instant, kernel: KernelKind) -> Option<Build> {
+    fn spawn_build(
+        &mut self,
+        target: Target,
+        posted: Instant,
+        kernel: KernelKind,
+    ) -> Option<Build> {
         let (tx, rx) = mpsc::channel();
         let ctx = Arc::clone(&self.ctx);
         let shared = Arc::clone(&self.shared);

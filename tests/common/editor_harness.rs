@@ -32,6 +32,8 @@ pub struct Setup {
     pub file: Option<PathBuf>,
     /// When the viewport compiles interpreted graphs (None: never; tests count builds).
     pub compile_after: Option<Duration>,
+    /// Samples per pixel the viewport stops at.
+    pub sample_limit: u32,
 }
 
 impl Default for Setup {
@@ -45,6 +47,7 @@ impl Default for Setup {
             thumbnails: false,
             file: None,
             compile_after: None,
+            sample_limit: SAMPLE_LIMIT,
         }
     }
 }
@@ -64,6 +67,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         thumbnails,
         file,
         compile_after,
+        sample_limit,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -75,7 +79,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     file,
                     dialogs: Box::new(dialogs),
                     plugins,
-                    sample_limit: SAMPLE_LIMIT,
+                    sample_limit,
                     state_dir,
                     autosave_every,
                     quit_when_done: false,
