@@ -73,6 +73,7 @@ fn albedos(
             input: bytemuck::cast_slice(&input),
             output_bytes: 4 * words as u64,
             invocations: (configs.len() * per_config) as u32,
+            material_params: &[],
         },
     )?;
     let words: &[u32] = bytemuck::cast_slice(&out);

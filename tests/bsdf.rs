@@ -324,6 +324,7 @@ fn run_lobe_kernel(
             input,
             output_bytes,
             invocations,
+            material_params: &[],
         },
     )
     .unwrap_or_else(|e| panic!("{e}"))

@@ -203,6 +203,7 @@ fn check_against_brute_force(page_bytes: Option<u64>) {
             input: bytemuck::cast_slice(&input),
             output_bytes: RAYS as u64 * 16,
             invocations: RAYS,
+            material_params: &[],
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));

@@ -63,6 +63,7 @@ fn probe(scene: &Scene, entry: &str, input: &[[u32; 4]], words: u64, invocations
             input: bytemuck::cast_slice(input),
             output_bytes: 4 * words,
             invocations,
+            material_params: &[],
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));

@@ -1,6 +1,7 @@
 //! The editor's interpreting kernel: graph materials run as programs from the parameter
-//! buffer render what their compiled code renders, and a topology edit of a graph is a
-//! buffer write, not a kernel.
+//! buffer render what their compiled code renders (every node of the library, and the
+//! bundled graphs in a scene), and a topology edit of a graph is a buffer write, not a
+//! kernel.
 
 mod common;
 
@@ -9,8 +10,10 @@ use std::sync::Arc;
 
 use common::{gpu, settings};
 use kiln::material::compile::link;
-use kiln::material::graph::Node;
+use kiln::material::graph::{Node, Param, SocketType};
+use kiln::material::nodes::{ParamKind, library};
 use kiln::render::materials::scene_materials;
+use kiln::render::probe::{Probe, run_probe};
 use kiln::render::{KernelKind, RenderControl, RenderSettings, Renderer};
 use kiln::scene::{Material, Scene, load_scene};
 
@@ -172,4 +175,165 @@ fn a_topology_edit_is_a_parameter_write_in_the_interpreting_kernel() {
         after, fresh,
         "the updated renderer renders what a fresh one does"
     );
+}
+
+/// One material per case: output `output` of a `kind` node with its defaults as the
+/// emission colour of a principled surface; negated first when `negate` (emission is
+/// clamped at 0, so negative values show through the negated case).
+fn node_case(kind: &str, output: &str, ty: SocketType, negate: bool) -> kiln::material::Graph {
+    let mut g = kiln::material::Graph::default();
+    g.add("n", Node::new(kind));
+    let mut from = link("n", output);
+    if negate {
+        let negated = match ty {
+            SocketType::Float => Node::new("math")
+                .param("operation", Param::Text("multiply".into()))
+                .input("a", from)
+                .input("b", -1.0),
+            _ => Node::new("vector_math")
+                .param("operation", Param::Text("scale".into()))
+                .input("a", from)
+                .input("scale", -1.0),
+        };
+        g.add("negated", negated);
+        let out = if ty == SocketType::Float {
+            "value"
+        } else {
+            "vector"
+        };
+        from = link("negated", out);
+    }
+    g.add(
+        "s",
+        Node::new("principled_bsdf")
+            .input("emission_color", from)
+            .input("emission_strength", 1.0),
+    );
+    g.add(
+        "out",
+        Node::new("material_output").input("surface", link("s", "bsdf")),
+    );
+    g
+}
+
+/// The emission (xyz) and opacity (w) of material `which` of `scene` at `points`, with
+/// the scene's materials as a kernel of kind `kernel` holds them.
+fn evaluate(scene: &Scene, kernel: KernelKind, cases: &[(u32, [f32; 3])]) -> Vec<[f32; 4]> {
+    let materials = scene_materials(scene, kernel).expect("compiles");
+    let mut wgsl: String = materials
+        .wgsl
+        .iter()
+        .map(|(_, code)| code.as_str())
+        .collect();
+    wgsl.push_str(
+        "fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
+    var none: MaterialEval;
+    return none;
+}
+
+@group(1) @binding(0) var<storage, read> probe_in: array<vec4<f32>>;
+@group(1) @binding(1) var<storage, read_write> probe_out: array<vec4<f32>>;
+
+@compute @workgroup_size(64)
+fn material_probe(@builtin(global_invocation_id) gid: vec3<u32>) {
+    let i = gid.x;
+    if (i >= u32(probe_in[0].x)) {
+        return;
+    }
+    let a = probe_in[1u + i];
+    let n = normalize(vec3<f32>(0.3, -0.2, 1.0));
+    let sp = ShadingPoint(
+        a.xyz, n, n, a.xy, a.yx, vec3<f32>(1.0, 0.0, 0.0), vec3<f32>(0.0, 1.0, 0.0), n,
+        a.xyz, n, fract(a.xyz), vec4<f32>(0.2, 0.5, 0.8, 1.0), 0.25, vec3<f32>(1.0, 2.0, 3.0), false,
+    );
+    let m = evaluate_material(u32(a.w), sp);
+    probe_out[i] = vec4<f32>(m.emission, m.opacity);
+}
+",
+    );
+    let mut input = vec![[cases.len() as f32, 0.0, 0.0, 0.0]];
+    input.extend(cases.iter().map(|(m, p)| [p[0], p[1], p[2], *m as f32]));
+    let out = run_probe(
+        &gpu(),
+        scene,
+        &settings(1, 1, 1),
+        &Probe {
+            name: "material_probe",
+            parts: &[("(generated) materials and probe", &wgsl)],
+            entry: "material_probe",
+            input: bytemuck::cast_slice(&input),
+            output_bytes: 16 * cases.len() as u64,
+            invocations: cases.len() as u32,
+            material_params: &materials.parameters,
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    bytemuck::cast_slice::<u8, [f32; 4]>(&out).to_vec()
+}
+
+#[test]
+fn every_library_node_interprets_as_it_compiles() {
+    let mut graphs = Vec::new();
+    for def in library() {
+        let reads_images = def.params.iter().any(|p| matches!(p.kind, ParamKind::File));
+        if reads_images {
+            continue;
+        }
+        for out in def.outputs.iter().filter(|o| o.ty != SocketType::Bsdf) {
+            for negate in [false, true] {
+                let name = format!(
+                    "{}.{}{}",
+                    def.kind,
+                    out.name,
+                    if negate { " negated" } else { "" }
+                );
+                graphs.push((name, node_case(def.kind, out.name, out.ty, negate)));
+            }
+        }
+    }
+    assert!(graphs.len() > 60, "{} cases", graphs.len());
+    let points = [
+        [0.25, 0.5, 0.75],
+        [1.3, -0.7, 0.2],
+        [-2.1, 3.4, 5.9],
+        [0.05, 0.95, 0.5],
+    ];
+    let mut compared = 0;
+    // Batches whose programs fit the parameter buffer.
+    for batch in graphs.chunks(24) {
+        let mut scene = Scene::empty(kiln::scene::Camera::look_at(
+            glam::Vec3::Z,
+            glam::Vec3::ZERO,
+            40.0,
+        ));
+        for (name, g) in batch {
+            scene
+                .materials
+                .push(Material::from_graph(name, g.clone()).expect(name));
+        }
+        assert!(interpreted(&scene), "the batch fits the interpreter");
+        let cases: Vec<(u32, [f32; 3])> = (0..batch.len() as u32)
+            .flat_map(|m| points.map(|p| (m, p)))
+            .collect();
+        let compiled = evaluate(&scene, KernelKind::General, &cases);
+        let run = evaluate(&scene, KernelKind::Interpreted, &cases);
+        for (((m, p), c), r) in cases.iter().zip(&compiled).zip(&run) {
+            let name = &batch[*m as usize].0;
+            for k in 0..4 {
+                let tolerance = 1e-4 * c[k].abs().max(1.0);
+                assert!(
+                    (c[k] - r[k]).abs() <= tolerance,
+                    "{name} at {p:?}: compiled {c:?}, interpreted {r:?}"
+                );
+            }
+            compared += 1;
+        }
+        // Not all zero: the cases show their nodes.
+        assert!(
+            compiled
+                .iter()
+                .any(|c| c[0] != 0.0 || c[1] != 0.0 || c[2] != 0.0)
+        );
+    }
+    eprintln!("{compared} node outputs compared");
 }

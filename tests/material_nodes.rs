@@ -101,6 +101,7 @@ fn evaluate_with_textures(materials: Vec<kiln::scene::Material>, cases: &[Case])
             input: bytemuck::cast_slice(&input),
             output_bytes: 16 * cases.len() as u64,
             invocations: cases.len() as u32,
+            material_params: &[],
         },
     )
     .unwrap_or_else(|e| panic!("{e}"));

@@ -30,6 +30,9 @@ pub struct Probe<'a> {
     pub input: &'a [u8],
     pub output_bytes: u64,
     pub invocations: u32,
+    /// The contents of `material_params` (graph materials' live constants or programs,
+    /// [`super::materials::SceneMaterials::parameters`]); zeros when empty.
+    pub material_params: &'a [[f32; 4]],
 }
 
 /// Runs a probe with `scene` bound as group 0.
@@ -46,6 +49,7 @@ pub fn run_probe(
         input,
         output_bytes,
         invocations,
+        material_params,
     } = *probe;
     let device = &ctx.device;
     // A binding over the limit would not fail loudly everywhere: refuse it here.
@@ -58,6 +62,17 @@ pub fn run_probe(
     }
     let accel = build_scene_accel(scene)?;
     let gpu_scene = GpuScene::upload(ctx, scene, &accel, settings.page_bytes)?;
+    if !material_params.is_empty() {
+        let bytes: &[u8] = bytemuck::cast_slice(material_params);
+        if bytes.len() as u64 > gpu_scene.material_params.size() {
+            return Err(RenderError::Scene(format!(
+                "probe \"{name}\": {} material parameters, over the buffer's {}",
+                material_params.len(),
+                crate::shader::bindings::MATERIAL_PARAMS
+            )));
+        }
+        ctx.queue.write_buffer(&gpu_scene.material_params, 0, bytes);
+    }
     let scene_layout = scene_bind_group_layout(device, &gpu_scene.features());
     let probe_layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("probe"),

@@ -136,6 +136,21 @@ pub fn compile_program(
     })
 }
 
+/// The outputs node `n` reads from registers: its linked inputs but a bump's height (a
+/// subroutine's) and a shader (the surface, not held in a register).
+fn register_reads(flat: &[super::FlatNode], n: usize) -> impl Iterator<Item = (usize, usize)> + '_ {
+    let def = flat[n].def;
+    (flat[n].inputs.iter().enumerate()).filter_map(move |(i, src)| match *src {
+        Src::Out(m, o)
+            if !(def.kind == BUMP && def.inputs[i].name == "height")
+                && output_type(flat, m, o) != SocketType::Bsdf =>
+        {
+            Some((m, o))
+        }
+        _ => None,
+    })
+}
+
 /// The nodes computing `root`, inputs first; a bump's height is not among its inputs (it
 /// is a subroutine of its own).
 fn order(flat: &[super::FlatNode], root: usize) -> Vec<usize> {
@@ -162,7 +177,7 @@ struct Writer<'a> {
     flat: &'a [super::FlatNode],
     words: Vec<u32>,
     constants: Vec<[f32; 4]>,
-    /// Registers used so far (each range of the program has its own).
+    /// Registers used by the ranges written so far.
     registers: u32,
     textures: &'a mut BTreeMap<String, u32>,
     images: BTreeMap<String, String>,
@@ -179,36 +194,54 @@ impl Writer<'_> {
         }
     }
 
-    /// A register for every output of `nodes` that an input among them (or `result`)
-    /// reads; the others go to the sink.
+    /// A register for every output of `nodes` (in execution order) that an input among
+    /// them (or `result`, read after the last) reads; the others go to the sink. A
+    /// register is reused once its value's last reader has read it: an instruction reads
+    /// all its inputs before it writes an output, so its outputs may take its inputs'
+    /// registers. Ranges of the program get registers above those of the ranges before
+    /// (a subroutine must not overwrite what the main program still holds).
     fn allocate(
         &mut self,
         nodes: &[usize],
         result: Option<(usize, usize)>,
     ) -> Result<HashMap<(usize, usize), u32>, ProgramError> {
-        let mut read: BTreeSet<(usize, usize)> = result.into_iter().collect();
-        for &n in nodes {
-            for (i, src) in self.flat[n].inputs.iter().enumerate() {
-                if let Src::Out(m, o) = *src {
-                    let def = self.flat[n].def;
-                    let height = def.kind == BUMP && def.inputs[i].name == "height";
-                    if !height && output_type(self.flat, m, o) != SocketType::Bsdf {
-                        read.insert((m, o));
-                    }
+        let flat = self.flat;
+        let reads = |n: usize| register_reads(flat, n);
+        let mut last_read: HashMap<(usize, usize), usize> = HashMap::new();
+        for (at, &n) in nodes.iter().enumerate() {
+            for value in reads(n) {
+                last_read.insert(value, at);
+            }
+        }
+        if let Some(value) = result {
+            last_read.insert(value, nodes.len());
+        }
+        let mut registers = HashMap::new();
+        let mut free: Vec<u32> = Vec::new();
+        let mut next = self.registers;
+        for (at, &n) in nodes.iter().enumerate() {
+            let dying: BTreeSet<u32> = reads(n)
+                .filter(|value| last_read[value] == at)
+                .map(|value| registers[&value])
+                .collect();
+            free.extend(dying.into_iter().rev());
+            for o in 0..self.flat[n].def.outputs.len() {
+                if last_read.contains_key(&(n, o)) {
+                    let register = free.pop().unwrap_or_else(|| {
+                        next += 1;
+                        next - 1
+                    });
+                    registers.insert((n, o), register);
                 }
             }
         }
-        let mut registers = HashMap::new();
-        for key in read {
-            if self.registers >= SINK {
-                return Err(self.unsupported(format!(
-                    "it keeps more than {} values at once",
-                    INTERPRETER_REGISTERS - 1
-                )));
-            }
-            registers.insert(key, self.registers);
-            self.registers += 1;
+        if next > SINK {
+            return Err(self.unsupported(format!(
+                "it keeps more than {} values at once",
+                INTERPRETER_REGISTERS - 1
+            )));
         }
+        self.registers = next;
         Ok(registers)
     }
 
