@@ -249,7 +249,7 @@ fn edit(
         autosave_every: kiln::editor::AUTOSAVE_EVERY,
         quit_when_done,
         thumbnails: true,
-        compile_after: Some(kiln::editor::COMPILE_AFTER),
+        graph_kernels: kiln::editor::GRAPH_KERNELS,
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
     if let Some(error) = report.error {

@@ -749,13 +749,14 @@ fn marble_box(dir: &std::path::Path) -> std::path::PathBuf {
 #[test]
 fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_background() {
     use kiln::editor::graph_edit::GraphEdit;
+    use kiln::editor::viewport::GraphKernels;
     use kiln::editor::{Command, viewport::ViewportStatus};
     use kiln::render::KernelKind;
 
     let dir = tempfile::tempdir().unwrap();
     let mut harness = start(Setup {
         file: Some(marble_box(dir.path())),
-        compile_after: Some(std::time::Duration::from_millis(300)),
+        graph_kernels: GraphKernels::InterpretedThenCompiled(std::time::Duration::from_millis(300)),
         // Enough that the viewport is still accumulating while the compile runs.
         sample_limit: 100_000,
         ..Setup::default()
@@ -824,5 +825,9 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
         app.viewport_status()
             .is_some_and(|s| s.compiled_swaps > edited.compiled_swaps)
     });
+    eprintln!(
+        "topology edit → compiled renderers swapped in: {:?}",
+        posted.elapsed()
+    );
     assert_eq!(status(&harness).kernel, Some(KernelKind::General));
 }

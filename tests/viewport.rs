@@ -9,7 +9,7 @@ use std::sync::Arc;
 use std::time::{Duration, Instant};
 
 use glam::{Affine3A, Vec3};
-use kiln::editor::viewport::{Target, ViewportRenderer, ViewportStatus};
+use kiln::editor::viewport::{GraphKernels, Target, ViewportRenderer, ViewportStatus};
 use kiln::material::{Input, Value};
 use kiln::render::GpuContext;
 use kiln::scene::{self, Light, Material, Scene};
@@ -26,7 +26,9 @@ fn target(scene: Scene, revision: u64, size: [u32; 2]) -> Target {
         // Never reached: the viewport keeps accumulating.
         sample_limit: 1 << 20,
         view: Default::default(),
-        compile_after: None,
+        // Graph edits here measure compiled kernels (value edits in place, structure
+        // compiled): tests/node_editor.rs measures interpreted ones.
+        graphs: GraphKernels::Compiled,
     }
 }
 

@@ -27,7 +27,7 @@ use super::pick::{Picker, camera_ray};
 use super::session::{Recovery, SessionStore};
 use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
 use super::thumbnails::Thumbnails;
-use super::viewport::{Target, ViewportRenderer, ViewportStatus};
+use super::viewport::{GraphKernels, Target, ViewportRenderer, ViewportStatus};
 
 /// Samples per pixel the viewport accumulates before it stops (Blender's viewport default
 /// is 1024).
@@ -53,15 +53,16 @@ pub struct EditorOptions {
     /// Render material thumbnails for the material list (tests that do not look at them
     /// leave the device to the viewport).
     pub thumbnails: bool,
-    /// After a graph edit, the viewport renders with the graphs interpreted (a first
-    /// image at once); once the scene has been still this long, it compiles them in the
-    /// background for faster sampling ([`super::viewport::Target::compile_after`]). None
-    /// keeps them interpreted (tests that count builds).
-    pub compile_after: Option<Duration>,
+    /// How the viewport's kernels hold graph materials: the editor interprets them (a
+    /// graph edit shows at once) and compiles them once the scene is still
+    /// ([`GRAPH_KERNELS`]); tests that count builds keep them interpreted.
+    pub graph_kernels: GraphKernels,
 }
 
-/// How long the scene stays still before the viewport compiles its graphs.
-pub const COMPILE_AFTER: Duration = Duration::from_millis(1500);
+/// The editor's viewport: graphs interpreted, compiled once the scene has been still for
+/// 1.5 s.
+pub const GRAPH_KERNELS: GraphKernels =
+    GraphKernels::InterpretedThenCompiled(Duration::from_millis(1500));
 
 /// What an editor session rendered, for the caller of [`super::run`].
 #[derive(Clone, Debug, Default)]
@@ -263,7 +264,7 @@ impl EditorApp {
             options: ViewOptions {
                 viewport_samples: options.sample_limit.max(1),
                 export_options: String::new(),
-                compile_after: options.compile_after,
+                graph_kernels: options.graph_kernels,
             },
             tab: Tab::Object,
             final_render: None,
@@ -1051,7 +1052,7 @@ impl EditorApp {
             size,
             sample_limit: self.options.viewport_samples,
             view: self.document.scene().settings.view,
-            compile_after: self.options.compile_after,
+            graphs: self.options.graph_kernels,
         };
         let painter = ui.painter_at(rect);
         painter.rect_filled(rect, 0.0, Color32::from_gray(30));

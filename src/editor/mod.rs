@@ -34,7 +34,7 @@ pub mod thumbnails;
 pub mod viewport;
 
 pub use app::{
-    AUTOSAVE_EVERY, COMPILE_AFTER, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, RunReport,
+    AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, GRAPH_KERNELS, RunReport,
 };
 pub use document::{Command, Document, Selection};
 pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};

@@ -4,8 +4,6 @@
 //! the final render's button, progress and export; and the environment (colour, map,
 //! strength, rotation). Document settings change through commands, like every other edit.
 
-use std::time::Duration;
-
 use egui::{DragValue, RichText, Ui};
 use glam::Vec3;
 
@@ -30,9 +28,8 @@ pub struct ViewOptions {
     pub viewport_samples: u32,
     /// Options for the image writer on export (`bits=16`, `quality=90`, …).
     pub export_options: String,
-    /// When the viewport swaps its interpreted graphs for compiled ones
-    /// ([`super::viewport::Target::compile_after`]).
-    pub compile_after: Option<Duration>,
+    /// How the viewport's kernels hold graph materials.
+    pub graph_kernels: super::viewport::GraphKernels,
 }
 
 /// What the Render tab asks of the app.

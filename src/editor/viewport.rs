@@ -48,11 +48,23 @@ pub struct Target {
     pub sample_limit: u32,
     /// Exposure and view transform of the display pass (no restart when they change).
     pub view: ViewSettings,
-    /// Graph materials are interpreted in the viewport (any graph edit is a buffer write,
-    /// [`KernelKind::Interpreted`]); once the scene has been still this long, renderers
-    /// with the graphs compiled (which sample faster) are built in the background and
-    /// replace them. None keeps the interpreted ones.
-    pub compile_after: Option<Duration>,
+    /// How the viewport's kernels hold graph materials.
+    pub graphs: GraphKernels,
+}
+
+/// How the viewport's kernels hold the scene's graph materials.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum GraphKernels {
+    /// Compiled, constants read from a buffer ([`KernelKind::General`]): a value edit is a
+    /// write, a change of structure a compile (in the background).
+    Compiled,
+    /// Interpreted ([`KernelKind::Interpreted`]): any graph edit is a buffer write, at a
+    /// cost in sampling speed.
+    Interpreted,
+    /// Interpreted, and once the scene has been still this long, compiled renderers are
+    /// built in the background and replace the interpreted ones (the editor): a graph
+    /// edit shows at once and sampling is fast while nothing changes.
+    InterpretedThenCompiled(Duration),
 }
 
 impl Target {
@@ -108,7 +120,7 @@ pub struct ViewportStatus {
     /// How the shown image's kernel holds the graph materials.
     pub kernel: Option<KernelKind>,
     /// True while compiled renderers are being built to replace the interpreted ones
-    /// ([`Target::compile_after`]); the interpreted ones keep accumulating meanwhile.
+    /// ([`GraphKernels::InterpretedThenCompiled`]); the interpreted ones keep accumulating meanwhile.
     pub compiling: bool,
     /// Interpreted renderers replaced by compiled ones; not counted in
     /// `renderer_builds`.
@@ -275,7 +287,7 @@ struct Build {
     result: mpsc::Receiver<Result<Built, String>>,
 }
 
-/// Compiled renderers being built to replace interpreted ones ([`Target::compile_after`]).
+/// Compiled renderers being built to replace interpreted ones ([`GraphKernels::InterpretedThenCompiled`]).
 struct Compile {
     build: Build,
 }
@@ -297,12 +309,17 @@ fn build_renderers(
     Ok(Built { full, coarse })
 }
 
-/// The kernel a new renderer for `scene` starts with: the interpreting one when the scene
-/// has graph materials it can run (then no graph edit needs a compile), else the general
-/// one (every lobe and light type, so that a parameter or light edit rarely needs one).
-fn first_kernel(scene: &Scene) -> KernelKind {
+/// The kernel a new renderer for `target` starts with: the interpreting one when its
+/// graphs are to be interpreted and the interpreter runs them (then no graph edit needs a
+/// compile), else the general one (every lobe and light type, so that a parameter or
+/// light edit rarely needs one).
+fn first_kernel(target: &Target) -> KernelKind {
+    let scene = &target.scene;
     let graphs = scene.materials.iter().any(|m| m.graph.is_some());
-    if graphs && crate::render::materials::interprets(scene) {
+    if target.graphs != GraphKernels::Compiled
+        && graphs
+        && crate::render::materials::interprets(scene)
+    {
         KernelKind::Interpreted
     } else {
         KernelKind::General
@@ -464,7 +481,7 @@ impl Worker {
     /// Starts building renderers for `target` on a thread of its own; the layers keep
     /// rendering what they render until it is done.
     fn start_build(&mut self, target: Target, posted: Instant) {
-        let kernel = first_kernel(&target.scene);
+        let kernel = first_kernel(&target);
         if let Some(build) = self.spawn_build(target, posted, kernel) {
             self.build = Some(build);
             self.publish(|s| s.building = true);
@@ -479,7 +496,9 @@ impl Worker {
     /// How long until compiled renderers are due for the current target, if they will be.
     fn compile_wait(&self) -> Option<Duration> {
         let target = self.current.as_ref()?;
-        let after = target.compile_after?;
+        let GraphKernels::InterpretedThenCompiled(after) = target.graphs else {
+            return None;
+        };
         // Not before the interpreted image has a full-size sample: the compile would
         // compete with it for the device and the CPU.
         let wanted = self.kernel() == Some(KernelKind::Interpreted)

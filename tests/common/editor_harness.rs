@@ -9,6 +9,7 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
+use kiln::editor::viewport::GraphKernels;
 use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs};
 use kiln::plugin::PluginHost;
 
@@ -30,8 +31,9 @@ pub struct Setup {
     pub thumbnails: bool,
     /// The file to open (None: the bundled Cornell box).
     pub file: Option<PathBuf>,
-    /// When the viewport compiles interpreted graphs (None: never; tests count builds).
-    pub compile_after: Option<Duration>,
+    /// How the viewport holds graphs (interpreted: no background compiles, which
+    /// tests counting builds would see).
+    pub graph_kernels: GraphKernels,
     /// Samples per pixel the viewport stops at.
     pub sample_limit: u32,
 }
@@ -46,7 +48,7 @@ impl Default for Setup {
             size: egui::vec2(1280.0, 800.0),
             thumbnails: false,
             file: None,
-            compile_after: None,
+            graph_kernels: GraphKernels::Interpreted,
             sample_limit: SAMPLE_LIMIT,
         }
     }
@@ -66,7 +68,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         size,
         thumbnails,
         file,
-        compile_after,
+        graph_kernels,
         sample_limit,
     } = setup;
     Harness::builder()
@@ -84,7 +86,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     autosave_every,
                     quit_when_done: false,
                     thumbnails,
-                    compile_after,
+                    graph_kernels,
                 },
             )
         })
