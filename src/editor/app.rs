@@ -1001,12 +1001,16 @@ impl EditorApp {
                         ui.label(RichText::new("· preparing…").weak());
                     }
                     if status.kernel == Some(KernelKind::Interpreted) {
-                        ui.label(RichText::new("· graphs interpreted").weak())
-                            .on_hover_text(
-                                "Material graphs run through the interpreter, so that every graph \
+                        let text = if status.compiling {
+                            "· graphs interpreted, compiling…"
+                        } else {
+                            "· graphs interpreted"
+                        };
+                        ui.label(RichText::new(text).weak()).on_hover_text(
+                            "Material graphs run through the interpreter, so that every graph \
                              edit shows at once; they are compiled for faster sampling once \
                              the scene is still.",
-                            );
+                        );
                     }
                 }
                 if let Some(gpu) = &self.gpu {
