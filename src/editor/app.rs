@@ -22,14 +22,14 @@ use super::gizmo::{self, Constraint, Mode, Orientation, ViewProjection};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
 use super::node_editor::MaterialDrag;
+use super::node_previews::NodePreviews;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
 use super::session::{Recovery, SessionStore};
 use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
-use super::node_previews::NodePreviews;
 use super::thumbnails::Thumbnails;
-use super::viewport_preview::{ViewportPreview, preview_scene};
 use super::viewport::{Target, ViewportRenderer, ViewportStatus};
+use super::viewport_preview::{ViewportPreview, preview_scene};
 
 /// Samples per pixel the viewport accumulates before it stops (Blender's viewport default
 /// is 1024).

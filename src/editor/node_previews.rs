@@ -153,9 +153,10 @@ impl NodePreviews {
     /// nothing when only the layout changed since the last call.
     pub fn want(&mut self, material: usize, graph: &Graph, source: &Material) {
         let wanted = previewed_outputs(graph);
-        let same = self.asked.as_ref().is_some_and(|(m, g, w)| {
-            *m == material && *w == wanted && g.same_but_layout(graph)
-        });
+        let same = self
+            .asked
+            .as_ref()
+            .is_some_and(|(m, g, w)| *m == material && *w == wanted && g.same_but_layout(graph));
         if same {
             return;
         }
@@ -562,7 +563,10 @@ mod tests {
         // The sphere covers π/4 · fill² of the square, within its one-pixel outline.
         let want = std::f32::consts::FRAC_PI_4 * SPHERE_FILL * SPHERE_FILL;
         let got = covered as f32 / points.len() as f32;
-        assert!((got - want).abs() < 0.03, "covered {got}, want {want} ± 0.03");
+        assert!(
+            (got - want).abs() < 0.03,
+            "covered {got}, want {want} ± 0.03"
+        );
     }
 
     #[test]
@@ -574,7 +578,10 @@ mod tests {
         assert_eq!(centre[2][3], 1.0);
         let g = &centre[2];
         assert!((g[0] - 0.5).abs() < 0.05 && (g[1] - 0.5).abs() < 0.05 && g[2] > 0.99);
-        assert_eq!(points[0][2][3], 0.0, "the top-left corner is off the sphere");
+        assert_eq!(
+            points[0][2][3], 0.0,
+            "the top-left corner is off the sphere"
+        );
         // The top of the image is the sphere's top (+y).
         let top = points[(2 * size + 16) as usize];
         assert!(top[1][1] > 0.8, "{:?}", top[1]);
@@ -587,7 +594,11 @@ mod tests {
             let (u, v) = (a[3], b[3]);
             let theta = v * std::f32::consts::PI;
             let phi = u * std::f32::consts::TAU;
-            let mesh = Vec3::new(theta.sin() * phi.cos(), theta.cos(), -theta.sin() * phi.sin());
+            let mesh = Vec3::new(
+                theta.sin() * phi.cos(),
+                theta.cos(),
+                -theta.sin() * phi.sin(),
+            );
             let p = Vec3::new(a[0], a[1], a[2]);
             assert!((mesh - p).length() < 1e-4, "uv ({u}, {v}): {mesh} vs {p}");
         }

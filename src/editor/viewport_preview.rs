@@ -15,8 +15,8 @@ use std::path::Path;
 
 use super::graph_edit::sockets_of;
 use crate::material::nodes::MATERIAL_OUTPUT;
-use crate::material::{Graph, Input, Link, Node, SocketType, Value};
 use crate::material::texture::load_texture;
+use crate::material::{Graph, Input, Link, Node, SocketType, Value};
 use crate::scene::{Material, Scene};
 
 /// The node the viewport previews: material `material`'s node `node`, its output number
@@ -73,7 +73,10 @@ pub fn preview_graph(graph: &Graph, node: &str, output: usize) -> Result<(Graph,
         }
     };
     let output_id = fresh(&rewired, "preview_output");
-    rewired.add(&output_id, Node::new(MATERIAL_OUTPUT).input("surface", surface));
+    rewired.add(
+        &output_id,
+        Node::new(MATERIAL_OUTPUT).input("surface", surface),
+    );
     rewired.output = Some(output_id);
     Ok((rewired, socket))
 }
@@ -99,8 +102,8 @@ pub fn preview_scene(
         Some(image) => Ok((**image).clone()),
         None => load_texture(Path::new(file)),
     };
-    let shown = Material::from_graph_with(&material.name, rewired, &load)
-        .map_err(|e| e.to_string())?;
+    let shown =
+        Material::from_graph_with(&material.name, rewired, &load).map_err(|e| e.to_string())?;
     scene.materials[preview.material] = shown;
     Ok(socket)
 }
@@ -138,7 +141,12 @@ mod tests {
         assert_eq!(compiled.traits.constant_emission, Some([1.0, 0.0, 0.0]));
         use crate::shader::lobes;
         let layers = lobes::COAT | lobes::SHEEN | lobes::METAL | lobes::GLASS;
-        assert_eq!(compiled.traits.lobes & layers, 0, "{:b}", compiled.traits.lobes);
+        assert_eq!(
+            compiled.traits.lobes & layers,
+            0,
+            "{:b}",
+            compiled.traits.lobes
+        );
         assert!(!compiled.traits.transmissive);
     }
 
@@ -180,6 +188,10 @@ mod tests {
             material: 3,
             ..preview
         };
-        assert!(preview_scene(&mut scene, &g, &missing).unwrap_err().contains('3'));
+        assert!(
+            preview_scene(&mut scene, &g, &missing)
+                .unwrap_err()
+                .contains('3')
+        );
     }
 }

@@ -291,7 +291,10 @@ mod tests {
         moved.nodes.get_mut("value").unwrap().position = Some([10.0, 20.0]);
         assert!(graph.same_but_layout(&moved));
         moved.nodes.get_mut("value").unwrap().preview = true;
-        assert!(graph.same_but_layout(&moved), "a preview shown computes nothing");
+        assert!(
+            graph.same_but_layout(&moved),
+            "a preview shown computes nothing"
+        );
         let mut muted = moved.clone();
         muted.nodes.get_mut("value").unwrap().muted = true;
         assert!(!graph.same_but_layout(&muted));

@@ -1040,7 +1040,7 @@ impl<'a> Viewer<'a> {
         }
     }
 
-    /// The preview image under a node's body: the latest made (the previous one, with a
+    /// The preview image under a node: the latest made (the previous one, with a
     /// spinner, while a new one renders), or why there is none.
     fn preview_ui(&self, ui: &mut Ui, id: &str) {
         let size = egui::Vec2::splat(PREVIEW_POINTS);
@@ -1056,7 +1056,10 @@ impl<'a> Viewer<'a> {
         if !view.current {
             let spinner = if view.texture.is_some() {
                 // Small, in the corner of the previous image.
-                egui::Rect::from_min_size(rect.left_top() + egui::vec2(4.0, 4.0), egui::vec2(14.0, 14.0))
+                egui::Rect::from_min_size(
+                    rect.left_top() + egui::vec2(4.0, 4.0),
+                    egui::vec2(14.0, 14.0),
+                )
             } else {
                 egui::Rect::from_center_size(rect.center(), egui::vec2(24.0, 24.0))
             };
@@ -1068,7 +1071,8 @@ impl<'a> Viewer<'a> {
                 Color32::LIGHT_RED,
                 PREVIEW_POINTS,
             );
-            ui.painter().galley(rect.left_top(), galley, Color32::LIGHT_RED);
+            ui.painter()
+                .galley(rect.left_top(), galley, Color32::LIGHT_RED);
         }
     }
 
@@ -1403,7 +1407,6 @@ impl SnarlViewer<String> for Viewer<'_> {
 
     fn has_body(&mut self, node: &String) -> bool {
         self.error_on(node).is_some()
-            || self.previewing(node)
             || self.node(node).is_some_and(|n| {
                 nodes::find(&n.kind).map_or(!n.params.is_empty(), |d| !d.params.is_empty())
             })
@@ -1433,10 +1436,24 @@ impl SnarlViewer<String> for Viewer<'_> {
                 ui.label(galley);
             }
             self.params_ui(ui, &id);
-            if self.previewing(&id) {
-                self.preview_ui(ui, &id);
-            }
         });
+    }
+
+    fn has_footer(&mut self, node: &String) -> bool {
+        self.previewing(node)
+    }
+
+    /// The preview, under the node's pins and body (as Blender draws it, full width).
+    fn show_footer(
+        &mut self,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        let id = snarl[node].clone();
+        ui.vertical_centered(|ui| self.preview_ui(ui, &id));
     }
 
     fn node_frame(
