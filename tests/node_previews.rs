@@ -274,6 +274,21 @@ fn a_preview_shows_a_nodes_output_under_it_toggles_with_undo_and_is_saved() {
     let p = sphere_pixels(&value)[0];
     assert!((p[0] as f32 - want).abs() <= 1.5, "{p:?} vs {want}");
 
+    // A shader: the block's surface on a sphere lit from the upper left, so its upper
+    // left is brighter than its lower right.
+    toggle_preview(&mut harness, "surface");
+    let surface = wait_for_preview(&mut harness, "surface");
+    let luma = |x: usize, y: usize| {
+        let p = surface.pixels[y * 96 + x];
+        assert_eq!(p.a(), 255, "({x}, {y}) is on the sphere");
+        p.r() as u32 + p.g() as u32 + p.b() as u32
+    };
+    let (lit, unlit) = (luma(32, 30), luma(66, 68));
+    assert!(
+        lit > unlit + 90,
+        "a shader's preview is shaded: upper left {lit}, lower right {unlit}"
+    );
+
     // The noise's eye again: off.
     toggle_preview(&mut harness, "noise_texture");
     assert!(!graph(harness.state()).nodes["noise_texture"].preview);
@@ -283,13 +298,14 @@ fn a_preview_shows_a_nodes_output_under_it_toggles_with_undo_and_is_saved() {
     steps(&mut harness, 2);
     assert!(saved.exists(), "{:?}", harness.state().error());
     let text = std::fs::read_to_string(&saved).unwrap();
-    assert_eq!(text.matches("preview: true").count(), 1, "{text}");
+    assert_eq!(text.matches("preview: true").count(), 2, "{text}");
     let shown = graph(harness.state());
     harness.state_mut().open(saved.clone());
     steps(&mut harness, 2);
     let reopened = harness.state().document().material_graph(m).unwrap();
     assert_eq!(reopened, shown);
     assert!(reopened.nodes["value"].preview && !reopened.nodes["noise_texture"].preview);
+    assert!(reopened.nodes["surface"].preview);
 }
 
 /// The viewport's pixel at its centre (the short block), as the window shows it.

@@ -350,6 +350,8 @@ fn preview_wgsl(
     let mut calls = BTreeSet::from([
         "ShadingPoint".to_owned(),
         "MaterialEval".to_owned(),
+        // A shader's code wraps its result in it (kernel assembly always adds it).
+        "material_eval".to_owned(),
         "nd_finite3".to_owned(),
     ]);
     let (code, body) = if ty == SocketType::Bsdf {
@@ -420,6 +422,21 @@ fn request_wgsl(request: &Request, scene: &Scene) -> Result<String, String> {
     )
 }
 
+/// The preview kernel's entry point.
+const PREVIEW_ENTRY: &str = "node_preview_main";
+
+/// What follows the shader library in the preview kernel: the preview's `code`
+/// ([`preview_wgsl`]) and the kernel that calls it.
+fn kernel_parts(code: &str) -> [(&str, &str); 2] {
+    [
+        ("generated: node preview", code),
+        (
+            "shaders/editor/node_preview.wgsl",
+            include_str!("../../shaders/editor/node_preview.wgsl"),
+        ),
+    ]
+}
+
 /// Runs the preview kernel with `code` over the sphere's points; the image in sRGB.
 fn evaluate(ctx: &GpuContext, scene: &Scene, code: &str) -> Result<egui::ColorImage, String> {
     let points = sphere_points(PREVIEW_SIZE);
@@ -438,14 +455,8 @@ fn evaluate(ctx: &GpuContext, scene: &Scene, code: &str) -> Result<egui::ColorIm
         &settings,
         &Probe {
             name: "node preview",
-            parts: &[
-                ("generated: node preview", code),
-                (
-                    "shaders/editor/node_preview.wgsl",
-                    include_str!("../../shaders/editor/node_preview.wgsl"),
-                ),
-            ],
-            entry: "node_preview_main",
+            parts: &kernel_parts(code),
+            entry: PREVIEW_ENTRY,
             input: bytemuck::cast_slice(&input),
             output_bytes: 16 * points.len() as u64,
             invocations: points.len() as u32,
@@ -615,7 +626,7 @@ mod tests {
     }
 
     #[test]
-    fn a_preview_of_each_output_type_compiles_to_one_function() {
+    fn a_preview_kernel_of_each_output_type_is_valid_wgsl() {
         let mut g = Graph::default();
         g.add("noise", Node::new("noise_texture"));
         g.add(
@@ -638,6 +649,17 @@ mod tests {
                 1,
                 "{wgsl}"
             );
+            // As run_probe assembles it, checked by naga without a device.
+            let mut source = crate::render::kernel::KernelSource::with_library(
+                "node preview",
+                &crate::shader::KernelFeatures::default(),
+            );
+            for (path, part) in kernel_parts(&wgsl) {
+                source.push(path, part);
+            }
+            if let Err(e) = source.validate() {
+                panic!("{node}.{socket}: {e}");
+            }
         }
         // The graph is left as it was: the output the BSDF preview adds is a copy's.
         assert_eq!(g.nodes.len(), 3);

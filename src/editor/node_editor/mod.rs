@@ -1065,14 +1065,21 @@ impl<'a> Viewer<'a> {
             };
             ui.put(spinner, egui::Spinner::new());
         } else if let Some(e) = view.error {
+            // The first line (a kernel error's full text is long), all of it on hover.
             let galley = ui.painter().layout(
-                format!("no preview: {e}"),
+                format!("no preview: {}", e.lines().next().unwrap_or_default()),
                 egui::TextStyle::Small.resolve(ui.style()),
                 Color32::LIGHT_RED,
                 PREVIEW_POINTS,
             );
             ui.painter()
                 .galley(rect.left_top(), galley, Color32::LIGHT_RED);
+            ui.interact(
+                rect,
+                ui.id().with(("preview error", id)),
+                egui::Sense::hover(),
+            )
+            .on_hover_text(e);
         }
     }
 
