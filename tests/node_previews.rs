@@ -374,7 +374,7 @@ fn ctrl_shift_click_previews_a_node_in_the_viewport_until_cleared() {
         "{preview:?}"
     );
     assert!(
-        harness.query_by_label("✕ Clear preview").is_some(),
+        harness.query_by_label("🗙 Clear preview").is_some(),
         "a banner says what the viewport shows"
     );
     wait_for_image(&mut harness, "the previewed node");
@@ -385,7 +385,7 @@ fn ctrl_shift_click_previews_a_node_in_the_viewport_until_cleared() {
     assert_eq!(harness.state().document().render_scene(), scene);
 
     // The banner's button clears it: the material again.
-    harness.get_by_label("✕ Clear preview").click();
+    harness.get_by_label("🗙 Clear preview").click();
     steps(&mut harness, 2);
     assert!(harness.state().node_editor().viewport_preview().is_none());
     wait_for_image(&mut harness, "the material again");

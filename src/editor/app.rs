@@ -1179,7 +1179,7 @@ impl EditorApp {
                             ui.label(RichText::new(format!("⚠ {e}")).color(Color32::LIGHT_RED));
                         }
                         clear = ui
-                            .button("✕ Clear preview")
+                            .button("🗙 Clear preview")
                             .on_hover_text("Show the material again (Esc)")
                             .clicked();
                     });
@@ -1991,10 +1991,10 @@ impl EditorApp {
                 self.update_thumbnails(ui.ctx());
                 let thumbnails = self.thumbnails.as_ref();
                 let dialogs = self.dialogs.as_mut();
-                let previews = self.node_previews.as_mut().map(|p| {
-                    p.poll(ui.ctx());
-                    p
-                });
+                if let Some(previews) = self.node_previews.as_mut() {
+                    previews.poll(ui.ctx());
+                }
+                let previews = self.node_previews.as_mut();
                 for (command, gesture) in
                     self.node_editor
                         .ui(ui, &self.document, thumbnails, previews, dialogs)
