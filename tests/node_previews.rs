@@ -175,9 +175,12 @@ fn a_preview_shows_a_nodes_output_under_it_toggles_with_undo_and_is_saved() {
         .unwrap()
         .height();
 
-    // The eye on the noise: an image under the node whose pixels vary.
+    // The eye on the noise: an image under the node whose pixels vary. The viewport's
+    // image does not change with it.
+    let image_revision = harness.state().document().image_revision();
     toggle_preview(&mut harness, "noise_texture");
     assert!(graph(harness.state()).nodes["noise_texture"].preview);
+    assert_eq!(harness.state().document().image_revision(), image_revision);
     assert!(
         graph(harness.state()).same_but_layout(&before),
         "a preview changes nothing the material computes"
