@@ -22,12 +22,14 @@ use super::gizmo::{self, Constraint, Mode, Orientation, ViewProjection};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
 use super::node_editor::MaterialDrag;
+use super::node_previews::NodePreviews;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
 use super::session::{Recovery, SessionStore};
 use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
 use super::thumbnails::Thumbnails;
 use super::viewport::{GraphKernels, Target, ViewportRenderer, ViewportStatus};
+use super::viewport_preview::{ViewportPreview, preview_scene};
 
 /// Samples per pixel the viewport accumulates before it stops (Blender's viewport default
 /// is 1024).
@@ -129,6 +131,14 @@ const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O)
 const NEW: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::N);
 const DUPLICATE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::SHIFT, Key::D);
 
+/// What the viewport's scene is made of: the document (serial, image revision) and the
+/// node previewed in it.
+#[derive(Clone, Debug, PartialEq)]
+struct ViewportSceneKey {
+    document: (u64, u64),
+    preview: Option<ViewportPreview>,
+}
+
 /// The editor application (an [`eframe::App`]).
 pub struct EditorApp {
     document: Document,
@@ -148,6 +158,15 @@ pub struct EditorApp {
     outliner: Outliner,
     picker: Option<((u64, u64), Picker)>,
     render_scene: Option<((u64, u64), Arc<Scene>)>,
+    /// The scene the viewport shows (the document's, or with a node previewed: see
+    /// [`super::viewport_preview`]), the state it was made of and its revision, which
+    /// counts every change of it.
+    viewport_scene: Option<(ViewportSceneKey, u64, Arc<Scene>)>,
+    viewport_revision: u64,
+    /// Why the previewed node cannot be shown, if it cannot.
+    viewport_preview_error: Option<String>,
+    /// The node editor's per-node previews.
+    node_previews: Option<NodePreviews>,
     options: ViewOptions,
     tab: Tab,
     final_render: Option<FinalRender>,
@@ -239,6 +258,10 @@ impl EditorApp {
             let egui_ctx = cc.egui_ctx.clone();
             Thumbnails::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
         });
+        let node_previews = gpu.as_ref().map(|ctx| {
+            let egui_ctx = cc.egui_ctx.clone();
+            NodePreviews::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
+        });
         let view = document.scene().camera;
         let session = options.state_dir.clone().map(SessionStore::new);
         if let (Some(store), Some(path)) = (&session, document.path()) {
@@ -261,6 +284,10 @@ impl EditorApp {
             outliner: Outliner::default(),
             picker: None,
             render_scene: None,
+            viewport_scene: None,
+            viewport_revision: 0,
+            viewport_preview_error: None,
+            node_previews,
             options: ViewOptions {
                 viewport_samples: options.sample_limit.max(1),
                 export_options: String::new(),
@@ -328,6 +355,11 @@ impl EditorApp {
     /// The material thumbnails, when the app renders them.
     pub fn thumbnails(&self) -> Option<&Thumbnails> {
         self.thumbnails.as_ref()
+    }
+
+    /// The node editor's per-node previews, when there is a device to make them.
+    pub fn node_previews(&self) -> Option<&NodePreviews> {
+        self.node_previews.as_ref()
     }
 
     pub fn node_editor(&self) -> &super::node_editor::NodeEditor {
@@ -398,12 +430,47 @@ impl EditorApp {
         }
     }
 
+    /// The scene the viewport renders, and its revision: the document's, with the
+    /// node the node editor previews in the viewport (Ctrl+Shift+click) shown on its
+    /// material instead of the material. Only the viewport takes it: final renders take
+    /// [`Self::render_scene`].
+    fn viewport_scene(&mut self) -> (Arc<Scene>, u64) {
+        let key = ViewportSceneKey {
+            document: self.scene_key(),
+            preview: self.node_editor.viewport_preview().cloned(),
+        };
+        if let Some((k, revision, scene)) = &self.viewport_scene
+            && *k == key
+        {
+            return (Arc::clone(scene), *revision);
+        }
+        let mut scene = self.render_scene();
+        self.viewport_preview_error = None;
+        if let Some(preview) = &key.preview {
+            let mut previewed = (*scene).clone();
+            let shown = self
+                .document
+                .material_graph(preview.material)
+                .ok_or_else(|| format!("no material {}", preview.material))
+                .and_then(|graph| preview_scene(&mut previewed, &graph, preview));
+            match shown {
+                Ok(_) => scene = Arc::new(previewed),
+                Err(e) => self.viewport_preview_error = Some(e),
+            }
+        }
+        self.viewport_revision += 1;
+        self.viewport_scene = Some((key, self.viewport_revision, Arc::clone(&scene)));
+        (scene, self.viewport_revision)
+    }
+
     fn replace_document(&mut self, document: Document) {
         self.document = document;
         self.document_serial += 1;
         self.view = self.document.scene().camera;
         self.picker = None;
         self.render_scene = None;
+        // The previewed node was another document's.
+        self.node_editor.clear_viewport_preview();
     }
 
     // ---- files ----
@@ -1046,12 +1113,10 @@ impl EditorApp {
             self.navigate(ui, &response, rect);
         }
 
-        let scene = self.render_scene();
-        let key = self.scene_key();
+        let (scene, scene_revision) = self.viewport_scene();
         let target = Target {
             scene,
-            // One number for both parts of the key: documents never reach 2^40 edits.
-            scene_revision: (key.0 << 40) | key.1,
+            scene_revision,
             camera: self.view,
             size,
             sample_limit: self.options.viewport_samples,
@@ -1092,6 +1157,7 @@ impl EditorApp {
         self.selection_outline(&painter, rect);
         self.draw_gizmo(&painter, rect);
         self.toolbar(ui, rect);
+        self.viewport_preview_banner(ui, rect);
         if let Some(error) = &status.error {
             painter.text(
                 rect.left_top() + egui::vec2(12.0, 12.0),
@@ -1100,6 +1166,50 @@ impl EditorApp {
                 egui::FontId::proportional(14.0),
                 Color32::LIGHT_RED,
             );
+        }
+    }
+
+    /// The banner over the viewport while it previews a node: which, why it cannot if it
+    /// cannot, and the button that clears it (as do Esc and Ctrl+Shift+click on empty
+    /// canvas in the node editor).
+    fn viewport_preview_banner(&mut self, ui: &mut Ui, rect: egui::Rect) {
+        let Some(preview) = self.node_editor.viewport_preview().cloned() else {
+            return;
+        };
+        let material = self
+            .document
+            .scene()
+            .materials
+            .get(preview.material)
+            .map_or("?", |m| m.name.as_str());
+        let at = egui::pos2(rect.center().x, rect.top() + 8.0);
+        let mut clear = false;
+        egui::Area::new(egui::Id::new("viewport preview banner"))
+            .fixed_pos(at)
+            .pivot(egui::Align2::CENTER_TOP)
+            .order(egui::Order::Foreground)
+            .show(ui.ctx(), |ui| {
+                egui::Frame::popup(ui.style()).show(ui, |ui| {
+                    ui.horizontal(|ui| {
+                        ui.label(
+                            RichText::new(format!(
+                                "Previewing node {} of \"{material}\"",
+                                preview.node
+                            ))
+                            .strong(),
+                        );
+                        if let Some(e) = &self.viewport_preview_error {
+                            ui.label(RichText::new(format!("⚠ {e}")).color(Color32::LIGHT_RED));
+                        }
+                        clear = ui
+                            .button("🗙 Clear preview")
+                            .on_hover_text("Show the material again (Esc)")
+                            .clicked();
+                    });
+                });
+            });
+        if clear {
+            self.node_editor.clear_viewport_preview();
         }
     }
 
@@ -1904,8 +2014,13 @@ impl EditorApp {
                 self.update_thumbnails(ui.ctx());
                 let thumbnails = self.thumbnails.as_ref();
                 let dialogs = self.dialogs.as_mut();
+                if let Some(previews) = self.node_previews.as_mut() {
+                    previews.poll(ui.ctx());
+                }
+                let previews = self.node_previews.as_mut();
                 for (command, gesture) in
-                    self.node_editor.ui(ui, &self.document, thumbnails, dialogs)
+                    self.node_editor
+                        .ui(ui, &self.document, thumbnails, previews, dialogs)
                 {
                     self.apply(command, gesture);
                 }

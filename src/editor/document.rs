@@ -188,7 +188,7 @@ impl Command {
     pub fn changes_image(&self) -> bool {
         match self {
             Command::Rename { .. } | Command::RenameMaterial { .. } | Command::SetView(_) => false,
-            Command::EditGraph { edit, .. } => !edit.only_moves(),
+            Command::EditGraph { edit, .. } => edit.changes_image(),
             _ => true,
         }
     }

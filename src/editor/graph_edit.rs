@@ -41,6 +41,9 @@ pub enum GraphEdit {
     },
     /// Mutes or unmutes a node (Blender's M: its outputs pass its inputs through).
     SetMuted { node: String, muted: bool },
+    /// Shows or hides a node's preview image (a view setting saved with the graph, which
+    /// renders nothing different).
+    SetPreview { node: String, preview: bool },
     /// Sets where nodes are drawn.
     MoveNodes(Vec<(String, Option<[f32; 2]>)>),
     /// Sets which node is the material's output (`None`: the only `material_output`).
@@ -65,6 +68,16 @@ impl GraphEdit {
             GraphEdit::MoveNodes(_) => true,
             GraphEdit::Batch(edits) => edits.iter().all(GraphEdit::only_moves),
             _ => false,
+        }
+    }
+
+    /// Whether the edit changes what the material renders: moves and preview toggles
+    /// do not.
+    pub fn changes_image(&self) -> bool {
+        match self {
+            GraphEdit::MoveNodes(_) | GraphEdit::SetPreview { .. } => false,
+            GraphEdit::Batch(edits) => edits.iter().any(GraphEdit::changes_image),
+            _ => true,
         }
     }
 
@@ -193,6 +206,13 @@ impl GraphEdit {
                 };
                 let old = std::mem::replace(&mut target.muted, muted);
                 Ok(GraphEdit::SetMuted { node, muted: old })
+            }
+            GraphEdit::SetPreview { node, preview } => {
+                let Some(target) = graph.nodes.get_mut(&node) else {
+                    return Err(format!("no node \"{node}\""));
+                };
+                let old = std::mem::replace(&mut target.preview, preview);
+                Ok(GraphEdit::SetPreview { node, preview: old })
             }
             GraphEdit::MoveNodes(moves) => {
                 if let Some((id, _)) = moves.iter().find(|(id, _)| !graph.nodes.contains_key(id)) {
@@ -812,6 +832,27 @@ mod tests {
         assert!(g.nodes["ramp"].muted);
         inverse.apply(&mut g).unwrap();
         assert_eq!(g, before);
+    }
+
+    #[test]
+    fn a_preview_toggle_is_one_edit_that_reverts_and_changes_no_image() {
+        let mut g = marble();
+        let before = g.clone();
+        let edit = GraphEdit::SetPreview {
+            node: "ramp".into(),
+            preview: true,
+        };
+        assert!(!edit.changes_image());
+        let inverse = edit.apply(&mut g).unwrap();
+        assert!(g.nodes["ramp"].preview);
+        assert!(g.same_but_layout(&before), "a preview computes nothing");
+        inverse.apply(&mut g).unwrap();
+        assert_eq!(g, before);
+        let missing = GraphEdit::SetPreview {
+            node: "nowhere".into(),
+            preview: true,
+        };
+        assert!(missing.apply(&mut g).unwrap_err().contains("nowhere"));
     }
 
     #[test]

@@ -14,6 +14,8 @@
 //!   in the background, shown and exported through the exporter plugins;
 //! - [`node_editor`]: the material list and the node editor of the shown material's
 //!   graph, whose edits are [`graph_edit::GraphEdit`]s applied as document commands;
+//!   [`node_previews`] renders its nodes' preview images and [`viewport_preview`] the
+//!   viewport's "preview this node" (Ctrl+Shift+click);
 //! - [`app`]: the window that ties them together.
 
 pub mod app;
@@ -26,12 +28,14 @@ pub mod graph_edit;
 pub mod inspector;
 pub mod navigation;
 pub mod node_editor;
+pub mod node_previews;
 pub mod outliner;
 pub mod pick;
 pub mod session;
 pub mod settings_panel;
 pub mod thumbnails;
 pub mod viewport;
+pub mod viewport_preview;
 
 pub use app::{
     AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, GRAPH_KERNELS, RunReport,

@@ -38,7 +38,8 @@ what it is fed). `(type: \"reroute\", inputs: { \"input\": \"node.output\" })` p
 a wire on with the type of what feeds it (its output is `output`; it compiles to nothing).
 `muted: true` mutes a node: each output passes the node's first input of the same type (a
 link, a value or that input's default), or 0 / black when it has none (a shader output:
-what its consumer reads unconnected).
+what its consumer reads unconnected). `preview: true` shows the node's output as an image
+under it in the node editor; the compiler ignores it.
 ";
 
 fn value(v: &Value) -> String {

@@ -185,6 +185,10 @@ pub struct Node {
     /// the consumer reads unconnected) when it has none. Saved only when set.
     #[serde(default, skip_serializing_if = "std::ops::Not::not")]
     pub muted: bool,
+    /// Whether a graph editor shows the node's output as a small image under it
+    /// (Blender's node preview); no meaning to the compiler. Saved only when set.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub preview: bool,
 }
 
 impl Node {
@@ -286,7 +290,8 @@ impl Graph {
     }
 
     /// Whether `other` computes the same as this graph: equal but for where nodes are
-    /// drawn (which the compiler ignores), so a moved node needs no new compile.
+    /// drawn and which show previews (which the compiler ignores), so a moved node needs
+    /// no new compile.
     pub fn same_but_layout(&self, other: &Graph) -> bool {
         fn nodes_match(a: &BTreeMap<String, Node>, b: &BTreeMap<String, Node>) -> bool {
             a.len() == b.len()

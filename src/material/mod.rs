@@ -272,12 +272,29 @@ mod tests {
     }
 
     #[test]
+    fn preview_is_saved_only_when_set_and_reads_back() {
+        let mut graph = Graph::default();
+        graph.add("value", Node::new("value"));
+        let plain = material_text("m", &graph).unwrap();
+        assert!(!plain.contains("preview"), "{plain}");
+        graph.nodes.get_mut("value").unwrap().preview = true;
+        let shown = material_text("m", &graph).unwrap();
+        assert!(shown.contains("preview: true"), "{shown}");
+        assert_eq!(parse_material(&shown, "m.kmat").unwrap().1, graph);
+    }
+
+    #[test]
     fn graphs_that_differ_only_in_layout_compute_the_same() {
         let mut graph = Graph::default();
         graph.add("value", Node::new("value"));
         let mut moved = graph.clone();
         moved.nodes.get_mut("value").unwrap().position = Some([10.0, 20.0]);
         assert!(graph.same_but_layout(&moved));
+        moved.nodes.get_mut("value").unwrap().preview = true;
+        assert!(
+            graph.same_but_layout(&moved),
+            "a preview shown computes nothing"
+        );
         let mut muted = moved.clone();
         muted.nodes.get_mut("value").unwrap().muted = true;
         assert!(!graph.same_but_layout(&muted));

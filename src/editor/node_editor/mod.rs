@@ -19,6 +19,14 @@
 //! Float fields keep to their input's declared range ([`FloatRange`]); a muted node is
 //! drawn dimmed under a red header, a reroute as a small node with no labels. The keys
 //! and the selection they act on are in [`keys`].
+//!
+//! Each node with outputs has a preview toggle (the eye in its header, or the node menu;
+//! a [`GraphEdit::SetPreview`], so it undoes and is saved) that shows its first output as
+//! an image under its body, made in the background by [`NodePreviews`]. Ctrl+Shift+click
+//! on a node previews it in the viewport instead (Node Wrangler's; again on the same node,
+//! its next output): a view state ([`ViewportPreview`]) that the app applies to the scene
+//! it hands the viewport, cleared by Ctrl+Shift+click on empty canvas, Esc or the banner
+//! over the viewport.
 
 mod keys;
 mod ramp;
@@ -39,7 +47,9 @@ use egui_snarl::{InPin, InPinId, NodeId, OutPin, OutPinId, Snarl};
 use super::document::{Command, Document, GestureId, Selection};
 use super::files::{self, FileDialogs};
 use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
+use super::node_previews::NodePreviews;
 use super::thumbnails::Thumbnails;
+use super::viewport_preview::ViewportPreview;
 use crate::material::graph::{REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
@@ -48,6 +58,11 @@ use crate::scene::Material;
 /// The node type a dropped image becomes, and its parameter naming the file.
 const IMAGE_TEXTURE: &str = "image_texture";
 const IMAGE_FILE_PARAM: &str = "file";
+
+/// The preview toggle in a node's header (an eye, as Blender's).
+const PREVIEW_ICON: &str = "👁";
+/// Side of a node's preview image in points.
+const PREVIEW_POINTS: f32 = 96.0;
 
 /// The gesture node drags merge under (one drag, one undo step).
 const MOVE_GESTURE: GestureId = 0x6e6f_6465_6d6f_7665;
@@ -136,6 +151,8 @@ pub struct NodeEditor {
     keep_view: bool,
     /// The shown graph's compile: its WGSL size and time, or the error.
     stats: Option<Result<CompileStats, String>>,
+    /// The node the viewport shows instead of its material (Ctrl+Shift+click).
+    viewport_preview: Option<ViewportPreview>,
 }
 
 /// What compiling a material's graph gave (the material list's statistics).
@@ -185,6 +202,7 @@ impl Default for NodeEditor {
             canvas_generation: 0,
             keep_view: false,
             stats: None,
+            viewport_preview: None,
         }
     }
 }
@@ -211,6 +229,9 @@ struct Viewer<'a> {
     pick_file: Option<(String, String)>,
     /// Where each node was drawn, in canvas coordinates.
     node_rects: BTreeMap<String, egui::Rect>,
+    /// The node previews (none without a device), and the shown material's index.
+    previews: Option<&'a NodePreviews>,
+    material: usize,
 }
 
 impl NodeEditor {
@@ -227,6 +248,16 @@ impl NodeEditor {
 
     pub fn message(&self) -> Option<&str> {
         self.message.as_deref()
+    }
+
+    /// The node the viewport previews instead of its material, if any (Ctrl+Shift+click).
+    pub fn viewport_preview(&self) -> Option<&ViewportPreview> {
+        self.viewport_preview.as_ref()
+    }
+
+    /// Shows the material in the viewport again.
+    pub fn clear_viewport_preview(&mut self) {
+        self.viewport_preview = None;
     }
 
     /// Where the pin of `socket` on node `node` (an input when `input`) was drawn in the
@@ -267,13 +298,15 @@ impl NodeEditor {
     }
 
     /// Draws the material list (with `thumbnails`, when the app renders them) and the
-    /// shown material's graph; returns the commands the user's edits make, each with its
-    /// gesture. `dialogs` answers an image parameter's "Open…".
+    /// shown material's graph (with its nodes' `previews`, when the app makes them);
+    /// returns the commands the user's edits make, each with its gesture. `dialogs`
+    /// answers an image parameter's "Open…".
     pub fn ui(
         &mut self,
         ui: &mut Ui,
         document: &Document,
         thumbnails: Option<&Thumbnails>,
+        previews: Option<&mut NodePreviews>,
         dialogs: &mut dyn FileDialogs,
     ) -> Vec<(Command, Option<GestureId>)> {
         let mut commands = Vec::new();
@@ -300,6 +333,20 @@ impl NodeEditor {
             ui.label(RichText::new(m).color(Color32::from_rgb(255, 170, 60)));
         }
         self.sync(material, &graph);
+        let previews = previews.map(|p| {
+            if let Some(source) = document.scene().materials.get(material) {
+                p.want(material, &graph, source);
+            }
+            &*p
+        });
+        // A previewed node that is gone (deleted, undone) is previewed no more.
+        if self
+            .viewport_preview
+            .as_ref()
+            .is_some_and(|p| p.material == material && !graph.nodes.contains_key(&p.node))
+        {
+            self.viewport_preview = None;
+        }
         self.refresh_selection(ui.ctx());
         let layer_selected = self.selected_by_layer(ui.ctx());
         let view = std::mem::take(&mut self.keep_view).then_some(self.to_global);
@@ -319,6 +366,8 @@ impl NodeEditor {
             selection_stroke: Stroke::new(2.0, ui.visuals().selection.stroke.color),
             pick_file: None,
             node_rects: BTreeMap::new(),
+            previews,
+            material,
         };
         self.pins.borrow_mut().clear();
         // The canvas fills what is left of the panel (snarl's response covers the whole
@@ -356,6 +405,7 @@ impl NodeEditor {
         if let Some(moves) = self.moves(&graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
+        self.viewport_preview_keys(ui, material, &graph, canvas);
         // The pointer over the canvas, whichever of snarl's layers it is over (its nodes
         // sit on a layer of their own).
         let hovered = ui
@@ -397,6 +447,60 @@ impl NodeEditor {
                 .map(|(edit, gesture)| (Command::EditGraph { material, edit }, gesture)),
         );
         commands
+    }
+
+    /// Ctrl+Shift+click on a node previews it in the viewport (again on the same node: its
+    /// next output), on empty canvas clears the preview, as does Esc while no text field
+    /// takes keys.
+    fn viewport_preview_keys(
+        &mut self,
+        ui: &Ui,
+        material: usize,
+        graph: &Graph,
+        canvas: egui::Rect,
+    ) {
+        let (clicked, escape) = ui.input(|i| {
+            let clicked = i.pointer.primary_clicked()
+                && i.modifiers.command
+                && i.modifiers.shift
+                && !i.modifiers.alt;
+            let at = i.pointer.interact_pos().filter(|p| canvas.contains(*p));
+            (
+                clicked.then_some(at).flatten(),
+                i.key_pressed(Key::Escape) && i.modifiers.is_none(),
+            )
+        });
+        if escape && self.viewport_preview.is_some() && !ui.ctx().egui_wants_keyboard_input() {
+            self.viewport_preview = None;
+        }
+        let Some(at) = clicked else { return };
+        let hit = self
+            .node_rects
+            .iter()
+            .find(|(_, rect)| (self.to_global * **rect).contains(at))
+            .map(|(id, _)| id.clone());
+        let Some(node) = hit else {
+            self.viewport_preview = None;
+            return;
+        };
+        let outputs = graph
+            .nodes
+            .get(&node)
+            .filter(|n| n.kind != REROUTE)
+            .and_then(|n| sockets_of(graph, n).ok())
+            .map_or(0, |s| s.outputs.len());
+        if outputs == 0 {
+            return;
+        }
+        let output = match &self.viewport_preview {
+            Some(p) if p.material == material && p.node == node => (p.output + 1) % outputs,
+            _ => 0,
+        };
+        self.viewport_preview = Some(ViewportPreview {
+            material,
+            node,
+            output,
+        });
     }
 
     /// Shows the selected object's material when the selection changes to an object.
@@ -915,6 +1019,70 @@ impl<'a> Viewer<'a> {
         self.node(id).is_some_and(|n| n.kind == REROUTE)
     }
 
+    /// Whether node `id` has an output to preview (a reroute has no preview).
+    fn has_outputs(&self, id: &str) -> bool {
+        !self.is_reroute(id) && !self.sockets(id).outputs.is_empty()
+    }
+
+    fn previewing(&self, id: &str) -> bool {
+        self.has_outputs(id) && self.node(id).is_some_and(|n| n.preview)
+    }
+
+    fn toggle_preview(&mut self, id: &str) {
+        if let Some(n) = self.node(id) {
+            self.try_edit(
+                GraphEdit::SetPreview {
+                    node: id.to_owned(),
+                    preview: !n.preview,
+                },
+                None,
+            );
+        }
+    }
+
+    /// The preview image under a node: the latest made (the previous one, with a
+    /// spinner, while a new one renders), or why there is none.
+    fn preview_ui(&self, ui: &mut Ui, id: &str) {
+        let size = egui::Vec2::splat(PREVIEW_POINTS);
+        let Some(previews) = self.previews else {
+            ui.label(RichText::new("no preview: no GPU device").weak());
+            return;
+        };
+        let view = previews.view(self.material, id, self.graph);
+        let (rect, _) = ui.allocate_exact_size(size, egui::Sense::hover());
+        if let Some(texture) = view.texture {
+            egui::Image::new((texture.id(), size)).paint_at(ui, rect);
+        }
+        if !view.current {
+            let spinner = if view.texture.is_some() {
+                // Small, in the corner of the previous image.
+                egui::Rect::from_min_size(
+                    rect.left_top() + egui::vec2(4.0, 4.0),
+                    egui::vec2(14.0, 14.0),
+                )
+            } else {
+                egui::Rect::from_center_size(rect.center(), egui::vec2(24.0, 24.0))
+            };
+            ui.put(spinner, egui::Spinner::new());
+        } else if let Some(e) = view.error {
+            // The first line (a kernel error's full text is long), all of it on hover.
+            let galley = ui.painter().layout(
+                format!("no preview: {}", e.lines().next().unwrap_or_default()),
+                egui::TextStyle::Small.resolve(ui.style()),
+                Color32::LIGHT_RED,
+                PREVIEW_POINTS,
+            );
+            ui.painter()
+                .galley(rect.left_top(), galley, Color32::LIGHT_RED);
+            ui.interact(
+                rect,
+                ui.id().with(("preview error", id)),
+                egui::Sense::hover(),
+            )
+            .on_hover_text(e);
+        }
+    }
+
     fn error_on(&self, id: &str) -> Option<&'a GraphError> {
         self.error.filter(|e| e.node.as_deref() == Some(id))
     }
@@ -1187,6 +1355,19 @@ impl SnarlViewer<String> for Viewer<'_> {
         if self.error_on(&id).is_some() {
             ui.label(RichText::new("⚠").color(Color32::LIGHT_RED));
         }
+        if self.has_outputs(&id) {
+            let on = self.node(&id).is_some_and(|n| n.preview);
+            let toggle = ui
+                .add(egui::Button::selectable(on, PREVIEW_ICON).small())
+                .on_hover_text(if on {
+                    "Hide the preview"
+                } else {
+                    "Show a preview of the node's output (Ctrl+Shift+click: in the viewport)"
+                });
+            if toggle.clicked() {
+                self.toggle_preview(&id);
+            }
+        }
     }
 
     fn inputs(&mut self, node: &String) -> usize {
@@ -1263,6 +1444,23 @@ impl SnarlViewer<String> for Viewer<'_> {
             }
             self.params_ui(ui, &id);
         });
+    }
+
+    fn has_footer(&mut self, node: &String) -> bool {
+        self.previewing(node)
+    }
+
+    /// The preview, under the node's pins and body (as Blender draws it, full width).
+    fn show_footer(
+        &mut self,
+        node: NodeId,
+        _inputs: &[InPin],
+        _outputs: &[OutPin],
+        ui: &mut Ui,
+        snarl: &mut Snarl<String>,
+    ) {
+        let id = snarl[node].clone();
+        ui.vertical_centered(|ui| self.preview_ui(ui, &id));
     }
 
     fn node_frame(
@@ -1447,6 +1645,17 @@ impl SnarlViewer<String> for Viewer<'_> {
         snarl: &mut Snarl<String>,
     ) {
         let id = snarl[node].clone();
+        if self.has_outputs(&id) {
+            let label = if self.previewing(&id) {
+                "Hide preview"
+            } else {
+                "Show preview"
+            };
+            if ui.button(label).clicked() {
+                self.toggle_preview(&id);
+                ui.close();
+            }
+        }
         if ui.button("Duplicate").clicked() {
             if let Some(n) = self.node(&id) {
                 let (adds, _) =
