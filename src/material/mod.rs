@@ -17,7 +17,8 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use compile::{CompiledMaterial, GraphError, MaterialTraits, compile};
-pub use graph::{Graph, Group, GroupSocket, Input, Link, Node, Param, RampStop, SocketType, Value};
+pub use graph::{
+    Frame, Graph, Group, GroupInterface, GroupSocket, Input, Link, Node, Param, RampStop, SocketType, Value};
 
 /// The `.kmat` format version this build reads and writes.
 pub const MATERIAL_FORMAT_VERSION: u32 = 1;
@@ -54,6 +55,10 @@ pub struct MaterialFile {
     pub groups: std::collections::BTreeMap<String, Group>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// The editor's frames (labelled boxes around nodes); written only when there are any,
+    /// so files without frames read and save as before.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub frames: std::collections::BTreeMap<String, Frame>,
 }
 
 impl MaterialFile {
@@ -62,6 +67,8 @@ impl MaterialFile {
             nodes: self.nodes.clone(),
             groups: self.groups.clone(),
             output: self.output.clone(),
+            frames: self.frames.clone(),
+            interface: None,
         }
     }
 }
@@ -140,6 +147,7 @@ pub fn material_text(name: &str, graph: &Graph) -> Result<String, MaterialFileEr
         nodes: graph.nodes.clone(),
         groups: graph.groups.clone(),
         output: graph.output.clone(),
+        frames: graph.frames.clone(),
     };
     ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default()).map_err(|e| {
         MaterialFileError::Save {
