@@ -734,3 +734,262 @@ fn graph_position(graph: &Graph, id: &str) -> [f32; 2] {
         .or_else(|| layout(graph).get(id).copied())
         .unwrap_or([0.0, 0.0])
 }
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::material::Value;
+
+    fn marble() -> Graph {
+        crate::material::parse_material(
+            include_str!("../../../assets/materials/marble.kmat"),
+            "marble.kmat",
+        )
+        .expect("the bundled marble parses")
+        .1
+    }
+
+    /// The material's WGSL, up to names: what it computes. The compiler numbers values
+    /// (`n3`) and helper functions (`m_ramp1`) in the order of the flattened node ids
+    /// and comments each with its node's path, which grouping changes; each such name is
+    /// renamed by its first appearance and the comments dropped.
+    fn wgsl(g: &Graph) -> String {
+        let code = crate::material::compile("m", g, "m")
+            .unwrap_or_else(|e| panic!("{}", e.message))
+            .code;
+        let numbered = |word: &str| {
+            let stem = word.trim_end_matches(|c: char| c.is_ascii_digit());
+            stem.len() < word.len() && (stem == "n" || stem.starts_with("m_"))
+        };
+        let mut names: BTreeMap<String, String> = BTreeMap::new();
+        let mut out = String::new();
+        for line in code.lines().filter(|l| !l.trim_start().starts_with("//")) {
+            let mut word = String::new();
+            for c in line.chars().chain(std::iter::once('\n')) {
+                if c.is_ascii_alphanumeric() || c == '_' {
+                    word.push(c);
+                    continue;
+                }
+                if numbered(&word) {
+                    let next = format!("v{}", names.len());
+                    word = names.entry(word).or_insert(next).clone();
+                }
+                out.push_str(&word);
+                out.push(c);
+                word.clear();
+            }
+        }
+        out
+    }
+
+    #[test]
+    fn grouping_and_ungrouping_keep_the_compiled_material_and_revert() {
+        let start = marble();
+        let before = wgsl(&start);
+        let mut g = start.clone();
+        let (edit, instance) = make_group(&g, &["veins".into(), "ramp".into()]).unwrap();
+        let undo_group = edit.apply(&mut g).unwrap();
+        let group = &g.groups["NodeGroup"];
+        assert_eq!(
+            group.nodes.keys().collect::<Vec<_>>(),
+            ["group_input", "ramp", "veins"]
+        );
+        // One input per source outside (the coordinates), one output per source read
+        // outside (the ramp's colour).
+        assert_eq!(group.inputs.len(), 1);
+        assert_eq!(group.inputs[0].ty, SocketType::Vector);
+        assert_eq!(group.outputs.len(), 1);
+        assert_eq!(group.outputs[0].ty, SocketType::Color);
+        assert_eq!(
+            g.nodes[&instance].inputs[&group.inputs[0].name],
+            Input::Link(Link::new("coords", "object"))
+        );
+        assert_eq!(
+            g.nodes["surface"].inputs["base_color"],
+            Input::Link(Link::new(&instance, &group.outputs[0].name))
+        );
+        assert!(!g.nodes.contains_key("veins") && !g.nodes.contains_key("ramp"));
+        assert_eq!(wgsl(&g), before, "grouping changes what the material computes");
+
+        // An edit inside the group reaches it and reverts.
+        let grouped = g.clone();
+        let undo_inside = GraphEdit::InGroup {
+            group: "NodeGroup".into(),
+            edit: Box::new(GraphEdit::SetInput {
+                node: "veins".into(),
+                input: "scale".into(),
+                value: Some(Input::Value(Value::Float(3.0))),
+            }),
+        }
+        .apply(&mut g)
+        .unwrap();
+        assert_eq!(
+            g.groups["NodeGroup"].nodes["veins"].inputs["scale"],
+            Input::Value(Value::Float(3.0))
+        );
+        assert_ne!(wgsl(&g), before);
+        undo_inside.apply(&mut g).unwrap();
+        assert_eq!(g, grouped);
+
+        let (edit, added) = ungroup(&g, &instance).unwrap();
+        let undo_ungroup = edit.apply(&mut g).unwrap();
+        assert_eq!(added, ["ramp", "veins"]);
+        assert!(g.groups.is_empty(), "the group nothing uses goes");
+        assert_eq!(wgsl(&g), before, "ungrouping changes what the material computes");
+        assert!(g.same_but_layout(&start), "ungrouping gives the graph grouped");
+        undo_ungroup.apply(&mut g).unwrap();
+        assert_eq!(g, grouped);
+        undo_group.apply(&mut g).unwrap();
+        assert_eq!(g, start);
+    }
+
+    #[test]
+    fn grouping_refuses_the_output_and_a_wire_that_leaves_and_comes_back() {
+        let g = marble();
+        let e = make_group(&g, &["out".into()]).unwrap_err();
+        assert!(e.contains("out") && e.contains("output"), "{e}");
+        // veins → ramp → surface: grouping veins and surface leaves the ramp outside,
+        // read by the group and reading it.
+        let (edit, _) = make_group(&g, &["veins".into(), "surface".into()]).unwrap();
+        let e = edit.apply(&mut g.clone()).unwrap_err();
+        assert!(e.contains("cycle"), "{e}");
+        assert!(make_group(&g, &[]).is_err());
+    }
+
+    #[test]
+    fn ungrouping_takes_fresh_ids_and_the_group_defaults() {
+        let mut g = marble();
+        let (edit, instance) = make_group(&g, &["ramp".into()]).unwrap();
+        edit.apply(&mut g).unwrap();
+        // A node outside now has the id of the node inside.
+        g.add("ramp", Node::new("color_ramp"));
+        // The instance's input left unconnected: the group's default feeds the ramp.
+        let input = g.groups["NodeGroup"].inputs[0].name.clone();
+        g.groups.get_mut("NodeGroup").unwrap().inputs[0].default = Some(Value::Float(0.25));
+        g.nodes.get_mut(&instance).unwrap().inputs.remove(&input);
+        let before = wgsl(&g);
+        let (edit, added) = ungroup(&g, &instance).unwrap();
+        edit.apply(&mut g).unwrap();
+        assert_eq!(added, ["ramp_2"]);
+        assert_eq!(
+            g.nodes["ramp_2"].inputs["fac"],
+            Input::Value(Value::Float(0.25))
+        );
+        assert_eq!(
+            g.nodes["surface"].inputs["base_color"],
+            Input::Link(Link::new("ramp_2", "color"))
+        );
+        assert_eq!(wgsl(&g), before);
+    }
+
+    #[test]
+    fn interface_sockets_are_added_renamed_and_removed_with_their_wires() {
+        let start = {
+            let mut g = marble();
+            let (edit, _) = make_group(&g, &["veins".into(), "ramp".into()]).unwrap();
+            edit.apply(&mut g).unwrap();
+            g
+        };
+        let mut g = start.clone();
+        let before = wgsl(&g);
+        let (input, output) = {
+            let group = &g.groups["NodeGroup"];
+            (group.inputs[0].name.clone(), group.outputs[0].name.clone())
+        };
+        let mut undo = Vec::new();
+        let mut apply = |edit: GraphEdit, g: &mut Graph| undo.push(edit.apply(g).unwrap());
+        apply(
+            GraphEdit::RenameGroupSocket {
+                group: "NodeGroup".into(),
+                output: false,
+                from: input.clone(),
+                to: "Coordinates".into(),
+            },
+            &mut g,
+        );
+        apply(
+            GraphEdit::RenameGroupSocket {
+                group: "NodeGroup".into(),
+                output: true,
+                from: output.clone(),
+                to: "Marble".into(),
+            },
+            &mut g,
+        );
+        assert_eq!(wgsl(&g), before, "renaming changes no wire");
+        assert_eq!(
+            g.nodes["surface"].inputs["base_color"],
+            Input::Link(Link::new("group", "Marble"))
+        );
+        apply(
+            add_group_socket(&g, "NodeGroup", false, SocketType::Float).unwrap(),
+            &mut g,
+        );
+        assert_eq!(g.groups["NodeGroup"].inputs[1].name, "Value");
+        apply(
+            remove_group_socket(&g, "NodeGroup", false, "Coordinates").unwrap(),
+            &mut g,
+        );
+        apply(
+            remove_group_socket(&g, "NodeGroup", true, "Marble").unwrap(),
+            &mut g,
+        );
+        let group = &g.groups["NodeGroup"];
+        assert!(group.links.is_empty());
+        assert!(!g.nodes["group"].inputs.contains_key("Coordinates"));
+        assert!(!g.nodes["surface"].inputs.contains_key("base_color"));
+        assert!(!group.nodes["veins"].inputs.contains_key("vector"));
+        // A name with a dot could not be written in a link.
+        let e = GraphEdit::RenameGroupSocket {
+            group: "NodeGroup".into(),
+            output: false,
+            from: "Value".into(),
+            to: "a.b".into(),
+        }
+        .apply(&mut g)
+        .unwrap_err();
+        assert!(e.contains("a.b"), "{e}");
+        for edit in undo.into_iter().rev() {
+            edit.apply(&mut g).unwrap();
+        }
+        assert_eq!(g, start);
+    }
+
+    #[test]
+    fn the_view_of_a_group_shows_its_output_node_and_keeps_it() {
+        let mut g = marble();
+        let (edit, _) = make_group(&g, &["veins".into(), "ramp".into()]).unwrap();
+        edit.apply(&mut g).unwrap();
+        let view = group_view(&g, "NodeGroup").unwrap();
+        let output = &view.nodes[GROUP_OUTPUT_ID];
+        assert_eq!(sockets_of(&view, output).unwrap().inputs.len(), 1);
+        let input = &view.nodes[GROUP_INPUT];
+        assert_eq!(sockets_of(&view, input).unwrap().outputs.len(), 1);
+        let inside = |edit: GraphEdit| GraphEdit::InGroup {
+            group: "NodeGroup".into(),
+            edit: Box::new(edit),
+        };
+        for refused in [
+            GraphEdit::RemoveNode {
+                id: GROUP_OUTPUT_ID.into(),
+            },
+            GraphEdit::SetInput {
+                node: GROUP_OUTPUT_ID.into(),
+                input: "color".into(),
+                value: Some(Input::Value(Value::Float(1.0))),
+            },
+        ] {
+            assert!(inside(refused).apply(&mut g).is_err());
+        }
+        // Rewiring the group's output to the veins' factor (float → colour converts).
+        inside(GraphEdit::connect("veins", "fac", GROUP_OUTPUT_ID, "color"))
+            .apply(&mut g)
+            .unwrap();
+        assert_eq!(
+            g.groups["NodeGroup"].links["color"],
+            Link::new("veins", "fac")
+        );
+        // A group input node outside a group has no sockets.
+        assert!(sockets_of(&g, &Node::new(GROUP_INPUT)).is_err());
+    }
+}
