@@ -34,6 +34,14 @@ impl NodeEditor {
         egui::Id::new("kiln node editor canvas").with(self.canvas_generation)
     }
 
+    /// Deselects every node, keeping the view. (After the nodes are replaced, snarl's
+    /// selection, by its node ids, would name other nodes.)
+    fn deselect_all(&mut self) {
+        self.select_all = None;
+        self.canvas_generation += 1;
+        self.keep_view = true;
+    }
+
     /// Snarl's selection, by snarl node id.
     fn snarl_selection(&self, ctx: &egui::Context) -> Vec<NodeId> {
         get_selected_nodes(self.canvas_id(), ctx)
@@ -101,9 +109,7 @@ impl NodeEditor {
             self.frame_all = true;
         }
         if pressed(Key::A, Modifiers::ALT) {
-            self.select_all = None;
-            self.canvas_generation += 1;
-            self.keep_view = true;
+            self.deselect_all();
         }
         if pressed(Key::A, Modifiers::SHIFT) {
             self.add_menu = ctx.pointer_latest_pos();
@@ -198,14 +204,14 @@ impl NodeEditor {
             }
             if !ungroups.is_empty() {
                 edits.push(GraphEdit::Batch(ungroups));
-                self.select_all = None;
+                self.deselect_all();
             }
         }
         if pressed(Key::G, Modifiers::COMMAND) && !selected.is_empty() {
             match graph_edit::make_group(graph, selected) {
                 Ok((edit, _)) => {
                     edits.push(edit);
-                    self.select_all = None;
+                    self.deselect_all();
                 }
                 Err(e) => self.message = Some(e),
             }

@@ -118,6 +118,8 @@ pub struct NodeEditor {
     path: Vec<String>,
     /// The frame whose label and colour are being edited, and the label as typed.
     frame_edit: Option<(String, String)>,
+    /// The frames drawn in the last frame.
+    frame_shapes: Vec<structure::FrameShape>,
     /// The graph the snarl was built from (of the material, in the group entered, if
     /// any), and where each node was drawn.
     shown: Option<(usize, Option<String>, Graph)>,
@@ -179,6 +181,7 @@ impl Default for NodeEditor {
             snarl: Snarl::new(),
             path: Vec::new(),
             frame_edit: None,
+            frame_shapes: Vec::new(),
             shown: None,
             positions: BTreeMap::new(),
             search: String::new(),
@@ -275,6 +278,16 @@ impl NodeEditor {
         self.to_global * canvas
     }
 
+    /// The groups entered, outermost first (empty: the material's graph is shown).
+    pub fn group_path(&self) -> &[String] {
+        &self.path
+    }
+
+    /// The label bar of frame `id` in the last frame, in screen points.
+    pub fn frame_bar(&self, id: &str) -> Option<egui::Rect> {
+        Some(self.to_global * structure::bar_of(&self.frame_shapes, id)?)
+    }
+
     /// The rectangle the canvas took in the last frame.
     pub fn canvas_rect(&self) -> Option<egui::Rect> {
         self.rect
@@ -291,7 +304,6 @@ impl NodeEditor {
         dialogs: &mut dyn FileDialogs,
     ) -> Vec<(Command, Option<GestureId>)> {
         let mut commands = Vec::new();
-        self.release_tab_focus(ui.ctx());
         self.follow_selection(document);
         self.material_bar(ui, document, thumbnails, &mut commands);
         let Some(material) = self.material else {
@@ -386,6 +398,7 @@ impl NodeEditor {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
         edits.extend(self.frame_bars(ui, graph, &frames, canvas));
+        self.frame_shapes = frames;
         if let Some(group) = enter {
             self.enter_group(group);
         }
@@ -783,7 +796,12 @@ fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
         ));
     }
     if bounds.is_finite() {
-        bounds
+        // Room for the frames around nodes, and their label bars above.
+        if graph.frames.is_empty() {
+            bounds
+        } else {
+            structure::with_frame_room(bounds)
+        }
     } else {
         egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 200.0))
     }

@@ -33,6 +33,19 @@ pub(super) struct FrameShape {
     bar: egui::Rect,
 }
 
+/// `bounds` of nodes grown by the room frames around them take.
+pub(super) fn with_frame_room(bounds: egui::Rect) -> egui::Rect {
+    egui::Rect::from_min_max(
+        bounds.min - egui::vec2(FRAME_MARGIN, FRAME_MARGIN + FRAME_BAR),
+        bounds.max + egui::vec2(FRAME_MARGIN, FRAME_MARGIN),
+    )
+}
+
+/// The label bar of frame `id` among `frames`, in canvas coordinates.
+pub(super) fn bar_of(frames: &[FrameShape], id: &str) -> Option<egui::Rect> {
+    frames.iter().find(|f| f.id == id).map(|f| f.bar)
+}
+
 /// Paints `frames` (in canvas coordinates, with the canvas's painter).
 pub(super) fn paint_frames(frames: &[FrameShape], painter: &egui::Painter) {
     for frame in frames {
@@ -131,8 +144,9 @@ impl NodeEditor {
     }
 
     /// Tab moves egui's keyboard focus to the next widget: over the canvas it is the
-    /// editor's key, so the focus stays where it was.
-    pub(super) fn release_tab_focus(&self, ctx: &egui::Context) {
+    /// editor's key (enter or leave a group), so the focus stays where it was. Called
+    /// before anything is drawn in a frame (the first widget drawn takes the focus).
+    pub fn release_tab_focus(&self, ctx: &egui::Context) {
         let over_canvas = (self.rect)
             .zip(ctx.pointer_hover_pos())
             .is_some_and(|(r, p)| r.contains(p));
