@@ -1106,6 +1106,14 @@ mod tests {
             SetValue(usize, usize, f32),
             Move(usize, f32, f32),
             Mute(usize),
+            /// Ctrl+G on two nodes.
+            Group(usize, usize),
+            /// Ctrl+Alt+G on a node (refused unless a group node).
+            Ungroup(usize),
+            /// A value set on a node inside a group.
+            SetInGroup(usize, usize, usize, f32),
+            /// Ctrl+J on two nodes.
+            Frame(usize, usize),
             Undo,
             Redo,
         }
@@ -1123,6 +1131,11 @@ mod tests {
                 (n.clone(), -500.0f32..500.0, -500.0f32..500.0)
                     .prop_map(|(a, x, y)| Action::Move(a, x, y)),
                 n.clone().prop_map(Action::Mute),
+                (n.clone(), n.clone()).prop_map(|(a, b)| Action::Group(a, b)),
+                n.clone().prop_map(Action::Ungroup),
+                (n.clone(), n.clone(), n.clone(), -10.0f32..10.0)
+                    .prop_map(|(g, a, b, v)| Action::SetInGroup(g, a, b, v)),
+                (n.clone(), n.clone()).prop_map(|(a, b)| Action::Frame(a, b)),
                 Just(Action::Undo),
                 Just(Action::Redo),
             ]
@@ -1183,6 +1196,28 @@ mod tests {
                     }
                 }
                 Action::Move(a, x, y) => GraphEdit::MoveNodes(vec![(pick(&ids, a)?, Some([x, y]))]),
+                Action::Group(a, b) => {
+                    make_group(g, &[pick(&ids, a)?, pick(&ids, b)?]).ok()?.0
+                }
+                Action::Ungroup(a) => ungroup(g, &pick(&ids, a)?).ok()?.0,
+                Action::SetInGroup(k, a, b, v) => {
+                    let names: Vec<String> = g.groups.keys().cloned().collect();
+                    let group = pick(&names, k)?;
+                    let view = group_view(g, &group).ok()?;
+                    let inner: Vec<String> = view.nodes.keys().cloned().collect();
+                    let node = pick(&inner, a)?;
+                    let inputs = sockets_of(&view, &view.nodes[&node]).ok()?.inputs;
+                    let (input, _) = pick(&inputs, b)?;
+                    GraphEdit::InGroup {
+                        group,
+                        edit: Box::new(GraphEdit::SetInput {
+                            node,
+                            input,
+                            value: Some(Input::Value(Value::Float(v))),
+                        }),
+                    }
+                }
+                Action::Frame(a, b) => join_in_frame(g, &[pick(&ids, a)?, pick(&ids, b)?])?.0,
                 Action::Undo | Action::Redo => return None,
             })
         }
