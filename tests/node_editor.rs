@@ -866,7 +866,13 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     assert_eq!(harness.state().node_editor().group_path(), ["NodeGroup"]);
     harness.get_by_label(&format!("{name} › NodeGroup"));
     harness.get_by_label("Group Output");
-    assert!(harness.state().node_editor().node_rect("noise_texture").is_some());
+    assert!(
+        harness
+            .state()
+            .node_editor()
+            .node_rect("noise_texture")
+            .is_some()
+    );
 
     // A value inside: the group's node changes.
     let field = harness
@@ -893,7 +899,11 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     harness.key_press(egui::Key::Tab);
     steps(&mut harness, 3);
     assert!(harness.state().node_editor().group_path().is_empty());
-    assert!(harness.query_by_label(&format!("{name} › NodeGroup")).is_none());
+    assert!(
+        harness
+            .query_by_label(&format!("{name} › NodeGroup"))
+            .is_none()
+    );
 
     // Ctrl+Alt+G ungroups: the nodes are back, wired as before, the group gone.
     frame_all(&mut harness);
@@ -904,7 +914,11 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     );
     steps(&mut harness, 3);
     let ungrouped = graph(harness.state());
-    assert!(ungrouped.groups.is_empty(), "{:?}", harness.state().node_editor().message());
+    assert!(
+        ungrouped.groups.is_empty(),
+        "{:?}",
+        harness.state().node_editor().message()
+    );
     assert_eq!(
         ungrouped.nodes["output"].inputs["surface"],
         Input::Link(Link::new("surface", "bsdf"))
@@ -941,17 +955,29 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
         .node_editor()
         .frame_bar("frame")
         .expect("the frame's label bar is drawn");
-    let surface_before = harness.state().node_editor().node_position("surface").unwrap();
+    let surface_before = harness
+        .state()
+        .node_editor()
+        .node_position("surface")
+        .unwrap();
     mouse_drag(&mut harness, bar.center(), egui::vec2(80.0, 40.0));
     let moved = graph(harness.state());
-    let surface_after = harness.state().node_editor().node_position("surface").unwrap();
+    let surface_after = harness
+        .state()
+        .node_editor()
+        .node_position("surface")
+        .unwrap();
     assert!(
         (surface_after - surface_before - egui::vec2(80.0, 40.0)).length() < 2.0,
         "{surface_before:?} → {surface_after:?}"
     );
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     steps(&mut harness, 2);
-    assert_eq!(graph(harness.state()), framed, "a frame drag is one undo step");
+    assert_eq!(
+        graph(harness.state()),
+        framed,
+        "a frame drag is one undo step"
+    );
     harness.key_press_modifiers(
         egui::Modifiers::COMMAND.plus(egui::Modifiers::SHIFT),
         egui::Key::Z,

@@ -18,7 +18,9 @@ use thiserror::Error;
 
 pub use compile::{CompiledMaterial, GraphError, MaterialTraits, compile};
 pub use graph::{
-    Frame, Graph, Group, GroupInterface, GroupSocket, Input, Link, Node, Param, RampStop, SocketType, Value};
+    Frame, Graph, Group, GroupInterface, GroupSocket, Input, Link, Node, Param, RampStop,
+    SocketType, Value,
+};
 
 /// The `.kmat` format version this build reads and writes.
 pub const MATERIAL_FORMAT_VERSION: u32 = 1;

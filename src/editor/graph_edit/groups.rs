@@ -82,9 +82,8 @@ fn is_instance(node: &Node, name: &str) -> bool {
 
 /// Every node using group `name`: the group it sits in (`None`: the material) and its id.
 pub fn instances_of(graph: &Graph, name: &str) -> Vec<(Option<String>, String)> {
-    let scopes = std::iter::once((None, &graph.nodes)).chain(
-        (graph.groups.iter()).map(|(group, g)| (Some(group.clone()), &g.nodes)),
-    );
+    let scopes = std::iter::once((None, &graph.nodes))
+        .chain((graph.groups.iter()).map(|(group, g)| (Some(group.clone()), &g.nodes)));
     scopes
         .flat_map(|(scope, nodes)| {
             (nodes.iter())
@@ -245,9 +244,8 @@ pub(super) fn rename_group_socket(
         }
     }
     // Where the group is used: its instances' inputs, or the links to their outputs.
-    let scopes = std::iter::once((&mut graph.nodes, None)).chain(
-        (graph.groups.values_mut()).map(|g| (&mut g.nodes, Some(&mut g.links))),
-    );
+    let scopes = std::iter::once((&mut graph.nodes, None))
+        .chain((graph.groups.values_mut()).map(|g| (&mut g.nodes, Some(&mut g.links))));
     for (nodes, group_links) in scopes {
         let ids: BTreeSet<String> = (nodes.iter())
             .filter(|(_, n)| is_instance(n, &name))
@@ -387,7 +385,11 @@ pub fn remove_group_socket(
         }
     } else {
         let reads = |l: &Link| {
-            l.socket == socket && group.nodes.get(&l.node).is_some_and(|n| n.kind == GROUP_INPUT)
+            l.socket == socket
+                && group
+                    .nodes
+                    .get(&l.node)
+                    .is_some_and(|n| n.kind == GROUP_INPUT)
         };
         for (consumer, node) in &group.nodes {
             for (input, value) in &node.inputs {
@@ -447,10 +449,7 @@ fn bounds<'a>(graph: &Graph, ids: impl Iterator<Item = &'a String>) -> ([f32; 2]
         let (Some(p), Some(node)) = (laid.get(id), graph.nodes.get(id)) else {
             continue;
         };
-        let size = [
-            estimated_width(graph, node),
-            estimated_height(graph, node),
-        ];
+        let size = [estimated_width(graph, node), estimated_height(graph, node)];
         for k in 0..2 {
             min[k] = min[k].min(p[k]);
             max[k] = max[k].max(p[k] + size[k]);
@@ -482,9 +481,10 @@ pub fn make_group(graph: &Graph, ids: &[String]) -> Result<(GraphEdit, String), 
             "select the nodes to group (a group's input and output nodes stay in it)".into(),
         );
     }
-    if let Some(id) = picked.iter().find(|id| {
-        graph.nodes[**id].kind == MATERIAL_OUTPUT || graph.output.as_ref() == Some(**id)
-    }) {
+    if let Some(id) = picked
+        .iter()
+        .find(|id| graph.nodes[**id].kind == MATERIAL_OUTPUT || graph.output.as_ref() == Some(**id))
+    {
         return Err(format!(
             "\"{id}\" is the material's output: it cannot go into a group"
         ));
@@ -565,20 +565,18 @@ pub fn make_group(graph: &Graph, ids: &[String]) -> Result<(GraphEdit, String), 
         name,
         group: Some(group),
     });
-    edits.extend(picked.iter().map(|id| GraphEdit::RemoveNode {
-        id: (*id).clone(),
-    }));
+    edits.extend(
+        picked
+            .iter()
+            .map(|id| GraphEdit::RemoveNode { id: (*id).clone() }),
+    );
     edits.push(GraphEdit::AddNode {
         id: instance_id.clone(),
         node: instance,
     });
-    edits.extend(
-        rewires
-            .into_iter()
-            .map(|(consumer, input, socket)| {
-                GraphEdit::connect(&instance_id, &socket, &consumer, &input)
-            }),
-    );
+    edits.extend(rewires.into_iter().map(|(consumer, input, socket)| {
+        GraphEdit::connect(&instance_id, &socket, &consumer, &input)
+    }));
     Ok((GraphEdit::Batch(edits), instance_id))
 }
 
@@ -809,7 +807,11 @@ mod tests {
             Input::Link(Link::new(&instance, &group.outputs[0].name))
         );
         assert!(!g.nodes.contains_key("veins") && !g.nodes.contains_key("ramp"));
-        assert_eq!(wgsl(&g), before, "grouping changes what the material computes");
+        assert_eq!(
+            wgsl(&g),
+            before,
+            "grouping changes what the material computes"
+        );
 
         // An edit inside the group reaches it and reverts.
         let grouped = g.clone();
@@ -835,8 +837,15 @@ mod tests {
         let undo_ungroup = edit.apply(&mut g).unwrap();
         assert_eq!(added, ["ramp", "veins"]);
         assert!(g.groups.is_empty(), "the group nothing uses goes");
-        assert_eq!(wgsl(&g), before, "ungrouping changes what the material computes");
-        assert!(g.same_but_layout(&start), "ungrouping gives the graph grouped");
+        assert_eq!(
+            wgsl(&g),
+            before,
+            "ungrouping changes what the material computes"
+        );
+        assert!(
+            g.same_but_layout(&start),
+            "ungrouping gives the graph grouped"
+        );
         undo_ungroup.apply(&mut g).unwrap();
         assert_eq!(g, grouped);
         undo_group.apply(&mut g).unwrap();

@@ -29,8 +29,8 @@ pub use groups::{
 use crate::material::graph::{
     GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT,
 };
-use crate::material::{Frame, Group, GroupSocket};
 use crate::material::nodes::{self, ParamKind};
+use crate::material::{Frame, Group, GroupSocket};
 use crate::material::{Graph, Input, Link, Node, Param, SocketType};
 
 /// One edit of a material graph.
@@ -255,7 +255,9 @@ impl GraphEdit {
                     return Err(format!("no node \"{node}\""));
                 };
                 if muted && matches!(target.kind.as_str(), GROUP_OUTPUT | GROUP_INPUT) {
-                    return Err(format!("\"{node}\" is a group's interface: it cannot be muted"));
+                    return Err(format!(
+                        "\"{node}\" is a group's interface: it cannot be muted"
+                    ));
                 }
                 let old = std::mem::replace(&mut target.muted, muted);
                 Ok(GraphEdit::SetMuted { node, muted: old })
@@ -1196,9 +1198,7 @@ mod tests {
                     }
                 }
                 Action::Move(a, x, y) => GraphEdit::MoveNodes(vec![(pick(&ids, a)?, Some([x, y]))]),
-                Action::Group(a, b) => {
-                    make_group(g, &[pick(&ids, a)?, pick(&ids, b)?]).ok()?.0
-                }
+                Action::Group(a, b) => make_group(g, &[pick(&ids, a)?, pick(&ids, b)?]).ok()?.0,
                 Action::Ungroup(a) => ungroup(g, &pick(&ids, a)?).ok()?.0,
                 Action::SetInGroup(k, a, b, v) => {
                     let names: Vec<String> = g.groups.keys().cloned().collect();

@@ -41,11 +41,13 @@ use super::document::{Command, Document, GestureId, Selection};
 use super::files::{self, FileDialogs};
 use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
 use super::thumbnails::Thumbnails;
-use crate::material::graph::{GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
-use graph_edit::GROUP_OUTPUT;
+use crate::material::graph::{
+    GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT,
+};
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
 use crate::scene::Material;
+use graph_edit::GROUP_OUTPUT;
 
 /// The node type a dropped image becomes, and its parameter naming the file.
 const IMAGE_TEXTURE: &str = "image_texture";
@@ -1225,7 +1227,9 @@ impl SnarlViewer<String> for Viewer<'_> {
             GROUP_INPUT => return "Group Input".into(),
             GROUP_OUTPUT => return "Group Output".into(),
             GROUP => {
-                if let Some(Param::Text(group)) = self.node(node).and_then(|n| n.params.get(GROUP_PARAM)) {
+                if let Some(Param::Text(group)) =
+                    self.node(node).and_then(|n| n.params.get(GROUP_PARAM))
+                {
                     return format!("⧉ {group}  ·  {node}");
                 }
             }

@@ -84,7 +84,12 @@ pub(super) fn group_default(graph: &Graph, node: &Node, input: &str) -> Option<V
     let Some(Param::Text(name)) = node.params.get(GROUP_PARAM) else {
         return None;
     };
-    let socket = graph.groups.get(name)?.inputs.iter().find(|s| s.name == input)?;
+    let socket = graph
+        .groups
+        .get(name)?
+        .inputs
+        .iter()
+        .find(|s| s.name == input)?;
     socket.default.clone()
 }
 
@@ -194,9 +199,10 @@ impl NodeEditor {
                     sockets_ui(ui, top, &name, group, output, &mut edits);
                 }
             });
-        if let Err(e) = edits.iter().try_for_each(|(edit, _)| {
-            edit.clone().apply(&mut top.clone()).map(|_| ())
-        }) {
+        if let Err(e) = edits
+            .iter()
+            .try_for_each(|(edit, _)| edit.clone().apply(&mut top.clone()).map(|_| ()))
+        {
             self.message = Some(e);
             edits.clear();
         }
@@ -343,7 +349,9 @@ impl NodeEditor {
             .show(ctx, |ui| {
                 ui.horizontal(|ui| {
                     let name = ui.label("Label");
-                    let field = ui.add(egui::TextEdit::singleline(label)).labelled_by(name.id);
+                    let field = ui
+                        .add(egui::TextEdit::singleline(label))
+                        .labelled_by(name.id);
                     if field.lost_focus() && *label != frame.label {
                         let mut changed = frame.clone();
                         changed.label = label.clone();
@@ -391,7 +399,11 @@ fn sockets_ui(
     output: bool,
     edits: &mut Vec<(GraphEdit, Option<GestureId>)>,
 ) {
-    let list = if output { &group.outputs } else { &group.inputs };
+    let list = if output {
+        &group.outputs
+    } else {
+        &group.inputs
+    };
     ui.label(RichText::new(if output { "Outputs" } else { "Inputs" }).strong());
     for (i, socket) in list.iter().enumerate() {
         ui.horizontal(|ui| {
