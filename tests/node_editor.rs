@@ -873,6 +873,10 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
             .node_rect("noise_texture")
             .is_some()
     );
+    if let Some(path) = std::env::var_os("KILN_GROUP_SHOT") {
+        // A look inside the group, for whoever changes how groups are drawn.
+        harness.render().unwrap().save(path).unwrap();
+    }
 
     // A value inside: the group's node changes.
     let field = harness

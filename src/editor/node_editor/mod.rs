@@ -1230,7 +1230,7 @@ impl SnarlViewer<String> for Viewer<'_> {
                 if let Some(Param::Text(group)) =
                     self.node(node).and_then(|n| n.params.get(GROUP_PARAM))
                 {
-                    return format!("⧉ {group}  ·  {node}");
+                    return format!("{group}  ·  {node}");
                 }
             }
             _ => {}

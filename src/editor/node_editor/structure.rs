@@ -181,7 +181,7 @@ impl NodeEditor {
         let mut edits = Vec::new();
         ui.horizontal(|ui| {
             if ui
-                .button("⬑ Exit group")
+                .button("Exit group")
                 .on_hover_text("Back to the graph around it (Tab or Ctrl+Tab)")
                 .clicked()
             {
