@@ -282,6 +282,36 @@ mod tests {
     }
 
     #[test]
+    fn frames_are_written_only_when_there_are_any_and_read_back() {
+        let mut graph = Graph::default();
+        graph.add("value", Node::new("value"));
+        let plain = material_text("m", &graph).unwrap();
+        assert!(!plain.contains("frames"), "{plain}");
+        let frame = Frame {
+            label: "Values".into(),
+            color: [0.2, 0.3, 0.4],
+            nodes: vec!["value".into()],
+        };
+        graph.frames.insert("frame".into(), frame.clone());
+        let mut group = Group::default();
+        group.frames.insert("inner".into(), frame);
+        group.output_position = Some([300.0, 0.0]);
+        graph.groups.insert("g".into(), group);
+        let framed = material_text("m", &graph).unwrap();
+        let read = parse_material(&framed, "m.kmat").unwrap().1;
+        assert_eq!(read, graph);
+        assert_eq!(
+            material_text("m", &read).unwrap(),
+            framed,
+            "saves byte-identical"
+        );
+        // Frames are layout: the same computation.
+        let mut unframed = graph.clone();
+        unframed.frames.clear();
+        assert!(graph.same_but_layout(&unframed));
+    }
+
+    #[test]
     fn graphs_that_differ_only_in_layout_compute_the_same() {
         let mut graph = Graph::default();
         graph.add("value", Node::new("value"));

@@ -978,8 +978,20 @@ impl<'a> Viewer<'a> {
         self.node(id).is_some_and(|n| n.kind == REROUTE)
     }
 
+    /// The compile error at node `id`, if any. The compiler names a node inside a group
+    /// by its path of instances (`group/veins`): outside, the error is on the instance;
+    /// inside a group, on the node of that id (any instance of the group shows it).
     fn error_on(&self, id: &str) -> Option<&'a GraphError> {
-        self.error.filter(|e| e.node.as_deref() == Some(id))
+        self.error.filter(|e| {
+            let Some(path) = e.node.as_deref() else {
+                return false;
+            };
+            if self.graph.interface.is_some() {
+                path.rsplit('/').next() == Some(id) && path.contains('/')
+            } else {
+                path.split('/').next() == Some(id)
+            }
+        })
     }
 
     /// Records `edit` if the graph accepts it, else its reason.
