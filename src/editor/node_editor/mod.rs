@@ -316,14 +316,16 @@ impl NodeEditor {
             return commands;
         };
         // Inside a group, the canvas shows and edits its view; edits are wrapped to reach
-        // the group ([`NodeEditor::scoped`]).
+        // the group ([`structure::scoped`]), the one shown this frame even when a key
+        // enters or leaves one after drawing.
         self.follow_path(material, &top);
-        let view = (self.path.last()).and_then(|g| graph_edit::group_view(&top, g).ok());
-        let graph = view.as_ref().unwrap_or(&top);
         let name = &document.scene().materials[material].name;
         for (edit, gesture) in self.scope_bar(ui, name, &top) {
             commands.push((Command::EditGraph { material, edit }, gesture));
         }
+        let scope = self.path.last().cloned();
+        let view = (scope.as_ref()).and_then(|g| graph_edit::group_view(&top, g).ok());
+        let graph = view.as_ref().unwrap_or(&top);
         let error = document.graph_error(material);
         if let Some(e) = error {
             ui.label(
@@ -440,7 +442,7 @@ impl NodeEditor {
             }
         }
         commands.extend(edits.into_iter().map(|(edit, gesture)| {
-            let edit = self.scoped(edit);
+            let edit = structure::scoped(scope.as_deref(), edit);
             (Command::EditGraph { material, edit }, gesture)
         }));
         commands

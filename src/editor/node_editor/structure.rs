@@ -4,7 +4,7 @@
 //!
 //! Snarl knows neither groups nor frames. Inside a group the canvas shows the group's
 //! view ([`graph_edit::group_view`]) and every edit made there is wrapped to reach the
-//! group ([`NodeEditor::scoped`]); frames are painted on the canvas under snarl's wires
+//! group ([`scoped`]); frames are painted on the canvas under snarl's wires
 //! and nodes ([`paint_frames`], from the viewer's background), around the rectangles the
 //! nodes took in the last frame, and their label bars take the pointer on a layer above
 //! the canvas.
@@ -102,19 +102,19 @@ const SOCKET_TYPES: [SocketType; 5] = [
     SocketType::Bsdf,
 ];
 
-impl NodeEditor {
-    /// `edit`, made on the canvas, as an edit of the material: wrapped to reach the group
-    /// entered, if any.
-    pub(super) fn scoped(&self, edit: GraphEdit) -> GraphEdit {
-        match self.path.last() {
-            Some(group) => GraphEdit::InGroup {
-                group: group.clone(),
-                edit: Box::new(edit),
-            },
-            None => edit,
-        }
+/// `edit`, made on the canvas showing group `group` (`None`: the material's graph), as
+/// an edit of the material: wrapped to reach the group.
+pub(super) fn scoped(group: Option<&str>, edit: GraphEdit) -> GraphEdit {
+    match group {
+        Some(group) => GraphEdit::InGroup {
+            group: group.to_owned(),
+            edit: Box::new(edit),
+        },
+        None => edit,
     }
+}
 
+impl NodeEditor {
     /// The groups entered, as the material's graph `top` has them: another material
     /// starts outside, and a group that went (undone, ungrouped) takes the canvas out.
     pub(super) fn follow_path(&mut self, material: usize, top: &Graph) {
@@ -274,12 +274,10 @@ impl NodeEditor {
                 .fixed_pos(bar.min)
                 .constrain(false)
                 .show(&ctx, |ui| {
-                    let (rect, response) =
-                        ui.allocate_exact_size(bar.size(), egui::Sense::click_and_drag());
+                    let response = ui.allocate_response(bar.size(), egui::Sense::click_and_drag());
                     response.widget_info(|| {
                         egui::WidgetInfo::labeled(egui::WidgetType::Other, true, &frame.label)
                     });
-                    let _ = rect;
                     response
                 })
                 .inner
