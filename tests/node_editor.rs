@@ -893,13 +893,34 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
         },
     ));
     steps(&mut harness, 3);
-    let edited = graph(harness.state());
+    let valued = graph(harness.state());
     assert_eq!(
-        edited.groups["NodeGroup"].nodes["noise_texture"].inputs["scale"],
+        valued.groups["NodeGroup"].nodes["noise_texture"].inputs["scale"],
         Input::from(12.5)
     );
 
+    // The interface panel adds a float input (and, the group having none, its input
+    // node inside).
+    harness.get_by_label("Group interface").click();
+    steps(&mut harness, 2);
+    harness.get_by_label("+ Input").click();
+    steps(&mut harness, 2);
+    harness.get_by_label("float").click();
+    steps(&mut harness, 3);
+    let edited = graph(harness.state());
+    let group = &edited.groups["NodeGroup"];
+    assert_eq!(
+        group.inputs.len(),
+        1,
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+    assert_eq!(group.inputs[0].name, "Value");
+    assert_eq!(group.nodes["group_input"].kind, "group_input");
+    assert_eq!(edited.nodes["group"].kind, "group");
+
     // Tab with nothing selected leaves the group.
+    frame_all(&mut harness);
     harness.key_press(egui::Key::Tab);
     steps(&mut harness, 3);
     assert!(harness.state().node_editor().group_path().is_empty());
@@ -933,8 +954,8 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     );
     assert_eq!(computes(&ungrouped), computes(&edited));
 
-    // Each step is one undo: ungroup, value, group, wire, node.
-    for expected in [&edited, &grouped, &connected] {
+    // Each step is one undo: ungroup, input, value, group, wire, node.
+    for expected in [&edited, &valued, &grouped, &connected] {
         harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
         steps(&mut harness, 2);
         assert_eq!(&graph(harness.state()), expected);

@@ -1000,5 +1000,19 @@ mod tests {
         );
         // A group input node outside a group has no sockets.
         assert!(sockets_of(&g, &Node::new(GROUP_INPUT)).is_err());
+
+        // Frames inside a group are the group's, and its output node may be in one.
+        let before = g.clone();
+        let view = group_view(&g, "NodeGroup").unwrap();
+        let (join, frame) =
+            super::super::join_in_frame(&view, &["veins".into(), GROUP_OUTPUT_ID.into()]).unwrap();
+        let undo = inside(join).apply(&mut g).unwrap();
+        assert_eq!(
+            g.groups["NodeGroup"].frames[&frame].nodes,
+            [GROUP_OUTPUT_ID, "veins"]
+        );
+        assert!(g.frames.is_empty());
+        undo.apply(&mut g).unwrap();
+        assert_eq!(g, before);
     }
 }

@@ -16,7 +16,7 @@ use egui_snarl::ui::get_selected_nodes;
 
 use super::NodeEditor;
 use crate::editor::graph_edit::{self, GROUP_OUTPUT, GraphEdit};
-use crate::material::graph::{GROUP, GROUP_PARAM, REROUTE};
+use crate::material::graph::{GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE};
 use crate::material::{Graph, Node, Param};
 
 /// Nodes selected with A, over snarl's selection.
@@ -143,9 +143,11 @@ impl NodeEditor {
                 .filter_map(|id| {
                     let node = graph.nodes.get(id)?;
                     // A node without outputs (the material output) has nothing to pass, a
-                    // reroute passes its input anyway.
+                    // reroute passes its input anyway, a group's input node is its
+                    // interface.
                     let outputs = graph_edit::sockets_of(graph, node).ok()?.outputs;
-                    (!outputs.is_empty() && node.kind != REROUTE).then(|| GraphEdit::SetMuted {
+                    let passes = node.kind != REROUTE && node.kind != GROUP_INPUT;
+                    (!outputs.is_empty() && passes).then(|| GraphEdit::SetMuted {
                         node: id.clone(),
                         muted: !node.muted,
                     })
