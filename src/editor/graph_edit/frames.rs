@@ -62,7 +62,7 @@ pub(super) fn set_frame(
 }
 
 /// An id for a new frame not used in `graph`.
-fn fresh_frame_id(graph: &Graph) -> String {
+pub(super) fn fresh_frame_id(graph: &Graph) -> String {
     std::iter::once("frame".to_owned())
         .chain((2..).map(|n| format!("frame_{n}")))
         .find(|id| !graph.frames.contains_key(id))

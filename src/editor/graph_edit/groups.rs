@@ -685,10 +685,7 @@ pub fn ungroup(graph: &Graph, id: &str) -> Result<(GraphEdit, Vec<String>), Stri
         if frame.nodes.is_empty() {
             continue;
         }
-        let frame_id = std::iter::once("frame".to_owned())
-            .chain((2..).map(|n| format!("frame_{n}")))
-            .find(|f| !frames.frames.contains_key(f))
-            .expect("a free id exists");
+        let frame_id = super::frames::fresh_frame_id(&frames);
         frames.frames.insert(frame_id.clone(), frame.clone());
         edits.push(GraphEdit::SetFrame {
             id: frame_id,
