@@ -18,7 +18,8 @@
 //!
 //! Float fields keep to their input's declared range ([`FloatRange`]); a muted node is
 //! drawn dimmed under a red header, a reroute as a small node with no labels. The keys
-//! and the selection they act on are in [`keys`].
+//! and the selection they act on are in [`keys`]; node groups (entering one shows its
+//! view, and edits there are wrapped to reach it) and frames in [`structure`].
 
 mod keys;
 mod ramp;
