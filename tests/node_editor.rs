@@ -831,3 +831,293 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
     );
     assert_eq!(status(&harness).kernel, Some(KernelKind::General));
 }
+
+/// Home over the canvas: the view frames every node.
+fn frame_all(harness: &mut Harness<'_, EditorApp>) {
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    harness.event(egui::Event::PointerMoved(canvas.center()));
+    harness.step();
+    harness.key_press(egui::Key::Home);
+    steps(harness, 3);
+}
+
+/// Shift+clicks the header of node `id` (snarl adds it to its selection).
+fn shift_click_node(harness: &mut Harness<'_, EditorApp>, id: &str) {
+    let rect = harness
+        .state()
+        .node_editor()
+        .node_rect(id)
+        .unwrap_or_else(|| panic!("node {id} is drawn"));
+    let header = egui::pos2(rect.center().x, rect.top() + 10.0);
+    harness.event(egui::Event::PointerMoved(header));
+    harness.step();
+    for pressed in [true, false] {
+        harness.event_modifiers(
+            egui::Event::PointerButton {
+                pos: header,
+                button: egui::PointerButton::Primary,
+                pressed,
+                modifiers: egui::Modifiers::SHIFT,
+            },
+            egui::Modifiers::SHIFT,
+        );
+        harness.step();
+    }
+    steps(harness, 2);
+}
+
+/// The material's WGSL up to names: what it computes. The compiler numbers values
+/// (`n3`) and helpers (`m_ramp1`) in the order of the flattened node ids, and comments
+/// each with its node's path, which grouping changes: such names are renamed by their
+/// first appearance and comments dropped.
+fn computes(g: &Graph) -> String {
+    let code = kiln::material::compile("m", g, "m")
+        .unwrap_or_else(|e| panic!("{}", e.message))
+        .code;
+    let numbered = |word: &str| {
+        let stem = word.trim_end_matches(|c: char| c.is_ascii_digit());
+        stem.len() < word.len() && (stem == "n" || stem.starts_with("m_"))
+    };
+    let mut names = std::collections::BTreeMap::new();
+    let mut out = String::new();
+    for line in code.lines().filter(|l| !l.trim_start().starts_with("//")) {
+        let mut word = String::new();
+        for c in line.chars().chain(std::iter::once('\n')) {
+            if c.is_ascii_alphanumeric() || c == '_' {
+                word.push(c);
+                continue;
+            }
+            if numbered(&word) {
+                let next = format!("v{}", names.len());
+                word = names.entry(word).or_insert(next).clone();
+            }
+            out.push_str(&word);
+            out.push(c);
+            word.clear();
+        }
+    }
+    out
+}
+
+#[test]
+fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
+    let dir = tempfile::tempdir().unwrap();
+    let saved = dir.path().join("structure.kiln");
+    let mut harness = harness(ScriptedDialogs {
+        save: vec![saved.clone()].into(),
+        ..ScriptedDialogs::default()
+    });
+    harness.get_by_label("block").click();
+    steps(&mut harness, 3);
+    let material = harness.state().node_editor().material().unwrap();
+    let name = harness.state().document().scene().materials[material]
+        .name
+        .clone();
+    let start = graph(harness.state());
+    add_from_menu(
+        &mut harness,
+        egui::vec2(30.0, 40.0),
+        "noise",
+        "Noise Texture",
+    );
+    steps(&mut harness, 2);
+    drag(
+        &mut harness,
+        ("noise_texture", "color"),
+        ("surface", "base_color"),
+    );
+    let connected = graph(harness.state());
+    assert_eq!(
+        connected.nodes["surface"].inputs["base_color"],
+        Input::Link(Link::new("noise_texture", "color"))
+    );
+
+    // Ctrl+G on the noise and the BSDF: one group, its instance read by the output.
+    shift_click_node(&mut harness, "noise_texture");
+    shift_click_node(&mut harness, "surface");
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::G);
+    steps(&mut harness, 3);
+    let grouped = graph(harness.state());
+    let group = grouped.groups.get("NodeGroup").unwrap_or_else(|| {
+        panic!(
+            "a group is made: {:?} {:?}",
+            grouped.groups.keys(),
+            harness.state().node_editor().message()
+        )
+    });
+    assert!(group.nodes.contains_key("noise_texture") && group.nodes.contains_key("surface"));
+    assert!(!grouped.nodes.contains_key("noise_texture") && !grouped.nodes.contains_key("surface"));
+    assert_eq!(grouped.nodes["group"].kind, "group");
+    assert_eq!(
+        grouped.nodes["output"].inputs["surface"],
+        Input::Link(Link::new("group", "bsdf"))
+    );
+    assert_eq!(computes(&grouped), computes(&connected));
+    assert!(harness.state().document().graph_error(material).is_none());
+
+    // Tab on the group node enters it: the breadcrumb names the path, the inner nodes
+    // and the group's output node show.
+    frame_all(&mut harness);
+    shift_click_node(&mut harness, "group");
+    harness.key_press(egui::Key::Tab);
+    steps(&mut harness, 3);
+    assert_eq!(harness.state().node_editor().group_path(), ["NodeGroup"]);
+    harness.get_by_label(&format!("{name} › NodeGroup"));
+    harness.get_by_label("Group Output");
+    assert!(
+        harness
+            .state()
+            .node_editor()
+            .node_rect("noise_texture")
+            .is_some()
+    );
+    if let Some(path) = std::env::var_os("KILN_GROUP_SHOT") {
+        // A look inside the group, for whoever changes how groups are drawn.
+        harness.render().unwrap().save(path).unwrap();
+    }
+
+    // A value inside: the group's node changes.
+    let field = harness
+        .get_all_by_role_and_label(Role::SpinButton, "scale")
+        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
+        .expect("the noise texture's scale field (5 by default) inside the group");
+    let (target_node, target_tree) = field.accesskit_node().locate();
+    harness.event(egui::Event::AccessKitActionRequest(
+        accesskit::ActionRequest {
+            action: accesskit::Action::SetValue,
+            target_node,
+            target_tree,
+            data: Some(accesskit::ActionData::NumericValue(12.5)),
+        },
+    ));
+    steps(&mut harness, 3);
+    let valued = graph(harness.state());
+    assert_eq!(
+        valued.groups["NodeGroup"].nodes["noise_texture"].inputs["scale"],
+        Input::from(12.5)
+    );
+
+    // The interface panel adds a float input (and, the group having none, its input
+    // node inside).
+    harness.get_by_label("Group interface").click();
+    steps(&mut harness, 2);
+    harness.get_by_label("+ Input").click();
+    steps(&mut harness, 2);
+    harness.get_by_label("float").click();
+    steps(&mut harness, 3);
+    let edited = graph(harness.state());
+    let group = &edited.groups["NodeGroup"];
+    assert_eq!(
+        group.inputs.len(),
+        1,
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+    assert_eq!(group.inputs[0].name, "Value");
+    assert_eq!(group.nodes["group_input"].kind, "group_input");
+    assert_eq!(edited.nodes["group"].kind, "group");
+
+    // Tab with nothing selected leaves the group.
+    frame_all(&mut harness);
+    harness.key_press(egui::Key::Tab);
+    steps(&mut harness, 3);
+    assert!(harness.state().node_editor().group_path().is_empty());
+    assert!(
+        harness
+            .query_by_label(&format!("{name} › NodeGroup"))
+            .is_none()
+    );
+
+    // Ctrl+Alt+G ungroups: the nodes are back, wired as before, the group gone.
+    frame_all(&mut harness);
+    shift_click_node(&mut harness, "group");
+    harness.key_press_modifiers(
+        egui::Modifiers::COMMAND.plus(egui::Modifiers::ALT),
+        egui::Key::G,
+    );
+    steps(&mut harness, 3);
+    let ungrouped = graph(harness.state());
+    assert!(
+        ungrouped.groups.is_empty(),
+        "{:?}",
+        harness.state().node_editor().message()
+    );
+    assert_eq!(
+        ungrouped.nodes["output"].inputs["surface"],
+        Input::Link(Link::new("surface", "bsdf"))
+    );
+    assert_eq!(
+        ungrouped.nodes["noise_texture"].inputs["scale"],
+        Input::from(12.5)
+    );
+    assert_eq!(computes(&ungrouped), computes(&edited));
+
+    // Each step is one undo: ungroup, input, value, group, wire, node.
+    for expected in [&edited, &valued, &grouped, &connected] {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        steps(&mut harness, 2);
+        assert_eq!(&graph(harness.state()), expected);
+    }
+    for _ in 0..2 {
+        harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+        steps(&mut harness, 2);
+    }
+    assert_eq!(graph(harness.state()), start);
+
+    // Ctrl+J frames the BSDF; dragging the frame's label bar moves it, one undo step.
+    frame_all(&mut harness);
+    shift_click_node(&mut harness, "surface");
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::J);
+    steps(&mut harness, 3);
+    let framed = graph(harness.state());
+    assert_eq!(framed.frames["frame"].nodes, ["surface"]);
+    assert_eq!(framed.frames["frame"].label, "Frame");
+    frame_all(&mut harness);
+    let bar = harness
+        .state()
+        .node_editor()
+        .frame_bar("frame")
+        .expect("the frame's label bar is drawn");
+    let surface_before = harness
+        .state()
+        .node_editor()
+        .node_position("surface")
+        .unwrap();
+    mouse_drag(&mut harness, bar.center(), egui::vec2(80.0, 40.0));
+    let moved = graph(harness.state());
+    let surface_after = harness
+        .state()
+        .node_editor()
+        .node_position("surface")
+        .unwrap();
+    assert!(
+        (surface_after - surface_before - egui::vec2(80.0, 40.0)).length() < 2.0,
+        "{surface_before:?} → {surface_after:?}"
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 2);
+    assert_eq!(
+        graph(harness.state()),
+        framed,
+        "a frame drag is one undo step"
+    );
+    harness.key_press_modifiers(
+        egui::Modifiers::COMMAND.plus(egui::Modifiers::SHIFT),
+        egui::Key::Z,
+    );
+    steps(&mut harness, 2);
+    assert_eq!(graph(harness.state()), moved);
+
+    // Saved and reopened, the frame is there; saving again writes the same bytes.
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    steps(&mut harness, 2);
+    assert!(saved.exists(), "{:?}", harness.state().error());
+    let first = std::fs::read(&saved).unwrap();
+    harness.state_mut().open(saved.clone());
+    steps(&mut harness, 2);
+    let reopened = harness.state().document().material_graph(material).unwrap();
+    assert_eq!(reopened, moved);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    steps(&mut harness, 2);
+    assert_eq!(std::fs::read(&saved).unwrap(), first);
+}

@@ -1958,6 +1958,8 @@ impl eframe::App for EditorApp {
             self.app_time = Duration::ZERO;
             self.log_start = now;
         }
+        // Before any panel is drawn: the first widget drawn would take Tab's focus.
+        self.node_editor.release_tab_focus(ui.ctx());
         self.frame(ui);
         self.app_time += now.elapsed();
     }

@@ -30,7 +30,10 @@ floats (luminance) and vectors feed floats (the mean), as in Blender; other type
 mix. `groups: { \"name\": (inputs: [(name: \"x\", type: float, default: 1.0)], outputs:
 [(name: \"y\", type: color)], nodes: {...}, links: { \"y\": \"inner.socket\" }) }` declares a
 node group, used as `(type: \"group\", params: { \"group\": \"name\" })`; inside, node type
-`group_input` has one output per group input.
+`group_input` has one output per group input. `frames: { \"frame\": (label: \"Veins\", color: (0.2,
+0.3, 0.4), nodes: [\"veins\", \"ramp\"]) }` (in a graph or a group) are the editor's labelled boxes
+around nodes, and a group's `output_position` where the editor draws its output node; neither
+means anything to the compiler.
 
 A float input's range is the values it may be set to: the compiler reports a value outside
 it, naming node and socket (what a link brings is not limited; the Principled BSDF clamps

@@ -269,6 +269,33 @@ pub struct Group {
     pub nodes: BTreeMap<String, Node>,
     /// Exposed output name → the inner `"node.socket"` that computes it.
     pub links: BTreeMap<String, Link>,
+    /// Where a graph editor draws the group's output node (the node it shows for
+    /// `links`); no meaning to the compiler.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub output_position: Option<[f32; 2]>,
+    /// The editor's frames inside the group, as [`Graph::frames`].
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub frames: BTreeMap<String, Frame>,
+}
+
+/// A frame, as Blender's Frame node: a labelled, coloured box a graph editor draws behind
+/// a set of nodes (around their bounds). Layout only: no meaning to the compiler.
+#[derive(Clone, Debug, PartialEq, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub struct Frame {
+    pub label: String,
+    /// Linear RGB, each in [0, 1].
+    pub color: [f32; 3],
+    /// The ids of the nodes it holds, sorted.
+    pub nodes: Vec<String>,
+}
+
+/// The sockets a group exposes: what its instances show, what its `group_input` node
+/// gives inside, and what its output node takes.
+#[derive(Clone, Debug, Default, PartialEq)]
+pub struct GroupInterface {
+    pub inputs: Vec<GroupSocket>,
+    pub outputs: Vec<GroupSocket>,
 }
 
 /// A material: nodes, the groups they use, and the node whose output is the surface
@@ -281,6 +308,15 @@ pub struct Graph {
     pub groups: BTreeMap<String, Group>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// The editor's frames by id, in id order; written only when there are any.
+    #[serde(default, skip_serializing_if = "BTreeMap::is_empty")]
+    pub frames: BTreeMap<String, Frame>,
+    /// Set only on a graph editor's view of a group's insides (its nodes as a graph of
+    /// their own, `editor::graph_edit::group_view`): the group's interface, which gives
+    /// the `group_input` node its outputs and the view's output node its inputs. Never
+    /// saved; `None` for a material's graph.
+    #[serde(skip)]
+    pub interface: Option<GroupInterface>,
 }
 
 impl Graph {

@@ -17,7 +17,10 @@ use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
 pub use compile::{CompiledMaterial, GraphError, MaterialTraits, compile};
-pub use graph::{Graph, Group, GroupSocket, Input, Link, Node, Param, RampStop, SocketType, Value};
+pub use graph::{
+    Frame, Graph, Group, GroupInterface, GroupSocket, Input, Link, Node, Param, RampStop,
+    SocketType, Value,
+};
 
 /// The `.kmat` format version this build reads and writes.
 pub const MATERIAL_FORMAT_VERSION: u32 = 1;
@@ -54,6 +57,10 @@ pub struct MaterialFile {
     pub groups: std::collections::BTreeMap<String, Group>,
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub output: Option<String>,
+    /// The editor's frames (labelled boxes around nodes); written only when there are any,
+    /// so files without frames read and save as before.
+    #[serde(default, skip_serializing_if = "std::collections::BTreeMap::is_empty")]
+    pub frames: std::collections::BTreeMap<String, Frame>,
 }
 
 impl MaterialFile {
@@ -62,6 +69,8 @@ impl MaterialFile {
             nodes: self.nodes.clone(),
             groups: self.groups.clone(),
             output: self.output.clone(),
+            frames: self.frames.clone(),
+            interface: None,
         }
     }
 }
@@ -140,6 +149,7 @@ pub fn material_text(name: &str, graph: &Graph) -> Result<String, MaterialFileEr
         nodes: graph.nodes.clone(),
         groups: graph.groups.clone(),
         output: graph.output.clone(),
+        frames: graph.frames.clone(),
     };
     ron::ser::to_string_pretty(&file, ron::ser::PrettyConfig::default()).map_err(|e| {
         MaterialFileError::Save {
@@ -281,6 +291,36 @@ mod tests {
         let shown = material_text("m", &graph).unwrap();
         assert!(shown.contains("preview: true"), "{shown}");
         assert_eq!(parse_material(&shown, "m.kmat").unwrap().1, graph);
+    }
+
+    #[test]
+    fn frames_are_written_only_when_there_are_any_and_read_back() {
+        let mut graph = Graph::default();
+        graph.add("value", Node::new("value"));
+        let plain = material_text("m", &graph).unwrap();
+        assert!(!plain.contains("frames"), "{plain}");
+        let frame = Frame {
+            label: "Values".into(),
+            color: [0.2, 0.3, 0.4],
+            nodes: vec!["value".into()],
+        };
+        graph.frames.insert("frame".into(), frame.clone());
+        let mut group = Group::default();
+        group.frames.insert("inner".into(), frame);
+        group.output_position = Some([300.0, 0.0]);
+        graph.groups.insert("g".into(), group);
+        let framed = material_text("m", &graph).unwrap();
+        let read = parse_material(&framed, "m.kmat").unwrap().1;
+        assert_eq!(read, graph);
+        assert_eq!(
+            material_text("m", &read).unwrap(),
+            framed,
+            "saves byte-identical"
+        );
+        // Frames are layout: the same computation.
+        let mut unframed = graph.clone();
+        unframed.frames.clear();
+        assert!(graph.same_but_layout(&unframed));
     }
 
     #[test]

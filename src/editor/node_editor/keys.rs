@@ -15,9 +15,9 @@ use egui_snarl::NodeId;
 use egui_snarl::ui::get_selected_nodes;
 
 use super::NodeEditor;
-use crate::editor::graph_edit::{self, GraphEdit};
-use crate::material::graph::REROUTE;
-use crate::material::{Graph, Node};
+use crate::editor::graph_edit::{self, GROUP_OUTPUT, GraphEdit};
+use crate::material::graph::{GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE};
+use crate::material::{Graph, Node, Param};
 
 /// Nodes selected with A, over snarl's selection.
 #[derive(Clone, Debug, Default)]
@@ -32,6 +32,14 @@ impl NodeEditor {
     /// all starts a new one.
     pub(super) fn canvas_id(&self) -> egui::Id {
         egui::Id::new("kiln node editor canvas").with(self.canvas_generation)
+    }
+
+    /// Deselects every node, keeping the view. (After the nodes are replaced, snarl's
+    /// selection, by its node ids, would name other nodes.)
+    fn deselect_all(&mut self) {
+        self.select_all = None;
+        self.canvas_generation += 1;
+        self.keep_view = true;
     }
 
     /// Snarl's selection, by snarl node id.
@@ -79,8 +87,11 @@ impl NodeEditor {
     }
 
     /// Select all (A) and deselect all (Alt+A), delete (X, Delete), mute (M), duplicate
-    /// (Shift+D), copy and paste (Ctrl+C, Ctrl+V), frame all (Home) and the add menu
-    /// (Shift+A), while the pointer is over the canvas and no text field has the keyboard.
+    /// (Shift+D), copy and paste (Ctrl+C, Ctrl+V), frame all (Home), the add menu
+    /// (Shift+A), and structure: make a group (Ctrl+G), ungroup (Ctrl+Alt+G), enter a
+    /// group or leave it (Tab; Ctrl+Tab leaves), join in a new frame (Ctrl+J) and take
+    /// out of frames (Alt+P), while the pointer is over the canvas and no text field has
+    /// the keyboard.
     pub(super) fn keyboard(&mut self, ui: &Ui, graph: &Graph, hovered: bool) -> Vec<GraphEdit> {
         let ctx = ui.ctx();
         if !hovered || ctx.egui_wants_keyboard_input() {
@@ -98,9 +109,7 @@ impl NodeEditor {
             self.frame_all = true;
         }
         if pressed(Key::A, Modifiers::ALT) {
-            self.select_all = None;
-            self.canvas_generation += 1;
-            self.keep_view = true;
+            self.deselect_all();
         }
         if pressed(Key::A, Modifiers::SHIFT) {
             self.add_menu = ctx.pointer_latest_pos();
@@ -113,11 +122,16 @@ impl NodeEditor {
             });
         }
         let selected = self.selected(ctx);
+        edits.extend(self.structure_keys(ctx, graph, &selected));
         let delete = pressed(Key::X, Modifiers::NONE) || pressed(Key::Delete, Modifiers::NONE);
-        if delete && !selected.is_empty() {
+        // A group's output node stays while the group does.
+        let removable: Vec<&String> = (selected.iter())
+            .filter(|id| graph.nodes.get(*id).is_some_and(|n| n.kind != GROUP_OUTPUT))
+            .collect();
+        if delete && !removable.is_empty() {
             edits.push(GraphEdit::Batch(
-                selected
-                    .iter()
+                removable
+                    .into_iter()
                     .map(|id| GraphEdit::RemoveNode { id: id.clone() })
                     .collect(),
             ));
@@ -129,9 +143,11 @@ impl NodeEditor {
                 .filter_map(|id| {
                     let node = graph.nodes.get(id)?;
                     // A node without outputs (the material output) has nothing to pass, a
-                    // reroute passes its input anyway.
+                    // reroute passes its input anyway, a group's input node is its
+                    // interface.
                     let outputs = graph_edit::sockets_of(graph, node).ok()?.outputs;
-                    (!outputs.is_empty() && node.kind != REROUTE).then(|| GraphEdit::SetMuted {
+                    let passes = node.kind != REROUTE && node.kind != GROUP_INPUT;
+                    (!outputs.is_empty() && passes).then(|| GraphEdit::SetMuted {
                         node: id.clone(),
                         muted: !node.muted,
                     })
@@ -156,6 +172,86 @@ impl NodeEditor {
         if (paste_event || pressed(Key::V, Modifiers::COMMAND)) && !self.clipboard.is_empty() {
             let (adds, _) = graph_edit::copies(graph, &self.clipboard, [60.0, 60.0]);
             edits.push(GraphEdit::Batch(adds));
+        }
+        edits
+    }
+
+    /// The structure keys (see [`NodeEditor::keyboard`]) on the nodes `selected`.
+    fn structure_keys(
+        &mut self,
+        ctx: &egui::Context,
+        graph: &Graph,
+        selected: &[String],
+    ) -> Vec<GraphEdit> {
+        let pressed =
+            |key: Key, modifiers: Modifiers| ctx.input_mut(|i| i.consume_key(modifiers, key));
+        let mut edits = Vec::new();
+        let any_tab = ctx.input(|i| i.key_pressed(Key::Tab));
+        // The keys with more modifiers first: a pattern also matches a press with Alt.
+        if pressed(Key::G, Modifiers::COMMAND | Modifiers::ALT) {
+            let mut scratch = graph.clone();
+            let mut ungroups = Vec::new();
+            let groups = selected
+                .iter()
+                .filter(|id| graph.nodes.get(*id).is_some_and(|n| n.kind == GROUP));
+            for id in groups {
+                match graph_edit::ungroup(&scratch, id) {
+                    // Applied to a copy, so that the next one gets fresh ids of its own.
+                    Ok((edit, _)) => match edit.clone().apply(&mut scratch) {
+                        Ok(_) => ungroups.push(edit),
+                        Err(e) => self.message = Some(e),
+                    },
+                    Err(e) => self.message = Some(e),
+                }
+            }
+            if !ungroups.is_empty() {
+                edits.push(GraphEdit::Batch(ungroups));
+                self.deselect_all();
+            }
+        }
+        if pressed(Key::G, Modifiers::COMMAND) && !selected.is_empty() {
+            match graph_edit::make_group(graph, selected) {
+                Ok((edit, _)) => {
+                    edits.push(edit);
+                    self.deselect_all();
+                }
+                Err(e) => self.message = Some(e),
+            }
+        }
+        let tab = pressed(Key::Tab, Modifiers::COMMAND);
+        if tab {
+            self.exit_group();
+        } else if pressed(Key::Tab, Modifiers::NONE) {
+            let group = selected.iter().find_map(|id| {
+                let node = graph.nodes.get(id).filter(|n| n.kind == GROUP)?;
+                match node.params.get(GROUP_PARAM) {
+                    Some(Param::Text(name)) if graph.groups.contains_key(name) => {
+                        Some(name.clone())
+                    }
+                    _ => None,
+                }
+            });
+            match group {
+                Some(name) => self.enter_group(name),
+                None => self.exit_group(),
+            }
+        }
+        if any_tab {
+            // Tab is the editor's here: no widget keeps the focus it gave.
+            ctx.memory_mut(|m| {
+                if let Some(id) = m.focused() {
+                    m.surrender_focus(id);
+                }
+                m.move_focus(egui::FocusDirection::None);
+            });
+        }
+        if pressed(Key::J, Modifiers::COMMAND) {
+            if let Some((edit, _)) = graph_edit::join_in_frame(graph, selected) {
+                edits.push(edit);
+            }
+        }
+        if pressed(Key::P, Modifiers::ALT) {
+            edits.extend(graph_edit::remove_from_frames(graph, selected));
         }
         edits
     }

@@ -18,7 +18,8 @@
 //!
 //! Float fields keep to their input's declared range ([`FloatRange`]); a muted node is
 //! drawn dimmed under a red header, a reroute as a small node with no labels. The keys
-//! and the selection they act on are in [`keys`].
+//! and the selection they act on are in [`keys`]; node groups (entering one shows its
+//! view, and edits there are wrapped to reach it) and frames in [`structure`].
 //!
 //! Each node with outputs has a preview toggle (the eye in its header, or the node menu;
 //! a [`GraphEdit::SetPreview`], so it undoes and is saved) that shows its first output as
@@ -30,6 +31,7 @@
 
 mod keys;
 mod ramp;
+mod structure;
 
 use std::cell::RefCell;
 use std::collections::{BTreeMap, BTreeSet};
@@ -50,10 +52,13 @@ use super::graph_edit::{self, GraphEdit, Sockets, sockets_of};
 use super::node_previews::NodePreviews;
 use super::thumbnails::Thumbnails;
 use super::viewport_preview::ViewportPreview;
-use crate::material::graph::{REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
+use crate::material::graph::{
+    GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT,
+};
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
 use crate::scene::Material;
+use graph_edit::GROUP_OUTPUT;
 
 /// The node type a dropped image becomes, and its parameter naming the file.
 const IMAGE_TEXTURE: &str = "image_texture";
@@ -126,8 +131,16 @@ pub struct NodeEditor {
     /// The selection the material was last taken from.
     followed: Option<Selection>,
     snarl: Snarl<String>,
-    /// The graph the snarl was built from, and where each node was drawn.
-    shown: Option<(usize, Graph)>,
+    /// The groups entered (Tab), outermost first: the canvas shows the last one's
+    /// insides ([`graph_edit::group_view`]), the material's graph when empty.
+    path: Vec<String>,
+    /// The frame whose label and colour are being edited, and the label as typed.
+    frame_edit: Option<(String, String)>,
+    /// The frames drawn in the last frame.
+    frame_shapes: Vec<structure::FrameShape>,
+    /// The graph the snarl was built from (of the material, in the group entered, if
+    /// any), and where each node was drawn.
+    shown: Option<(usize, Option<String>, Graph)>,
     positions: BTreeMap<String, [f32; 2]>,
     search: String,
     /// The Shift+A menu, open at this screen position.
@@ -186,6 +199,9 @@ impl Default for NodeEditor {
             material: None,
             followed: None,
             snarl: Snarl::new(),
+            path: Vec::new(),
+            frame_edit: None,
+            frame_shapes: Vec::new(),
             shown: None,
             positions: BTreeMap::new(),
             search: String::new(),
@@ -229,9 +245,14 @@ struct Viewer<'a> {
     pick_file: Option<(String, String)>,
     /// Where each node was drawn, in canvas coordinates.
     node_rects: BTreeMap<String, egui::Rect>,
-    /// The node previews (none without a device), and the shown material's index.
+    /// The node previews (none without a device, or inside a group), and the shown
+    /// material's index.
     previews: Option<&'a NodePreviews>,
     material: usize,
+    /// The frames to draw behind the nodes.
+    frames: Vec<structure::FrameShape>,
+    /// A group node whose "Enter group" was clicked.
+    enter: Option<String>,
 }
 
 impl NodeEditor {
@@ -292,6 +313,16 @@ impl NodeEditor {
         self.to_global * canvas
     }
 
+    /// The groups entered, outermost first (empty: the material's graph is shown).
+    pub fn group_path(&self) -> &[String] {
+        &self.path
+    }
+
+    /// The label bar of frame `id` in the last frame, in screen points.
+    pub fn frame_bar(&self, id: &str) -> Option<egui::Rect> {
+        Some(self.to_global * structure::bar_of(&self.frame_shapes, id)?)
+    }
+
     /// The rectangle the canvas took in the last frame.
     pub fn canvas_rect(&self) -> Option<egui::Rect> {
         self.rect
@@ -316,9 +347,20 @@ impl NodeEditor {
             ui.label("No material.");
             return commands;
         };
-        let Some(graph) = document.material_graph(material) else {
+        let Some(top) = document.material_graph(material) else {
             return commands;
         };
+        // Inside a group, the canvas shows and edits its view; edits are wrapped to reach
+        // the group ([`structure::scoped`]), the one shown this frame even when a key
+        // enters or leaves one after drawing.
+        self.follow_path(material, &top);
+        let name = &document.scene().materials[material].name;
+        for (edit, gesture) in self.scope_bar(ui, name, &top) {
+            commands.push((Command::EditGraph { material, edit }, gesture));
+        }
+        let scope = self.path.last().cloned();
+        let view = (scope.as_ref()).and_then(|g| graph_edit::group_view(&top, g).ok());
+        let graph = view.as_ref().unwrap_or(&top);
         let error = document.graph_error(material);
         if let Some(e) = error {
             ui.label(
@@ -332,10 +374,12 @@ impl NodeEditor {
         if let Some(m) = &self.message {
             ui.label(RichText::new(m).color(Color32::from_rgb(255, 170, 60)));
         }
-        self.sync(material, &graph);
-        let previews = previews.map(|p| {
+        self.sync(material, graph, &top);
+        // Previews are of the material's own nodes (a group's nodes compute per
+        // instance): none inside a group.
+        let previews = previews.filter(|_| scope.is_none()).map(|p| {
             if let Some(source) = document.scene().materials.get(material) {
-                p.want(material, &graph, source);
+                p.want(material, &top, source);
             }
             &*p
         });
@@ -343,7 +387,7 @@ impl NodeEditor {
         if self
             .viewport_preview
             .as_ref()
-            .is_some_and(|p| p.material == material && !graph.nodes.contains_key(&p.node))
+            .is_some_and(|p| p.material == material && !top.nodes.contains_key(&p.node))
         {
             self.viewport_preview = None;
         }
@@ -352,8 +396,9 @@ impl NodeEditor {
         let view = std::mem::take(&mut self.keep_view).then_some(self.to_global);
         let canvas_id = self.canvas_id();
 
+        let frames = self.frame_shapes(graph);
         let mut viewer = Viewer {
-            graph: &graph,
+            graph,
             error,
             edits: Vec::new(),
             message: None,
@@ -368,13 +413,15 @@ impl NodeEditor {
             node_rects: BTreeMap::new(),
             previews,
             material,
+            frames,
+            enter: None,
         };
         self.pins.borrow_mut().clear();
         // The canvas fills what is left of the panel (snarl's response covers the whole
         // plane it pans over, so it cannot tell where the canvas is).
         let canvas = ui.available_rect_before_wrap();
         if std::mem::take(&mut self.frame_all) {
-            viewer.frame = Some((bounds(&graph, &self.positions), canvas));
+            viewer.frame = Some((bounds(graph, &self.positions), canvas));
         }
         SnarlWidget::new()
             .id(canvas_id)
@@ -383,6 +430,8 @@ impl NodeEditor {
         self.rect = Some(canvas);
         self.to_global = viewer.to_global;
         self.node_rects = std::mem::take(&mut viewer.node_rects);
+        let frames = std::mem::take(&mut viewer.frames);
+        let enter = viewer.enter.take();
         let mut edits = std::mem::take(&mut viewer.edits);
         if let Some(m) = viewer.message.take() {
             self.message = Some(m);
@@ -402,10 +451,17 @@ impl NodeEditor {
                 ));
             }
         }
-        if let Some(moves) = self.moves(&graph) {
+        if let Some(moves) = self.moves(graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
-        self.viewport_preview_keys(ui, material, &graph, canvas);
+        if scope.is_none() {
+            self.viewport_preview_keys(ui, material, graph, canvas);
+        }
+        edits.extend(self.frame_bars(ui, graph, &frames, canvas));
+        self.frame_shapes = frames;
+        if let Some(group) = enter {
+            self.enter_group(group);
+        }
         // The pointer over the canvas, whichever of snarl's layers it is over (its nodes
         // sit on a layer of their own).
         let hovered = ui
@@ -413,12 +469,12 @@ impl NodeEditor {
             .pointer_hover_pos()
             .is_some_and(|p| canvas.contains(p));
         edits.extend(
-            self.keyboard(ui, &graph, hovered)
+            self.keyboard(ui, graph, hovered)
                 .into_iter()
                 .map(|e| (e, None)),
         );
         edits.extend(
-            self.add_menu_popup(ui, &graph)
+            self.add_menu_popup(ui, graph)
                 .into_iter()
                 .map(|e| (e, None)),
         );
@@ -437,15 +493,14 @@ impl NodeEditor {
                     .map(|f| f.path().to_owned())
                     .collect()
             });
-            if let Some(edit) = self.dropped_images(&graph, &dropped, at) {
+            if let Some(edit) = self.dropped_images(graph, &dropped, at) {
                 edits.push((edit, None));
             }
         }
-        commands.extend(
-            edits
-                .into_iter()
-                .map(|(edit, gesture)| (Command::EditGraph { material, edit }, gesture)),
-        );
+        commands.extend(edits.into_iter().map(|(edit, gesture)| {
+            let edit = structure::scoped(scope.as_deref(), edit);
+            (Command::EditGraph { material, edit }, gesture)
+        }));
         commands
     }
 
@@ -663,19 +718,18 @@ impl NodeEditor {
         });
     }
 
-    /// Rebuilds the snarl when the document's graph differs from the one drawn.
-    fn sync(&mut self, material: usize, graph: &Graph) {
-        if self
-            .shown
-            .as_ref()
-            .is_some_and(|(m, g)| *m == material && g == graph)
-        {
+    /// Rebuilds the snarl when the document's graph (`graph`, the view of the group
+    /// entered if any, of the material's graph `top`) differs from the one drawn.
+    fn sync(&mut self, material: usize, graph: &Graph, top: &Graph) {
+        let scope = self.path.last().cloned();
+        let same_place = |m: &usize, s: &Option<String>| *m == material && *s == scope;
+        if (self.shown.as_ref()).is_some_and(|(m, s, g)| same_place(m, s) && g == graph) {
             return;
         }
-        let moved_only =
-            (self.shown.as_ref()).is_some_and(|(m, g)| *m == material && g.same_but_layout(graph));
+        let moved_only = (self.shown.as_ref())
+            .is_some_and(|(m, s, g)| same_place(m, s) && g.same_but_layout(graph));
         if !moved_only {
-            self.stats = Some(compile_stats(graph));
+            self.stats = Some(compile_stats(top));
         }
         let laid = graph_edit::layout(graph);
         let mut snarl = Snarl::new();
@@ -719,12 +773,14 @@ impl NodeEditor {
                 );
             }
         }
-        if self.shown.as_ref().is_none_or(|(m, _)| *m != material) {
+        if (self.shown.as_ref()).is_none_or(|(m, s, _)| !same_place(m, s)) {
             self.frame_all = true;
+            // Rectangles of the nodes of another graph, some of the same ids.
+            self.node_rects.clear();
         }
         self.snarl = snarl;
         self.positions = laid;
-        self.shown = Some((material, graph.clone()));
+        self.shown = Some((material, scope, graph.clone()));
     }
 
     /// The move command for nodes the user dragged this frame, if any. The first move of
@@ -739,6 +795,16 @@ impl NodeEditor {
                 moved.push((id.clone(), Some(now)));
             }
         }
+        self.move_edit(graph, moved)
+    }
+
+    /// The edit moving nodes as `moved` says (with the layout of all others saved, as
+    /// [`NodeEditor::moves`] does), or none when nothing moves.
+    fn move_edit(
+        &mut self,
+        graph: &Graph,
+        moved: Vec<(String, Option<[f32; 2]>)>,
+    ) -> Option<GraphEdit> {
         if moved.is_empty() {
             return None;
         }
@@ -844,7 +910,12 @@ fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
         ));
     }
     if bounds.is_finite() {
-        bounds
+        // Room for the frames around nodes, and their label bars above.
+        if graph.frames.is_empty() {
+            bounds
+        } else {
+            structure::with_frame_room(bounds)
+        }
     } else {
         egui::Rect::from_min_size(Pos2::ZERO, egui::vec2(400.0, 200.0))
     }
@@ -1045,7 +1116,7 @@ impl<'a> Viewer<'a> {
     fn preview_ui(&self, ui: &mut Ui, id: &str) {
         let size = egui::Vec2::splat(PREVIEW_POINTS);
         let Some(previews) = self.previews else {
-            ui.label(RichText::new("no preview: no GPU device").weak());
+            ui.label(RichText::new("no preview here (inside a group, or no GPU device)").weak());
             return;
         };
         let view = previews.view(self.material, id, self.graph);
@@ -1083,8 +1154,20 @@ impl<'a> Viewer<'a> {
         }
     }
 
+    /// The compile error at node `id`, if any. The compiler names a node inside a group
+    /// by its path of instances (`group/veins`): outside, the error is on the instance;
+    /// inside a group, on the node of that id (any instance of the group shows it).
     fn error_on(&self, id: &str) -> Option<&'a GraphError> {
-        self.error.filter(|e| e.node.as_deref() == Some(id))
+        self.error.filter(|e| {
+            let Some(path) = e.node.as_deref() else {
+                return false;
+            };
+            if self.graph.interface.is_some() {
+                path.rsplit('/').next() == Some(id) && path.contains('/')
+            } else {
+                path.split('/').next() == Some(id)
+            }
+        })
     }
 
     /// Records `edit` if the graph accepts it, else its reason.
@@ -1130,10 +1213,14 @@ impl<'a> Viewer<'a> {
                 ui.label(RichText::new(format!("({what})")).weak());
                 return;
             }
-            (None, None) => match ty {
-                SocketType::Float => Value::Float(0.0),
-                SocketType::Vec2 => Value::Vec2([0.0; 2]),
-                _ => Value::Vec3([0.0; 3]),
+            // A group's input: the group's default for it.
+            (None, None) => match structure::group_default(self.graph, node, name) {
+                Some(v) => v,
+                None => match ty {
+                    SocketType::Float => Value::Float(0.0),
+                    SocketType::Vec2 => Value::Vec2([0.0; 2]),
+                    _ => Value::Vec3([0.0; 3]),
+                },
             },
         };
         let range = def.and_then(|d| d.input(name)).and_then(|s| s.range);
@@ -1323,8 +1410,18 @@ fn keep_to_soft_range(x: f32, old: f32, range: &FloatRange) -> f32 {
 impl SnarlViewer<String> for Viewer<'_> {
     fn title(&mut self, node: &String) -> String {
         let kind = self.node(node).map_or("", |n| n.kind.as_str());
-        if kind == REROUTE {
-            return String::new();
+        match kind {
+            REROUTE => return String::new(),
+            GROUP_INPUT => return "Group Input".into(),
+            GROUP_OUTPUT => return "Group Output".into(),
+            GROUP => {
+                if let Some(Param::Text(group)) =
+                    self.node(node).and_then(|n| n.params.get(GROUP_PARAM))
+                {
+                    return format!("{group}  ·  {node}");
+                }
+            }
+            _ => {}
         }
         let label = nodes::find(kind).map_or(kind, |d| d.label);
         format!("{label}  ·  {node}")
@@ -1391,7 +1488,8 @@ impl SnarlViewer<String> for Viewer<'_> {
             return self.pin(&id, Side::Input, &name, ty);
         }
         let label = ui.label(&name);
-        if pin.remotes.is_empty() && ty != SocketType::Bsdf {
+        let takes_values = self.node(&id).is_some_and(|n| n.kind != GROUP_OUTPUT);
+        if pin.remotes.is_empty() && ty != SocketType::Bsdf && takes_values {
             self.value_ui(ui, &id, &name, ty, label.id);
         }
         self.pin(&id, Side::Input, &name, ty)
@@ -1665,9 +1763,26 @@ impl SnarlViewer<String> for Viewer<'_> {
             ui.close();
         }
         if ui.button("Delete").clicked() {
-            self.try_edit(GraphEdit::RemoveNode { id }, None);
+            self.try_edit(GraphEdit::RemoveNode { id: id.clone() }, None);
             ui.close();
         }
+        self.structure_menu(ui, &id);
+    }
+
+    fn draw_background(
+        &mut self,
+        background: Option<&egui_snarl::ui::BackgroundPattern>,
+        viewport: &egui::Rect,
+        snarl_style: &SnarlStyle,
+        style: &egui::Style,
+        painter: &egui::Painter,
+        _snarl: &Snarl<String>,
+    ) {
+        if let Some(background) = background {
+            background.draw(viewport, snarl_style, style, painter);
+        }
+        // Frames lie on the canvas, under the wires and the nodes.
+        structure::paint_frames(&self.frames, painter);
     }
 
     fn final_node_rect(

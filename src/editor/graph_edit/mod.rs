@@ -10,12 +10,27 @@
 //! compiler's to say; an edit may leave a graph that does not (a required input left
 //! unconnected is still a graph the user is building).
 //!
+//! Structure has modules of its own: node groups (making, entering as a view, ungrouping,
+//! their interface) in [`groups`], frames in [`frames`].
+//!
 //! Nothing here knows about egui.
+
+mod frames;
+mod groups;
 
 use std::collections::{BTreeMap, BTreeSet};
 
-use crate::material::graph::{GROUP, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT};
+pub use frames::{join_in_frame, remove_from_frames};
+pub use groups::{
+    GROUP_OUTPUT, GROUP_OUTPUT_ID, add_group_socket, group_view, instances_of, make_group,
+    remove_group_socket, ungroup,
+};
+
+use crate::material::graph::{
+    GROUP, GROUP_INPUT, GROUP_PARAM, REROUTE, REROUTE_INPUT, REROUTE_OUTPUT,
+};
 use crate::material::nodes::{self, ParamKind};
+use crate::material::{Frame, Group, GroupSocket};
 use crate::material::{Graph, Input, Link, Node, Param, SocketType};
 
 /// One edit of a material graph.
@@ -48,6 +63,31 @@ pub enum GraphEdit {
     MoveNodes(Vec<(String, Option<[f32; 2]>)>),
     /// Sets which node is the material's output (`None`: the only `material_output`).
     SetOutput(Option<String>),
+    /// Adds, replaces or (`None`) removes node group `name`. A group still used by a
+    /// node is not removed.
+    SetGroup { name: String, group: Option<Group> },
+    /// Sets the interface of group `group`: its input and output sockets (names, types,
+    /// defaults). What its instances and inner nodes link to it is not touched:
+    /// [`remove_group_socket`] unlinks a socket before removing it.
+    SetGroupSockets {
+        group: String,
+        inputs: Vec<GroupSocket>,
+        outputs: Vec<GroupSocket>,
+    },
+    /// Renames an input (or, with `output`, an output) socket of group `group`, and with
+    /// it every link and instance input that names it.
+    RenameGroupSocket {
+        group: String,
+        output: bool,
+        from: String,
+        to: String,
+    },
+    /// An edit of the nodes inside group `group`, applied to its [`group_view`]: the
+    /// group's nodes as a graph, with a `group_input` node giving the interface's inputs
+    /// and the [`GROUP_OUTPUT`] node taking its outputs.
+    InGroup { group: String, edit: Box<GraphEdit> },
+    /// Adds, replaces or (`None`) removes frame `id`.
+    SetFrame { id: String, frame: Option<Frame> },
     /// Several edits as one: all are applied or none.
     Batch(Vec<GraphEdit>),
 }
@@ -66,6 +106,7 @@ impl GraphEdit {
     pub fn only_moves(&self) -> bool {
         match self {
             GraphEdit::MoveNodes(_) => true,
+            GraphEdit::InGroup { edit, .. } => edit.only_moves(),
             GraphEdit::Batch(edits) => edits.iter().all(GraphEdit::only_moves),
             _ => false,
         }
@@ -92,11 +133,17 @@ impl GraphEdit {
                 if graph.nodes.contains_key(&id) {
                     return Err(format!("there is already a node \"{id}\""));
                 }
+                if node.kind == GROUP_OUTPUT {
+                    return Err("a group has one output node, made with the group".into());
+                }
                 sockets_of(graph, &node)?;
                 graph.nodes.insert(id.clone(), node);
                 Ok(GraphEdit::RemoveNode { id })
             }
             GraphEdit::RemoveNode { id } => {
+                if graph.nodes.get(&id).is_some_and(|n| n.kind == GROUP_OUTPUT) {
+                    return Err("a group's output node stays while the group does".into());
+                }
                 let Some(node) = graph.nodes.remove(&id) else {
                     return Err(format!("no node \"{id}\""));
                 };
@@ -122,8 +169,19 @@ impl GraphEdit {
                 }
                 if graph.output.as_deref() == Some(id.as_str()) {
                     graph.output = None;
-                    inverse.push(GraphEdit::SetOutput(Some(id)));
+                    inverse.push(GraphEdit::SetOutput(Some(id.clone())));
                 }
+                // Frames lose the node (and a frame left empty goes).
+                for (frame_id, frame) in &mut graph.frames {
+                    if frame.nodes.contains(&id) {
+                        inverse.push(GraphEdit::SetFrame {
+                            id: frame_id.clone(),
+                            frame: Some(frame.clone()),
+                        });
+                        frame.nodes.retain(|n| *n != id);
+                    }
+                }
+                graph.frames.retain(|_, f| !f.nodes.is_empty());
                 Ok(if inverse.len() == 1 {
                     inverse.pop().expect("one edit")
                 } else {
@@ -143,6 +201,11 @@ impl GraphEdit {
                     Some(Input::Value(_)) if target.kind == REROUTE => {
                         return Err(format!(
                             "\"{node}\" is a reroute: it passes a wire on and holds no value"
+                        ));
+                    }
+                    Some(Input::Value(_)) if target.kind == GROUP_OUTPUT => {
+                        return Err(format!(
+                            "the group's output \"{input}\" takes a wire, not a value"
                         ));
                     }
                     Some(Input::Value(v)) => {
@@ -204,6 +267,11 @@ impl GraphEdit {
                 let Some(target) = graph.nodes.get_mut(&node) else {
                     return Err(format!("no node \"{node}\""));
                 };
+                if muted && matches!(target.kind.as_str(), GROUP_OUTPUT | GROUP_INPUT) {
+                    return Err(format!(
+                        "\"{node}\" is a group's interface: it cannot be muted"
+                    ));
+                }
                 let old = std::mem::replace(&mut target.muted, muted);
                 Ok(GraphEdit::SetMuted { node, muted: old })
             }
@@ -244,6 +312,28 @@ impl GraphEdit {
                     output,
                 )))
             }
+            GraphEdit::SetGroup { name, group } => groups::set_group(graph, name, group),
+            GraphEdit::SetGroupSockets {
+                group,
+                inputs,
+                outputs,
+            } => groups::set_group_sockets(graph, group, inputs, outputs),
+            GraphEdit::RenameGroupSocket {
+                group,
+                output,
+                from,
+                to,
+            } => groups::rename_group_socket(graph, group, output, from, to),
+            GraphEdit::InGroup { group, edit } => {
+                let mut view = group_view(graph, &group)?;
+                let inverse = edit.apply(&mut view)?;
+                groups::store_view(graph, &group, view);
+                Ok(GraphEdit::InGroup {
+                    group,
+                    edit: Box::new(inverse),
+                })
+            }
+            GraphEdit::SetFrame { id, frame } => frames::set_frame(graph, id, frame),
             GraphEdit::Batch(edits) => {
                 let mut inverses = Vec::with_capacity(edits.len());
                 for edit in edits {
@@ -284,6 +374,26 @@ pub fn sockets_of(graph: &Graph, node: &Node) -> Result<Sockets, String> {
         return Ok(Sockets {
             inputs: vec![(REROUTE_INPUT.to_owned(), ty)],
             outputs: vec![(REROUTE_OUTPUT.to_owned(), ty)],
+        });
+    }
+    if node.kind == GROUP_INPUT || node.kind == GROUP_OUTPUT {
+        let Some(interface) = &graph.interface else {
+            return Err(format!(
+                "a {} node is only meaningful inside a group",
+                node.kind
+            ));
+        };
+        let sockets = |list: &[GroupSocket]| named(list.iter().map(|s| (s.name.as_str(), s.ty)));
+        return Ok(if node.kind == GROUP_INPUT {
+            Sockets {
+                inputs: Vec::new(),
+                outputs: sockets(&interface.inputs),
+            }
+        } else {
+            Sockets {
+                inputs: sockets(&interface.outputs),
+                outputs: Vec::new(),
+            }
         });
     }
     if node.kind == GROUP {
@@ -665,13 +775,20 @@ pub fn fix_layout(graph: &Graph) -> Vec<(String, Option<[f32; 2]>)> {
         .collect()
 }
 
-/// The nodes `ids` of `graph` copied under fresh ids, offset by `offset`, with the links
+/// The nodes `nodes` of `graph` (but a group's output node) copied under fresh ids, offset by `offset`, with the links
 /// among them kept and links to nodes outside dropped. What paste and duplicate add.
 pub fn copies(
     graph: &Graph,
     nodes: &[(String, Node)],
     offset: [f32; 2],
 ) -> (Vec<GraphEdit>, Vec<String>) {
+    // A group's output node is one per group: it is not copied.
+    let nodes: Vec<(String, Node)> = nodes
+        .iter()
+        .filter(|(_, n)| n.kind != GROUP_OUTPUT)
+        .cloned()
+        .collect();
+    let nodes = nodes.as_slice();
     let mut scratch = graph.clone();
     let mut renamed = BTreeMap::new();
     for (id, node) in nodes {
@@ -714,7 +831,7 @@ mod tests {
 
     fn marble() -> Graph {
         crate::material::parse_material(
-            include_str!("../../assets/materials/marble.kmat"),
+            include_str!("../../../assets/materials/marble.kmat"),
             "marble.kmat",
         )
         .expect("the bundled marble parses")
@@ -1032,6 +1149,14 @@ mod tests {
             SetValue(usize, usize, f32),
             Move(usize, f32, f32),
             Mute(usize),
+            /// Ctrl+G on two nodes.
+            Group(usize, usize),
+            /// Ctrl+Alt+G on a node (refused unless a group node).
+            Ungroup(usize),
+            /// A value set on a node inside a group.
+            SetInGroup(usize, usize, usize, f32),
+            /// Ctrl+J on two nodes.
+            Frame(usize, usize),
             Undo,
             Redo,
         }
@@ -1049,6 +1174,11 @@ mod tests {
                 (n.clone(), -500.0f32..500.0, -500.0f32..500.0)
                     .prop_map(|(a, x, y)| Action::Move(a, x, y)),
                 n.clone().prop_map(Action::Mute),
+                (n.clone(), n.clone()).prop_map(|(a, b)| Action::Group(a, b)),
+                n.clone().prop_map(Action::Ungroup),
+                (n.clone(), n.clone(), n.clone(), -10.0f32..10.0)
+                    .prop_map(|(g, a, b, v)| Action::SetInGroup(g, a, b, v)),
+                (n.clone(), n.clone()).prop_map(|(a, b)| Action::Frame(a, b)),
                 Just(Action::Undo),
                 Just(Action::Redo),
             ]
@@ -1109,6 +1239,26 @@ mod tests {
                     }
                 }
                 Action::Move(a, x, y) => GraphEdit::MoveNodes(vec![(pick(&ids, a)?, Some([x, y]))]),
+                Action::Group(a, b) => make_group(g, &[pick(&ids, a)?, pick(&ids, b)?]).ok()?.0,
+                Action::Ungroup(a) => ungroup(g, &pick(&ids, a)?).ok()?.0,
+                Action::SetInGroup(k, a, b, v) => {
+                    let names: Vec<String> = g.groups.keys().cloned().collect();
+                    let group = pick(&names, k)?;
+                    let view = group_view(g, &group).ok()?;
+                    let inner: Vec<String> = view.nodes.keys().cloned().collect();
+                    let node = pick(&inner, a)?;
+                    let inputs = sockets_of(&view, &view.nodes[&node]).ok()?.inputs;
+                    let (input, _) = pick(&inputs, b)?;
+                    GraphEdit::InGroup {
+                        group,
+                        edit: Box::new(GraphEdit::SetInput {
+                            node,
+                            input,
+                            value: Some(Input::Value(Value::Float(v))),
+                        }),
+                    }
+                }
+                Action::Frame(a, b) => join_in_frame(g, &[pick(&ids, a)?, pick(&ids, b)?])?.0,
                 Action::Undo | Action::Redo => return None,
             })
         }
