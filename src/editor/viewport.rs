@@ -250,6 +250,10 @@ fn lock<T>(m: &Mutex<T>) -> std::sync::MutexGuard<'_, T> {
 /// A coarse film has at most this many pixels: one pass of it takes a few milliseconds
 /// even on lavapipe, so the image follows a drag.
 const COARSE_PIXELS: u32 = 160 * 120;
+/// With interpreted graphs, which sample about 13 times slower on lavapipe
+/// (docs/BENCHMARKS.md), the coarse film is a quarter of that, so that the first image of
+/// a graph edit still comes within a second.
+const COARSE_PIXELS_INTERPRETED: u32 = COARSE_PIXELS / 4;
 /// The coarse film is shown until no change came for this long (Cycles' viewport
 /// behaves the same: coarse while you move, refining when you stop).
 const REFINE_AFTER: Duration = Duration::from_millis(300);
@@ -265,11 +269,12 @@ struct Layer {
     texture_generation: u64,
 }
 
-/// The divisor of the image size that makes a film of at most [`COARSE_PIXELS`]; 1 when
-/// the image is that small already.
-fn coarse_divisor(size: [u32; 2]) -> u32 {
+/// The divisor of the image size that makes a film of at most `budget` pixels
+/// ([`COARSE_PIXELS`], [`COARSE_PIXELS_INTERPRETED`]); 1 when the image is that small
+/// already.
+fn coarse_divisor(size: [u32; 2], budget: u32) -> u32 {
     let pixels = size[0] as f64 * size[1] as f64;
-    (pixels / COARSE_PIXELS as f64).sqrt().ceil().max(1.0) as u32
+    (pixels / budget as f64).sqrt().ceil().max(1.0) as u32
 }
 
 /// The renderers a background build made for a target: the full image's and, for large
@@ -298,14 +303,23 @@ fn build_renderers(
     target: &Target,
     kernel: KernelKind,
 ) -> Result<Built, String> {
-    let divisor = coarse_divisor(target.size);
+    let budget = match kernel {
+        KernelKind::Interpreted => COARSE_PIXELS_INTERPRETED,
+        KernelKind::Specialized | KernelKind::General => COARSE_PIXELS,
+    };
+    let divisor = coarse_divisor(target.size, budget);
     let coarse_size = target.size.map(|v| (v / divisor).max(1));
+    let started = Instant::now();
     let full = build_renderer(ctx, target, target.size, kernel)?;
     let coarse = if divisor > 1 {
         Some(build_renderer(ctx, target, coarse_size, kernel)?)
     } else {
         None
     };
+    tracing::debug!(
+        "viewport renderers ({kernel:?}) built in {:.0} ms",
+        started.elapsed().as_secs_f64() * 1e3
+    );
     Ok(Built { full, coarse })
 }
 
@@ -854,14 +868,16 @@ mod tests {
     #[test]
     fn the_coarse_film_stays_within_its_pixel_budget() {
         for size in [[1, 1], [160, 120], [161, 120], [950, 754], [3840, 2160]] {
-            let d = coarse_divisor(size);
-            let pixels = (size[0] / d).max(1) * (size[1] / d).max(1);
-            assert!(pixels <= COARSE_PIXELS, "{size:?} / {d} = {pixels} pixels");
-            assert!(
-                d == 1 || pixels * 4 > COARSE_PIXELS / 4,
-                "{size:?}: needlessly coarse"
-            );
+            for budget in [COARSE_PIXELS, COARSE_PIXELS_INTERPRETED] {
+                let d = coarse_divisor(size, budget);
+                let pixels = (size[0] / d).max(1) * (size[1] / d).max(1);
+                assert!(pixels <= budget, "{size:?} / {d} = {pixels} pixels");
+                assert!(
+                    d == 1 || pixels * 4 > budget / 4,
+                    "{size:?}: needlessly coarse"
+                );
+            }
         }
-        assert_eq!(coarse_divisor([160, 120]), 1);
+        assert_eq!(coarse_divisor([160, 120], COARSE_PIXELS), 1);
     }
 }
