@@ -513,10 +513,10 @@ impl Worker {
         let GraphKernels::InterpretedThenCompiled(after) = target.graphs else {
             return None;
         };
-        // Not before the interpreted image has a full-size sample: the compile would
-        // compete with it for the device and the CPU.
+        // Not before the interpreted image is on screen: the compile would compete with
+        // it for the device and the CPU.
         let wanted = self.kernel() == Some(KernelKind::Interpreted)
-            && self.full.as_ref().is_some_and(|f| f.samples > 0)
+            && self.shown().is_some_and(|l| l.samples > 0)
             && self.build.is_none()
             && self.compile.is_none()
             && self.compile_failed != Some(target.scene_revision);

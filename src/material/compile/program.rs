@@ -625,7 +625,8 @@ fn bump_case(e: &mut KindEmitter, layout: &Layout) -> String {
     let normal = e.input("normal");
     let strength = e.input("strength");
     let distance = e.input("distance");
-    let invert = e.param("invert");
+    // Its one parameter: whether the bump goes inward.
+    let invert = e.param(e.def.params[0].name);
     let out = layout.outputs[0].expect("the bump's normal output");
     let (sub, len) = (layout.len - 1, layout.len);
     format!(
