@@ -559,6 +559,7 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             cancel: Some(&cancel),
             deadline,
             progress: Some(&mut on_progress),
+            ..RenderControl::default()
         },
     );
     bar.finish_and_clear();

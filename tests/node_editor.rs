@@ -763,24 +763,27 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
     });
     let status =
         |h: &Harness<'_, EditorApp>| -> ViewportStatus { h.state().viewport_status().unwrap() };
+    // The first image on screen (of the coarse film) is interpreted.
     step_until(&mut harness, "the interpreted first image", |app| {
         app.viewport_status()
-            .is_some_and(|s| s.samples >= 1 && s.kernel == Some(KernelKind::Interpreted))
+            .is_some_and(|s| s.passes >= 1 && s.kernel == Some(KernelKind::Interpreted))
     });
     // Still: the compiled kernel is built in the background while frames keep coming.
     step_until(&mut harness, "the background compile", |app| {
         app.viewport_status().is_some_and(|s| s.compiling)
     });
     let compiling = status(&harness);
+    assert!(compiling.passes >= 1, "the interpreted image is on screen");
+    let mut frames = 0;
     step_until(&mut harness, "the compiled renderers", |app| {
+        frames += 1;
         app.viewport_status().is_some_and(|s| s.compiled_swaps >= 1)
     });
     let compiled = status(&harness);
     assert_eq!(compiled.kernel, Some(KernelKind::General));
     assert!(
-        compiled.passes > compiling.passes,
-        "the interpreted image kept accumulating while the kernel compiled ({} passes)",
-        compiling.passes
+        frames > 10,
+        "the window kept drawing while the kernel compiled ({frames} frames)"
     );
     assert_eq!(compiled.renderer_builds, compiling.renderer_builds);
 
@@ -805,7 +808,7 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
         .apply_command(Command::EditGraph { material, edit });
     step_until(&mut harness, "the edit's first image", |app| {
         app.viewport_status().is_some_and(|s| {
-            s.restarts > before.restarts && s.shown_restart == s.restarts && s.samples >= 1
+            s.restarts > before.restarts && s.shown_restart == s.restarts
         })
     });
     let edited = status(&harness);

@@ -98,6 +98,30 @@ fn a_cancel_mid_pass_leaves_counts_within_one_batch() {
     assert_eq!(stats.passes, 1);
     assert_eq!(count_range(&r.read_film().unwrap()), (1, 1));
 
+    // Unless the caller lets a cancel stop the first pass too (and throws the partial
+    // film away): then nothing is dispatched, and a cleared film renders as a fresh one.
+    let mut abandoned = Renderer::new(Arc::clone(&ctx), &scene, s.clone()).unwrap();
+    let stats = abandoned
+        .render(
+            0..1000,
+            RenderControl {
+                cancel: Some(&cancel),
+                cancel_first_pass: true,
+                ..RenderControl::default()
+            },
+        )
+        .unwrap();
+    assert!(!stats.completed);
+    assert_eq!((stats.passes, stats.dispatches), (0, 0));
+    abandoned.clear_film();
+    abandoned.render(0..1, RenderControl::default()).unwrap();
+    let mut fresh = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
+    fresh.render(0..1, RenderControl::default()).unwrap();
+    assert_eq!(
+        abandoned.read_film().unwrap().sums,
+        fresh.read_film().unwrap().sums
+    );
+
     // Cancelled one dispatch into the third pass.
     let cancel = AtomicBool::new(false);
     let mut batch = 0;

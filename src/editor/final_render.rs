@@ -133,6 +133,7 @@ fn render(
                 cancel: Some(cancel),
                 deadline: None,
                 progress: Some(&mut report),
+                ..RenderControl::default()
             },
         )
         .map_err(|e| e.to_string())?;

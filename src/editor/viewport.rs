@@ -460,7 +460,10 @@ impl Worker {
                 // Consumed here, not where a result is taken: a build thread sets it after
                 // sending, so a result taken early must not leave it set (the loop would
                 // spin) — at worst it costs one more turn of the loop.
-                self.shared.built.store(false, Ordering::Relaxed);
+                if self.shared.built.swap(false, Ordering::Relaxed) {
+                    // Its cancel has done its work (see `spawn_build`).
+                    self.shared.cancel.store(false, Ordering::Relaxed);
+                }
                 next
             };
             if self.shared.shutdown.load(Ordering::Relaxed) {
@@ -615,6 +618,9 @@ impl Worker {
                 let _ = tx.send(built);
                 let _slot = lock(&shared.target);
                 shared.built.store(true, Ordering::Relaxed);
+                // The pass in progress stops, so the renderers go in without waiting
+                // for it (a first full-size pass can take seconds).
+                shared.cancel.store(true, Ordering::Relaxed);
                 shared.wake.notify_all();
                 drop(_slot);
                 repaint();
@@ -810,6 +816,9 @@ impl Worker {
         let control = RenderControl {
             cancel: Some(&self.shared.cancel),
             progress: Some(&mut give_ui_a_turn),
+            // A film's first full-size pass can take seconds (a slow kernel, a large
+            // viewport): an edit or a finished build must not wait for it.
+            cancel_first_pass: true,
             ..Default::default()
         };
         match layer
@@ -848,8 +857,12 @@ impl Worker {
                     }
                 });
             }
-            // Cancelled: a new target is waiting.
-            Ok(_) => {}
+            // Cancelled: a new target or a built renderer is waiting. The pass stopped
+            // part-way: its film is thrown away, as a restart would.
+            Ok(_) => {
+                layer.renderer.clear_film();
+                layer.samples = 0;
+            }
             Err(e) => {
                 let message = format!("rendering the viewport failed: {e}");
                 self.full = None;

@@ -206,6 +206,10 @@ pub struct RenderControl<'a> {
     pub cancel: Option<&'a AtomicBool>,
     pub deadline: Option<Instant>,
     pub progress: Option<&'a mut dyn FnMut(&Progress)>,
+    /// Lets a cancel stop the film's first pass too. The film is then partial (some
+    /// pixels have no sample): the caller throws it away ([`Renderer::clear_film`]), as
+    /// the editor's viewport does when a new scene or a built renderer replaces a pass.
+    pub cancel_first_pass: bool,
 }
 
 #[derive(Clone, Copy, Debug, Default)]
@@ -654,9 +658,9 @@ impl Renderer {
                 self.zero_stats();
             }
             for &(piece, origin, size) in &tiles {
-                let stop = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed))
-                    || control.deadline.is_some_and(|d| Instant::now() >= d);
-                if stop && self.film_has_whole_pass {
+                let cancelled = control.cancel.is_some_and(|c| c.load(Ordering::Relaxed));
+                let stop = cancelled || control.deadline.is_some_and(|d| Instant::now() >= d);
+                if stop && (self.film_has_whole_pass || cancelled && control.cancel_first_pass) {
                     stats.completed = false;
                     break 'passes;
                 }

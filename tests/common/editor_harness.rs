@@ -96,14 +96,17 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
 pub fn step_until(
     harness: &mut Harness<'_, EditorApp>,
     what: &str,
-    done: impl Fn(&EditorApp) -> bool,
+    mut done: impl FnMut(&EditorApp) -> bool,
 ) {
     let start = Instant::now();
     while !done(harness.state()) {
         assert!(
             start.elapsed() < WAIT,
-            "timed out waiting for {what}; viewport error: {:?}",
-            harness.state().viewport_status().and_then(|s| s.error)
+            "timed out waiting for {what}; viewport: {}",
+            harness
+                .state()
+                .viewport_status()
+                .map_or("no status".to_owned(), |s| describe(&s))
         );
         harness.step();
         std::thread::sleep(Duration::from_millis(20));
@@ -124,4 +127,21 @@ pub fn quad_glb(dir: &Path) -> PathBuf {
     let glb = dir.join("quad.glb");
     kiln::bench::write_glb(&kiln::scene::shapes::quad(), &glb).unwrap();
     glb
+}
+
+/// The viewport's progress in one line, for a timeout's message.
+fn describe(s: &kiln::editor::viewport::ViewportStatus) -> String {
+    format!(
+        "kernel {:?}, {} spp shown ({} passes), building {}, compiling {}, \
+         {} renderers / {} kernels built, {} compiled swaps, error {:?}",
+        s.kernel,
+        s.samples,
+        s.passes,
+        s.building,
+        s.compiling,
+        s.renderer_builds,
+        s.kernel_builds,
+        s.compiled_swaps,
+        s.error
+    )
 }
