@@ -389,6 +389,9 @@ struct Worker {
     compile: Option<Compile>,
     /// The scene revision whose compiled build failed: not tried again.
     compile_failed: Option<u64>,
+    /// The scene revision whose compiled renderers went in: a rebuild of that scene (a
+    /// new viewport size) builds compiled renderers at once, their kernels cached.
+    compiled_revision: Option<u64>,
     /// A target whose build failed: not tried again until the scene or size changes.
     failed: Option<(u64, [u32; 2])>,
     started: Instant,
@@ -419,6 +422,7 @@ impl Worker {
             build: None,
             compile: None,
             compile_failed: None,
+            compiled_revision: None,
             failed: None,
             started: Instant::now(),
             last_change: Instant::now(),
@@ -498,7 +502,11 @@ impl Worker {
     /// Starts building renderers for `target` on a thread of its own; the layers keep
     /// rendering what they render until it is done.
     fn start_build(&mut self, target: Target, posted: Instant) {
-        let kernel = first_kernel(&target);
+        let kernel = if self.compiled_revision == Some(target.scene_revision) {
+            KernelKind::General
+        } else {
+            first_kernel(&target)
+        };
         if let Some(build) = self.spawn_build(target, posted, kernel) {
             self.build = Some(build);
             self.publish(|s| s.building = true);
@@ -582,6 +590,7 @@ impl Worker {
                 self.full = Some(self.layer(full));
                 self.coarse = coarse.map(|r| self.layer(r));
                 self.started = Instant::now();
+                self.compiled_revision = Some(build.target.scene_revision);
                 self.publish(|s| {
                     s.compiled_swaps += 1;
                     s.kernel_builds += kernels;
