@@ -807,9 +807,8 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
         .state_mut()
         .apply_command(Command::EditGraph { material, edit });
     step_until(&mut harness, "the edit's first image", |app| {
-        app.viewport_status().is_some_and(|s| {
-            s.restarts > before.restarts && s.shown_restart == s.restarts
-        })
+        app.viewport_status()
+            .is_some_and(|s| s.restarts > before.restarts && s.shown_restart == s.restarts)
     });
     let edited = status(&harness);
     eprintln!(

@@ -100,7 +100,7 @@ fn a_cancel_mid_pass_leaves_counts_within_one_batch() {
 
     // Unless the caller lets a cancel stop the first pass too (and throws the partial
     // film away): then nothing is dispatched, and a cleared film renders as a fresh one.
-    let mut abandoned = Renderer::new(Arc::clone(&ctx), &scene, s.clone()).unwrap();
+    let mut abandoned = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
     let stats = abandoned
         .render(
             0..1000,
