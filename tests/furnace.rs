@@ -410,7 +410,9 @@ fn sphere_channel_means(
     std::array::from_fn(|c| {
         let channel: Vec<Vec3> = pixels.iter().map(|p| Vec3::splat(p[c])).collect();
         let (m, se) = (mean(&channel).x, standard_error_of_mean(&channel));
-        eprintln!("{name}, light sampling {light_sampling}, channel {c}: mean {m}, standard error {se}");
+        eprintln!(
+            "{name}, light sampling {light_sampling}, channel {c}: mean {m}, standard error {se}"
+        );
         assert!(
             se < 0.004,
             "{name} (light sampling {light_sampling}): standard error {se} too large to test"
@@ -442,10 +444,7 @@ fn furnace_white_subsurface_is_one_in_every_channel() {
     // every channel when the radius differs per channel (sampled by MIS over the
     // channels). Radii are the sphere's size, so walks end well within their step bound.
     let cases = [
-        (
-            "index-matched",
-            white_subsurface(Vec3::ONE, 0.5, 0.0, 1.0),
-        ),
+        ("index-matched", white_subsurface(Vec3::ONE, 0.5, 0.0, 1.0)),
         (
             "behind a smooth dielectric",
             white_subsurface(Vec3::ONE, 0.5, 0.0, 1.5),
@@ -457,7 +456,11 @@ fn furnace_white_subsurface_is_one_in_every_channel() {
     ];
     for (name, material) in cases {
         // Per-channel free flights make chromatic walks noisier.
-        let spp = if name.starts_with("chromatic") { 1024 } else { 256 };
+        let spp = if name.starts_with("chromatic") {
+            1024
+        } else {
+            256
+        };
         for light_sampling in [false, true] {
             for (c, (m, se)) in sphere_channel_means(name, &material, light_sampling, spp)
                 .into_iter()
