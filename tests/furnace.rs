@@ -397,3 +397,115 @@ fn furnace_rough_layers_of_white_lose_little_and_never_gain() {
         }
     }
 }
+
+/// The mean over the sphere of each channel of `material`'s furnace, with its standard
+/// error, at `spp` samples per pixel.
+fn sphere_channel_means(
+    name: &str,
+    material: &Material,
+    light_sampling: bool,
+    spp: u32,
+) -> [(f32, f32); 3] {
+    let (_, pixels) = principled_furnace_pixels(material.clone(), light_sampling, spp);
+    std::array::from_fn(|c| {
+        let channel: Vec<Vec3> = pixels.iter().map(|p| Vec3::splat(p[c])).collect();
+        let (m, se) = (mean(&channel).x, standard_error_of_mean(&channel));
+        eprintln!(
+            "{name}, light sampling {light_sampling}, channel {c}: mean {m}, standard error {se}"
+        );
+        assert!(
+            se < 0.004,
+            "{name} (light sampling {light_sampling}): standard error {se} too large to test"
+        );
+        (m, se)
+    })
+}
+
+fn white_subsurface(radius: Vec3, scale: f32, anisotropy: f32, ior: f32) -> Material {
+    Material {
+        principled: Principled {
+            subsurface_weight: 1.0,
+            subsurface_radius: radius,
+            subsurface_scale: scale,
+            subsurface_anisotropy: anisotropy,
+            ior,
+            roughness: 0.0,
+            ..white().principled
+        },
+        ..white()
+    }
+}
+
+#[test]
+fn furnace_white_subsurface_is_one_in_every_channel() {
+    // A white base colour maps to a medium that absorbs nothing (albedo exactly 1), so
+    // whatever enters the sphere leaves it again: the sphere reads 1, whether its
+    // boundary reflects nothing (IOR 1, index-matched) or is a smooth dielectric, and in
+    // every channel when the radius differs per channel (sampled by MIS over the
+    // channels). Radii are the sphere's size, so walks end well within their step bound.
+    let cases = [
+        ("index-matched", white_subsurface(Vec3::ONE, 0.5, 0.0, 1.0)),
+        (
+            "behind a smooth dielectric",
+            white_subsurface(Vec3::ONE, 0.5, 0.0, 1.5),
+        ),
+        (
+            "chromatic radius, forward scattering",
+            white_subsurface(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.7, 1.5),
+        ),
+    ];
+    for (name, material) in cases {
+        // Per-channel free flights make chromatic walks noisier.
+        let spp = if name.starts_with("chromatic") {
+            1024
+        } else {
+            256
+        };
+        for light_sampling in [false, true] {
+            for (c, (m, se)) in sphere_channel_means(name, &material, light_sampling, spp)
+                .into_iter()
+                .enumerate()
+            {
+                assert!(
+                    (m - 1.0).abs() < 4.0 * se + 1e-4,
+                    "{name} (light sampling {light_sampling}) channel {c}: mean {m}, standard error {se}"
+                );
+            }
+        }
+    }
+}
+
+#[test]
+fn subsurface_stays_finite_at_parameter_extremes() {
+    let ctx = gpu();
+    let mut checked = 0;
+    for radius in [0.0, 1e-6, 1.0, 1e6] {
+        for scale in [1e-4, 1e4] {
+            for (base, anisotropy) in [(0.0, 0.0), (1.0, 1.0), (0.5, 0.999)] {
+                let mut scene = furnace_scene(0.5, 1.0);
+                scene.materials[0] = Material {
+                    name: "extreme".into(),
+                    principled: Principled {
+                        base_color: Vec3::splat(base),
+                        subsurface_weight: 1.0,
+                        subsurface_radius: Vec3::new(radius, radius * 0.5, radius * 0.1),
+                        subsurface_scale: scale,
+                        subsurface_anisotropy: anisotropy,
+                        ..Principled::default()
+                    },
+                    ..Material::default()
+                };
+                // `render` fails on any non-finite sample.
+                let px = render(&ctx, &scene, settings(8, 8, 4)).radiance();
+                for p in px {
+                    assert!(
+                        p.is_finite() && p.max_element() < 20.0,
+                        "radius {radius}, scale {scale}, base {base}, g {anisotropy}: {p}"
+                    );
+                }
+                checked += 1;
+            }
+        }
+    }
+    assert_eq!(checked, 24);
+}

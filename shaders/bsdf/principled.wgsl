@@ -8,6 +8,7 @@
 //       └ dielectric base                                   weight 1 - metallic
 //         ├ glass (rough or smooth, thin or solid)         weight transmission
 //         └ specular reflection over diffuse               weight 1 - transmission
+//             └ diffuse split with subsurface              weight subsurface
 //
 // A sample picks one lobe with probability proportional to its estimated albedo toward wo;
 // the pdf for MIS is the mixture of every non-delta lobe's pdf, so any direction any lobe
@@ -18,6 +19,10 @@
 // Rough metal and rough glass carry multiple-scattering energy compensation
 // (multiple_scattering.wgsl, dielectric_energy.wgsl), so white ones stay white at every
 // roughness. Not yet: coat/base layering beyond albedo scaling.
+//
+// The subsurface lobe is a Lambertian transmission of albedo 1 into the object: the colour
+// comes from the random walk that follows (shaders/media/subsurface.wgsl), which the
+// integrator starts when this lobe was the one sampled (`principled_sampled_lobe`).
 
 // `struct Principled`, its packed form and defaults are generated from the parameter table
 // (src/shader/principled.rs).
@@ -30,12 +35,17 @@ const LOBE_SPECULAR: u32 = 4u;
 const LOBE_DIFFUSE: u32 = 5u;
 // The metal's multiple-scattering compensation (shaders/bsdf/multiple_scattering.wgsl).
 const LOBE_METAL_MS: u32 = 6u;
-const LOBE_COUNT: u32 = 7u;
+// Into the object, for a random walk (shaders/media/subsurface.wgsl).
+const LOBE_SUBSURFACE: u32 = 7u;
+const LOBE_COUNT: u32 = 8u;
+
+// The lobe the last principled_sample drew from.
+var<private> principled_sampled_lobe: u32;
 
 // Per-lobe colour scale (layering) and selection probability for one wo.
 struct LobeWeights {
-    scale: array<vec3<f32>, 7>,
-    probability: array<f32, 7>,
+    scale: array<vec3<f32>, LOBE_COUNT>,
+    probability: array<f32, LOBE_COUNT>,
 };
 
 fn principled_glass_tint(p: Principled) -> vec3<f32> {
@@ -70,10 +80,13 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     let spec = select(0.0, max(p.specular_weight, 0.0), FEATURE_SPECULAR) * p.specular_color;
     w.scale[LOBE_SPECULAR] = opaque * spec;
     let spec_albedo = fresnel_dielectric(cos_o, max(p.ior, 1.0)) * min(max(spec.r, max(spec.g, spec.b)), 1.0);
-    w.scale[LOBE_DIFFUSE] = select(vec3<f32>(0.0), opaque * (1.0 - spec_albedo), FEATURE_DIFFUSE);
+    let under_spec = opaque * (1.0 - spec_albedo);
+    let sss = select(0.0, clamp(p.subsurface_weight, 0.0, 1.0), subsurface_enabled(p));
+    w.scale[LOBE_DIFFUSE] = select(vec3<f32>(0.0), under_spec * (1.0 - sss), FEATURE_DIFFUSE);
+    w.scale[LOBE_SUBSURFACE] = under_spec * (sss * clamp(p.base_weight, 0.0, 1.0));
 
     // Selection by estimated albedo toward wo.
-    var e: array<f32, 7>;
+    var e: array<f32, LOBE_COUNT>;
     e[LOBE_COAT] = luminance(w.scale[LOBE_COAT]) * coat_albedo;
     e[LOBE_SHEEN] = luminance(w.scale[LOBE_SHEEN]) * min(sheen_e, 1.0);
     let f82 = fresnel_f82(cos_o, p.base_color * p.base_weight, p.specular_color);
@@ -82,6 +95,10 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     e[LOBE_GLASS] = luminance(w.scale[LOBE_GLASS] * max(principled_glass_tint(p), vec3<f32>(0.05)));
     e[LOBE_SPECULAR] = luminance(w.scale[LOBE_SPECULAR]) * fresnel_dielectric(cos_o, max(p.ior, 1.0));
     e[LOBE_DIFFUSE] = luminance(w.scale[LOBE_DIFFUSE] * p.base_color * clamp(p.base_weight, 0.0, 1.0));
+    // The walk returns about the base colour (its multiple-scattering albedo) from a
+    // thick object, more from a thin one (a dark medium with a long radius is nearly
+    // clear): the floor keeps such walks from being rare and heavily weighted.
+    e[LOBE_SUBSURFACE] = luminance(w.scale[LOBE_SUBSURFACE]) * max(luminance(p.base_color), 0.2);
     var total = 0.0;
     for (var i = 0u; i < LOBE_COUNT; i++) {
         // Every lobe with any weight keeps some probability, so its pdf is never 0 where
@@ -107,6 +124,7 @@ fn principled_lobe_compiled(lobe: u32) -> bool {
         case LOBE_METAL, LOBE_METAL_MS: { return FEATURE_METAL; }
         case LOBE_GLASS: { return FEATURE_GLASS; }
         case LOBE_SPECULAR: { return FEATURE_SPECULAR; }
+        case LOBE_SUBSURFACE: { return FEATURE_SUBSURFACE; }
         default: { return FEATURE_DIFFUSE; }
     }
 }
@@ -130,6 +148,7 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         case LOBE_METAL_MS: {
             return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);
         }
+        case LOBE_SUBSURFACE: { return subsurface_entry_eval(wo, wi); }
         // The diffuse lobe carries its albedo itself: its energy compensation depends on
         // the albedo non-linearly.
         default: { return energy_preserving_diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness); }
@@ -147,6 +166,7 @@ fn principled_lobe_pdf(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -
         case LOBE_METAL: { return conductor_pdf(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha); }
         case LOBE_GLASS: { return dielectric_pdf(wo, wi, alpha, p.ior, p.thin_walled); }
         case LOBE_SPECULAR: { return dielectric_reflection_pdf(wo, wi, alpha); }
+        case LOBE_SUBSURFACE: { return subsurface_entry_pdf(wo, wi); }
         default: { return diffuse_pdf(wo, wi); }
     }
 }
@@ -160,14 +180,18 @@ struct PrincipledEval {
 // Only the diffuse lobe has weight: the common matte case skips the layering arithmetic
 // (which is exact here too, only slower).
 fn principled_is_diffuse(p: Principled) -> bool {
-    if (!FEATURE_COAT && !FEATURE_SHEEN && !FEATURE_METAL && !FEATURE_GLASS && !FEATURE_SPECULAR) {
+    if (!FEATURE_COAT && !FEATURE_SHEEN && !FEATURE_METAL && !FEATURE_GLASS && !FEATURE_SPECULAR
+        && !FEATURE_SUBSURFACE) {
         return true;
     }
     return p.metallic == 0.0 && p.specular_weight == 0.0 && p.coat_weight == 0.0
-        && p.sheen_weight == 0.0 && p.transmission_weight == 0.0;
+        && p.sheen_weight == 0.0 && p.transmission_weight == 0.0
+        && (p.subsurface_weight == 0.0 || !FEATURE_SUBSURFACE);
 }
 
-// Sum over the non-delta lobes (delta lobes are 0 for every direction given).
+// Sum over the non-delta lobes (delta lobes are 0 for every direction given). The
+// subsurface lobe is left out: light reaches the surface through it only by a random
+// walk, never straight from a light, and a direction it samples carries its own weight.
 fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEval {
     if (principled_is_diffuse(p)) {
         return PrincipledEval(
@@ -179,7 +203,7 @@ fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEva
     var value = vec3<f32>(0.0);
     var pdf = 0.0;
     for (var i = 0u; i < LOBE_COUNT; i++) {
-        if (w.probability[i] > 0.0) {
+        if (w.probability[i] > 0.0 && i != LOBE_SUBSURFACE) {
             value += w.scale[i] * principled_lobe_eval(p, i, wo, wi);
             pdf += w.probability[i] * principled_lobe_pdf(p, i, wo, wi);
         }
@@ -188,6 +212,7 @@ fn principled_eval(p: Principled, wo: vec3<f32>, wi: vec3<f32>) -> PrincipledEva
 }
 
 fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32>) -> BsdfSample {
+    principled_sampled_lobe = LOBE_DIFFUSE;
     if (principled_is_diffuse(p)) {
         let d = diffuse_sample(wo, vec3<f32>(1.0), u);
         if (d.pdf <= 0.0) {
@@ -220,6 +245,7 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
     if (!found || !principled_lobe_compiled(lobe)) {
         return no_sample();
     }
+    principled_sampled_lobe = lobe;
     let alpha = ggx_alpha(p.roughness, p.anisotropy);
     var s: BsdfSample;
     switch (lobe) {
@@ -234,6 +260,10 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
         }
         case LOBE_GLASS: { s = dielectric_sample(wo, alpha, p.ior, principled_glass_tint(p), p.thin_walled, ul, u); }
         case LOBE_SPECULAR: { s = dielectric_reflection_sample(wo, alpha, p.ior, vec3<f32>(1.0), u); }
+        case LOBE_SUBSURFACE: {
+            let wi = subsurface_entry_sample(wo, u);
+            s = BsdfSample(wi, vec3<f32>(1.0), subsurface_entry_pdf(wo, wi), false, wi.z != 0.0);
+        }
         default: {
             let d = diffuse_sample(wo, vec3<f32>(1.0), u);
             s = BsdfSample(d.wi, d.weight, d.pdf, false, d.pdf > 0.0);
@@ -247,6 +277,15 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
         s.weight = w.scale[lobe] * s.weight / w.probability[lobe];
         s.pdf *= w.probability[lobe];
         return s;
+    }
+    if (w.probability[LOBE_SUBSURFACE] > 0.0 && s.wi.z * wo.z < 0.0) {
+        // Into the object, by the subsurface lobe or by rough glass: the two go on
+        // differently (a random walk, a straight path), so each keeps its own weight.
+        let pdf = w.probability[lobe] * principled_lobe_pdf(p, lobe, wo, s.wi);
+        if (!(pdf > 0.0)) {
+            return no_sample();
+        }
+        return BsdfSample(s.wi, w.scale[lobe] * principled_lobe_eval(p, lobe, wo, s.wi) / pdf, pdf, false, true);
     }
     // A direction several lobes can produce: the mixture's value over its density.
     let e = principled_eval(p, wo, s.wi);

@@ -1,7 +1,8 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling
 // (Veach 1997, ch. 9; the structure of Mitsuba 3's path.cpp and pbrt-v4's PathIntegrator)
-// over the principled surface (shaders/bsdf/principled.wgsl), with alpha cut-outs and
-// Beer–Lambert absorption inside transmissive objects.
+// over the principled surface (shaders/bsdf/principled.wgsl), with alpha cut-outs,
+// Beer–Lambert absorption inside transmissive objects and random-walk subsurface
+// scattering (shaders/media/subsurface.wgsl).
 // Each invocation owns one pixel of the current tile and renders `sample_count` samples
 // into it, adding them to the film with Kahan summation so that sums over 10^5 samples do
 // not drift.
@@ -116,6 +117,17 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     return e.value * ls.radiance * (w / ls.pdf);
 }
 
+// What a random walk leaves by: a white Lambertian surface.
+fn walk_exit_surface() -> Principled {
+    var p = principled_default();
+    p.base_color = vec3<f32>(1.0);
+    p.base_weight = 1.0;
+    p.diffuse_roughness = 0.0;
+    p.specular_weight = 0.0;
+    p.subsurface_weight = 0.0;
+    return p;
+}
+
 fn trace_path(primary: Ray) -> vec3<f32> {
     var ray = primary;
     var radiance = vec3<f32>(0.0);
@@ -128,9 +140,55 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     let nee = light_sampling_enabled();
     var depth = 0u;
     var passes = 0u;
+    // Inside an object, in a random walk its subsurface lobe started.
+    var walking = false;
+    var walk_medium: Medium;
+    var walk_steps = 0u;
     loop {
         rays_traced++;
         let hit = intersect_scene(ray);
+        if (FEATURE_SUBSURFACE && walking) {
+            // Whatever surface the walk meets is where it leaves: the object's own
+            // boundary (or, in an open or overlapping mesh, the first surface ahead).
+            let flight = medium_free_flight(walk_medium, throughput, select(3.0e38, hit.t, hit.hit), rand(), rand());
+            if (!flight.valid) {
+                break;
+            }
+            throughput *= flight.weight;
+            if (flight.scattered) {
+                walk_steps++;
+                if (walk_steps > SUBSURFACE_MAX_STEPS) {
+                    break;
+                }
+                ray = Ray(ray.origin + ray.dir * flight.t, hg_sample(ray.dir, walk_medium.g, rand2()));
+                continue;
+            }
+            // The exit: a white Lambertian facing out, lit by next-event estimation as
+            // part of the bounce that entered (so one bounce sees subsurface light).
+            walking = false;
+            extinction = vec3<f32>(0.0);
+            var exit = surface_at(hit);
+            let ng_out = select(-exit.ng, exit.ng, dot(ray.dir, exit.ng) > 0.0);
+            exit.ns = select(exit.ns, -exit.ns, dot(exit.ns, ng_out) < 0.0);
+            let exit_frame = frame_from_normal(exit.ns);
+            let up = vec3<f32>(0.0, 0.0, 1.0);
+            if (nee) {
+                radiance += throughput * sample_direct(exit, ng_out, exit_frame, up, walk_exit_surface());
+            }
+            if (depth >= params.max_bounces) {
+                break;
+            }
+            let local = sample_cosine_hemisphere(rand2());
+            let wi = normalize(frame_to_world(exit_frame, local));
+            if (dot(wi, ng_out) <= 0.0 || local.z <= 0.0) {
+                break;
+            }
+            prev_bsdf_pdf = local.z / PI;
+            prev_delta = false;
+            ray = Ray(offset_ray_origin(exit.pe, ng_out, wi), wi);
+            depth++;
+            continue;
+        }
         let t_scene = select(3.0e38, hit.t, hit.hit);
         // Sphere lights and sun disks in front of the surface (or the sky).
         var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
@@ -233,6 +291,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         throughput *= bs.weight;
         prev_bsdf_pdf = bs.pdf;
         prev_delta = bs.delta;
+        if (FEATURE_SUBSURFACE && principled_sampled_lobe == LOBE_SUBSURFACE) {
+            walking = true;
+            walk_medium = subsurface_medium(p);
+            walk_steps = 0u;
+        }
         if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
             extinction = select(vec3<f32>(0.0), principled_extinction(p), dot(wi, s.ng) < 0.0);

@@ -1066,6 +1066,7 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
                     Some(0.0),
                     Some(0.0),
                     Some(1.0),
+                    Some(0.0),
                 ),
                 ..MaterialTraits::default()
             };

@@ -227,6 +227,7 @@ pub fn principled_lobes(
     metallic: Option<f32>,
     transmission: Option<f32>,
     specular: Option<f32>,
+    subsurface: Option<f32>,
 ) -> u32 {
     use crate::shader::lobes;
     let some = |w: Option<f32>| w.is_none_or(|w| w > 0.0);
@@ -249,6 +250,9 @@ pub fn principled_lobes(
         set |= lobes::DIFFUSE;
         if some(specular) {
             set |= lobes::SPECULAR;
+        }
+        if some(subsurface) {
+            set |= lobes::SUBSURFACE;
         }
     }
     set

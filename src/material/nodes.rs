@@ -1707,6 +1707,7 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         weight("metallic"),
         transmission,
         weight("specular_weight"),
+        weight("subsurface_weight"),
     );
     MaterialTraits {
         transmissive,

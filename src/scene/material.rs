@@ -120,6 +120,7 @@ impl Material {
             Some(p.metallic),
             Some(p.transmission_weight),
             Some(p.specular_weight),
+            Some(p.subsurface_weight),
         )
     }
 

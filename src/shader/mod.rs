@@ -51,6 +51,8 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("bsdf/diffuse_albedo_table.wgsl"),
     shader_file!("bsdf/sheen_table.wgsl"),
     shader_file!("bsdf/sheen.wgsl"),
+    shader_file!("media/phase.wgsl"),
+    shader_file!("media/subsurface.wgsl"),
     shader_file!("bsdf/principled.wgsl"),
     shader_file!("lights/emissive_triangle.wgsl"),
     shader_file!("lights/environment.wgsl"),
@@ -69,13 +71,16 @@ pub mod lobes {
     pub const GLASS: u32 = 8;
     pub const SPECULAR: u32 = 16;
     pub const DIFFUSE: u32 = 32;
-    pub const ALL: u32 = 63;
-    pub const NAMES: [(u32, &str); 6] = [
+    /// The random walk under the surface (`shaders/media/subsurface.wgsl`).
+    pub const SUBSURFACE: u32 = 64;
+    pub const ALL: u32 = 127;
+    pub const NAMES: [(u32, &str); 7] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
         (METAL, "METAL"),
         (GLASS, "GLASS"),
         (SPECULAR, "SPECULAR"),
         (DIFFUSE, "DIFFUSE"),
+        (SUBSURFACE, "SUBSURFACE"),
     ];
 }

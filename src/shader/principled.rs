@@ -202,6 +202,13 @@ principled_parameters! {
     transmission_color: Vec3 = Vec3::ONE, Unit, "Glass tint.";
     transmission_depth: f32 = 0.0, NonNegative,
         "Depth at which light inside reaches the transmission colour (Beer–Lambert); 0 tints the surface instead.";
+    subsurface_weight: f32 = 0.0, Unit,
+        "Share of the diffuse base that enters the object and scatters inside it (a random walk) before leaving.";
+    subsurface_radius: Vec3 = Vec3::new(1.0, 0.2, 0.1), NonNegative,
+        "Mean free path per channel, times the subsurface scale: how far each colour travels under the surface.";
+    subsurface_scale: f32 = 0.05, NonNegative, "Scales the subsurface radius, in scene units.";
+    subsurface_anisotropy: f32 = 0.0, Unit,
+        "Forward scattering inside the object (Henyey–Greenstein g); 0 is isotropic.";
     coat_weight: f32 = 0.0, Unit, "Clear coat amount.";
     coat_roughness: f32 = 0.03, Unit, "Coat roughness.";
     coat_ior: f32 = 1.5, Ior, "Coat index of refraction.";
