@@ -231,20 +231,7 @@ fn build_a_graph_in_the_node_editor_then_undo_redo_save_and_reopen() {
 
     // The noise scale, set as a screen reader would.
     let status = harness.state().viewport_status().unwrap();
-    let field = harness
-        .get_all_by_role_and_label(Role::SpinButton, "scale")
-        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
-        .expect("the noise texture's scale field (5 by default)");
-    let (target_node, target_tree) = field.accesskit_node().locate();
-    harness.event(egui::Event::AccessKitActionRequest(
-        accesskit::ActionRequest {
-            action: accesskit::Action::SetValue,
-            target_node,
-            target_tree,
-            data: Some(accesskit::ActionData::NumericValue(12.5)),
-        },
-    ));
-    steps(&mut harness, 3);
+    set_noise_scale(&mut harness, 12.5);
     let scaled = graph(harness.state());
     assert_eq!(
         scaled.nodes["noise_texture"].inputs["scale"],
@@ -979,20 +966,7 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     }
 
     // A value inside: the group's node changes.
-    let field = harness
-        .get_all_by_role_and_label(Role::SpinButton, "scale")
-        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
-        .expect("the noise texture's scale field (5 by default) inside the group");
-    let (target_node, target_tree) = field.accesskit_node().locate();
-    harness.event(egui::Event::AccessKitActionRequest(
-        accesskit::ActionRequest {
-            action: accesskit::Action::SetValue,
-            target_node,
-            target_tree,
-            data: Some(accesskit::ActionData::NumericValue(12.5)),
-        },
-    ));
-    steps(&mut harness, 3);
+    set_noise_scale(&mut harness, 12.5);
     let valued = graph(harness.state());
     assert_eq!(
         valued.groups["NodeGroup"].nodes["noise_texture"].inputs["scale"],
@@ -1122,4 +1096,23 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
     steps(&mut harness, 2);
     assert_eq!(std::fs::read(&saved).unwrap(), first);
+}
+
+/// Sets the noise texture's scale field (5 by default) to `value`, as a screen reader
+/// would, and lets the edit land.
+fn set_noise_scale(harness: &mut Harness<'_, EditorApp>, value: f64) {
+    let field = harness
+        .get_all_by_role_and_label(Role::SpinButton, "scale")
+        .find(|n| n.accesskit_node().numeric_value() == Some(5.0))
+        .expect("the noise texture's scale field (5 by default)");
+    let (target_node, target_tree) = field.accesskit_node().locate();
+    harness.event(egui::Event::AccessKitActionRequest(
+        accesskit::ActionRequest {
+            action: accesskit::Action::SetValue,
+            target_node,
+            target_tree,
+            data: Some(accesskit::ActionData::NumericValue(value)),
+        },
+    ));
+    steps(harness, 3);
 }
