@@ -87,7 +87,9 @@ struct Material {
     emission: vec4<f32>,
     // 1 if light passes through: the surface keeps its geometric orientation.
     transmissive: u32,
-    _pad: array<u32, 3>,
+    // 1 for a volume's boundary without a surface: light crosses it unchanged.
+    boundary_only: u32,
+    _pad: array<u32, 2>,
 };
 
 // An emissive triangle in world space, for next-event estimation.

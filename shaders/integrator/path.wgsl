@@ -1,8 +1,11 @@
 // Unidirectional path tracing with next-event estimation and multiple importance sampling
 // (Veach 1997, ch. 9; the structure of Mitsuba 3's path.cpp and pbrt-v4's PathIntegrator)
 // over the principled surface (shaders/bsdf/principled.wgsl), with alpha cut-outs,
-// Beer–Lambert absorption inside transmissive objects and random-walk subsurface
-// scattering (shaders/media/subsurface.wgsl).
+// random-walk subsurface scattering (shaders/media/subsurface.wgsl) and participating
+// media: the volumes of materials and the Beer–Lambert absorption of transmissive
+// objects, nested as shaders/integrator/media.wgsl says, sampled by free flights with
+// one-sample MIS over the channels, with next-event estimation through media and volume
+// boundaries (transmittance) weighted against phase-function sampling.
 // Each invocation owns one pixel of the current tile and renders `sample_count` samples
 // into it, adding them to the film with Kahan summation so that sums over 10^5 samples do
 // not drift.
@@ -71,11 +74,10 @@ fn to_local(f: Frame, v: vec3<f32>) -> vec3<f32> {
     return vec3<f32>(dot(v, f.t), dot(v, f.b), dot(v, f.n));
 }
 
-// Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
-// geometric normal on the side the shading frame's z points to.
-fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled) -> vec3<f32> {
-    // One light: the environment, an emissive triangle or an analytic light, each family
-    // picked with the probability the host estimated from its power.
+// One light sample seen from `p`: the environment, an emissive triangle or an analytic
+// light, each family picked with the probability the host estimated from its power. A
+// pdf of 0 means no light.
+fn sample_light(p: vec3<f32>) -> LightSample {
     let p_env = params.environment.w;
     let p_tri = params.triangle_pick;
     let u_pick = rand();
@@ -85,14 +87,81 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
         ls = sample_environment(u);
         ls.pdf *= p_env;
     } else if (FEATURE_EMISSIVE_TRIANGLES && u_pick < p_env + p_tri) {
-        ls = sample_light_triangle(s.pe.p, (u_pick - p_env) / p_tri, u);
+        ls = sample_light_triangle(p, (u_pick - p_env) / p_tri, u);
         ls.pdf *= p_tri;
     } else {
         if (!FEATURE_ANALYTIC_LIGHTS || params.analytic_light_count == 0u) {
+            ls.pdf = 0.0;
+            return ls;
+        }
+        ls = sample_analytic_light(pick_analytic_light(u_pick), p, u);
+    }
+    return ls;
+}
+
+// The media the path is in now (shaders/integrator/media.wgsl).
+var<private> media: Media;
+
+// The fraction of light that crosses the segment from `origin` along `dir` to `t_max`:
+// through the media the path is in, across the bare boundaries of volumes (entering and
+// leaving their media on the way); 0 where any other surface blocks it.
+fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
+    if (!FEATURE_VOLUME) {
+        rays_traced++;
+        return select(vec3<f32>(1.0), vec3<f32>(0.0), occluded(Ray(origin, dir), t_max));
+    }
+    var inside = media;
+    var o = origin;
+    var tr = vec3<f32>(1.0);
+    for (var i = 0u; i <= MAX_PASS_THROUGH; i++) {
+        let remaining = t_max - dot(o - origin, dir);
+        if (!(remaining > 0.0)) {
+            return tr;
+        }
+        rays_traced++;
+        let hit = traverse_scene(Ray(o, dir), remaining, false);
+        let t = select(remaining, hit.t, hit.hit);
+        if (inside.count > 0u) {
+            tr *= exp(-inside.medium[inside.count - 1u].sigma_t * t);
+        }
+        if (!hit.hit) {
+            return tr;
+        }
+        let s = surface_at(hit);
+        if (materials[s.material].boundary_only == 0u || !any(tr > vec3<f32>(0.0))) {
             return vec3<f32>(0.0);
         }
-        ls = sample_analytic_light(pick_analytic_light(u_pick), s.pe.p, u);
+        if (dot(dir, s.ng) < 0.0) {
+            let v = evaluate_material(s.material, shading_point(s, hit, -dir, true)).volume;
+            inside = media_entered(inside, s.material, volume_medium(v, vec3<f32>(0.0)), v.emission);
+        } else {
+            inside = media_left(inside, s.material);
+        }
+        o = offset_ray_origin(s.pe, s.ng, dir);
     }
+    return vec3<f32>(0.0);
+}
+
+// Next-event estimation at a point in a medium: one light sample, weighted against
+// phase-function sampling. `d` is the direction the path arrived in.
+fn sample_direct_medium(p: vec3<f32>, d: vec3<f32>, g: f32) -> vec3<f32> {
+    let ls = sample_light(p);
+    if (ls.pdf <= 0.0) {
+        return vec3<f32>(0.0);
+    }
+    let phase = hg_phase(dot(d, ls.wi), g);
+    let tr = transmittance(p, ls.wi, ls.dist * (1.0 - 1e-4));
+    if (!any(tr > vec3<f32>(0.0))) {
+        return vec3<f32>(0.0);
+    }
+    let w = select(1.0, power_heuristic(ls.pdf, phase), ls.mis);
+    return tr * ls.radiance * (phase * w / ls.pdf);
+}
+
+// Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
+// geometric normal on the side the shading frame's z points to.
+fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled) -> vec3<f32> {
+    let ls = sample_light(s.pe.p);
     if (ls.pdf <= 0.0) {
         return vec3<f32>(0.0);
     }
@@ -108,13 +177,12 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     }
     let origin = offset_ray_origin(s.pe, ng, ls.wi);
     // Stop short of the light by its own rounding error: the light must not shadow itself.
-    let t_max = ls.dist * (1.0 - 1e-4);
-    rays_traced++;
-    if (occluded(Ray(origin, ls.wi), t_max)) {
+    let tr = transmittance(origin, ls.wi, ls.dist * (1.0 - 1e-4));
+    if (!any(tr > vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
     let w = select(1.0, power_heuristic(ls.pdf, e.pdf), ls.mis);
-    return e.value * ls.radiance * (w / ls.pdf);
+    return e.value * tr * ls.radiance * (w / ls.pdf);
 }
 
 // What a random walk leaves by: a white Lambertian surface.
@@ -128,6 +196,31 @@ fn walk_exit_surface() -> Principled {
     return p;
 }
 
+// Russian roulette past RR_START_DEPTH: false when the path ends; else the survivors'
+// throughput is divided by their probability.
+fn survives_roulette(depth: u32, throughput: ptr<function, vec3<f32>>) -> bool {
+    if (depth < RR_START_DEPTH) {
+        return true;
+    }
+    let t = *throughput;
+    let q = max(0.05, 1.0 - max(t.r, max(t.g, t.b)));
+    if (rand() < q) {
+        return false;
+    }
+    *throughput = t / (1.0 - q);
+    return true;
+}
+
+// The medium inside an object the path enters through a surface: the material's volume
+// (evaluated where it enters) with the surface's Beer–Lambert absorption.
+fn inside_medium(me: MaterialEval) -> Medium {
+    var v = nd_no_volume();
+    if (FEATURE_VOLUME) {
+        v = me.volume;
+    }
+    return volume_medium(v, principled_extinction(me.principled));
+}
+
 fn trace_path(primary: Ray) -> vec3<f32> {
     var ray = primary;
     var radiance = vec3<f32>(0.0);
@@ -135,8 +228,9 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     var prev_bsdf_pdf = 0.0;
     // The camera, like a delta lobe, could not have been sampled by light sampling.
     var prev_delta = true;
-    // Extinction of the medium the path is in (inside a transmissive object).
-    var extinction = vec3<f32>(0.0);
+    // Where the last scattering event was: what light sampling saw a light from.
+    var vertex = primary.origin;
+    media = media_empty();
     let nee = light_sampling_enabled();
     var depth = 0u;
     var passes = 0u;
@@ -160,13 +254,13 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 if (walk_steps > SUBSURFACE_MAX_STEPS) {
                     break;
                 }
-                ray = Ray(ray.origin + ray.dir * flight.t, hg_sample(ray.dir, walk_medium.g, rand2()));
+                vertex = ray.origin + ray.dir * flight.t;
+                ray = Ray(vertex, hg_sample(ray.dir, walk_medium.g, rand2()));
                 continue;
             }
             // The exit: a white Lambertian facing out, lit by next-event estimation as
             // part of the bounce that entered (so one bounce sees subsurface light).
             walking = false;
-            extinction = vec3<f32>(0.0);
             var exit = surface_at(hit);
             let ng_out = select(-exit.ng, exit.ng, dot(ray.dir, exit.ng) > 0.0);
             exit.ns = select(exit.ns, -exit.ns, dot(exit.ns, ng_out) < 0.0);
@@ -185,6 +279,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             }
             prev_bsdf_pdf = local.z / PI;
             prev_delta = false;
+            vertex = exit.pe.p;
             ray = Ray(offset_ray_origin(exit.pe, ng_out, wi), wi);
             depth++;
             continue;
@@ -195,9 +290,43 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
             light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
         }
-        if (any(extinction > vec3<f32>(0.0))) {
-            // Beer–Lambert over the segment; a medium without an exit absorbs everything.
-            throughput *= exp(-extinction * min(t_scene, light_hit.t));
+        if (media.count > 0u) {
+            // The segment runs through the innermost medium; a medium without an exit
+            // absorbs everything.
+            let top = media.count - 1u;
+            let m = media.medium[top];
+            let t_segment = min(t_scene, light_hit.t);
+            if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
+                radiance += throughput * medium_emission(m, media.emission[top], t_segment);
+            }
+            if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
+                let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
+                if (!flight.valid) {
+                    break;
+                }
+                throughput *= flight.weight;
+                if (flight.scattered) {
+                    vertex = ray.origin + ray.dir * flight.t;
+                    if (depth >= params.max_bounces) {
+                        break;
+                    }
+                    if (nee) {
+                        radiance += throughput * sample_direct_medium(vertex, ray.dir, m.g);
+                    }
+                    let wi = hg_sample(ray.dir, m.g, rand2());
+                    prev_bsdf_pdf = hg_phase(dot(ray.dir, wi), m.g);
+                    prev_delta = false;
+                    if (!survives_roulette(depth, &throughput)) {
+                        break;
+                    }
+                    ray = Ray(vertex, wi);
+                    depth++;
+                    continue;
+                }
+            } else {
+                // Beer–Lambert: the medium only absorbs.
+                throughput *= exp(-m.sigma_t * t_segment);
+            }
         }
         if (light_hit.hit) {
             var w = 1.0;
@@ -222,6 +351,20 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         let material = materials[s.material];
         let front = dot(ray.dir, s.ng) < 0.0;
         let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
+        if (FEATURE_VOLUME && material.boundary_only != 0u) {
+            // A volume's bare boundary: the path enters or leaves its medium unchanged.
+            if (front) {
+                media = media_entered(media, s.material, volume_medium(me.volume, vec3<f32>(0.0)), me.volume.emission);
+            } else {
+                media = media_left(media, s.material);
+            }
+            passes++;
+            if (passes > MAX_PASS_THROUGH) {
+                break;
+            }
+            ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
+            continue;
+        }
         // A normal from a normal map or bump on the other side of the surface than its
         // geometry would let light leak: keep the interpolated one then.
         if (dot(me.normal, s.ng) > 0.0) {
@@ -245,7 +388,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             if (nee && !prev_delta) {
                 // Light sampling knows the surface by its buffer emission (0 for emission
                 // that varies over it, which only BSDF sampling finds).
-                let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, hit.t, -dot(ray.dir, s.ng));
+                let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, distance(vertex, s.pe.p), -dot(ray.dir, s.ng));
                 w = power_heuristic(prev_bsdf_pdf, light_pdf);
             }
             radiance += throughput * emission * w;
@@ -291,22 +434,22 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         throughput *= bs.weight;
         prev_bsdf_pdf = bs.pdf;
         prev_delta = bs.delta;
+        vertex = s.pe.p;
         if (FEATURE_SUBSURFACE && principled_sampled_lobe == LOBE_SUBSURFACE) {
             walking = true;
             walk_medium = subsurface_medium(p);
             walk_steps = 0u;
-        }
-        if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
+        } else if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
-            extinction = select(vec3<f32>(0.0), principled_extinction(p), dot(wi, s.ng) < 0.0);
+            if (dot(wi, s.ng) < 0.0) {
+                media = media_entered(media, s.material, inside_medium(me), me.volume.emission);
+            } else {
+                media = media_left(media, s.material);
+            }
         }
 
-        if (depth >= RR_START_DEPTH) {
-            let q = max(0.05, 1.0 - max(throughput.r, max(throughput.g, throughput.b)));
-            if (rand() < q) {
-                break;
-            }
-            throughput /= 1.0 - q;
+        if (!survives_roulette(depth, &throughput)) {
+            break;
         }
         ray = Ray(offset_ray_origin(s.pe, ng, wi), wi);
         depth++;

@@ -34,11 +34,13 @@ struct MaterialEval {
     opacity: f32,
     normal: vec3<f32>,
     anisotropy_rotation: f32,
+    // What fills the inside (shaders/nodes/volume.wgsl); read where a path enters.
+    volume: VolumeEval,
 };
 
 // What the integrator reads of a principled surface with shading normal `normal`.
 fn material_eval(p: Principled, normal: vec3<f32>) -> MaterialEval {
-    return MaterialEval(p, p.emission_color * p.emission_strength, p.alpha, normal, p.anisotropy_rotation);
+    return MaterialEval(p, p.emission_color * p.emission_strength, p.alpha, normal, p.anisotropy_rotation, nd_no_volume());
 }
 
 struct NdTextureCoordinate {

@@ -49,8 +49,10 @@ pub fn preview_graph(graph: &Graph, node: &str, output: usize) -> Result<(Graph,
         }
         id
     };
-    let surface = match ty {
-        SocketType::Bsdf => at,
+    let (surface, volume) = match ty {
+        SocketType::Bsdf => (Some(at), None),
+        // A volume alone: its boundary lets light through.
+        SocketType::Volume => (None, Some(at)),
         SocketType::Vec2 => {
             return Err(format!(
                 "output \"{socket}\" of node \"{node}\" has two components: no colour to show"
@@ -69,14 +71,18 @@ pub fn preview_graph(graph: &Graph, node: &str, output: usize) -> Result<(Graph,
                 .input("emission_color", at)
                 .input("emission_strength", Input::Value(Value::Float(1.0)));
             rewired.add(&id, emission);
-            Input::Link(Link::new(&id, "bsdf"))
+            (Some(Input::Link(Link::new(&id, "bsdf"))), None)
         }
     };
     let output_id = fresh(&rewired, "preview_output");
-    rewired.add(
-        &output_id,
-        Node::new(MATERIAL_OUTPUT).input("surface", surface),
-    );
+    let mut output = Node::new(MATERIAL_OUTPUT);
+    if let Some(surface) = surface {
+        output = output.input("surface", surface);
+    }
+    if let Some(volume) = volume {
+        output = output.input("volume", volume);
+    }
+    rewired.add(&output_id, output);
     rewired.output = Some(output_id);
     Ok((rewired, socket))
 }

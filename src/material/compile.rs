@@ -54,8 +54,12 @@ pub struct MaterialTraits {
     pub constant_emission: Option<[f32; 3]>,
     /// Emission that varies over the surface (not sampled as a light).
     pub varying_emission: bool,
-    /// Principled lobes the material can reach ([`crate::shader::lobes`]).
+    /// Principled lobes the material can reach, and whether it has a volume
+    /// ([`crate::shader::lobes`]).
     pub lobes: u32,
+    /// A volume without a surface: the boundary only marks where the volume begins
+    /// and ends, and light crosses it unchanged.
+    pub boundary_only: bool,
 }
 
 /// Where a compiled material's constant inputs live.
@@ -247,11 +251,11 @@ pub fn compile_value_with_textures(
         return Err(ctx.err(Some(&at.node), Some(&at.socket), "no such output".into()));
     };
     let ty = def.ty;
-    if ty == SocketType::Bsdf {
+    if ty.is_shader() {
         return Err(ctx.err(
             Some(&at.node),
             Some(&at.socket),
-            "a BSDF has no value to preview".into(),
+            "a shader has no value to preview".into(),
         ));
     }
     emit_function(
@@ -723,7 +727,7 @@ fn zero(ty: SocketType) -> Src {
         SocketType::Float => Src::Const(Value::Float(0.0)),
         SocketType::Vec2 => Src::Const(Value::Vec2([0.0; 2])),
         SocketType::Vector | SocketType::Color => Src::Const(Value::Vec3([0.0; 3])),
-        SocketType::Bsdf => Src::Default,
+        SocketType::Bsdf | SocketType::Volume => Src::Default,
     }
 }
 
@@ -1055,6 +1059,19 @@ fn merge_identical(flat: &mut [FlatNode], root: usize) {
 // ---------------------------------------------------------------------- traits
 
 fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
+    let volume = matches!(flat[output].inputs[1], Src::Out(..));
+    let mut traits = surface_traits(flat, output);
+    if volume {
+        // The inside is entered and left: the surface keeps its front.
+        traits.transmissive = true;
+        traits.lobes |= crate::shader::lobes::VOLUME;
+        // A volume without a surface: the boundary lets light through unchanged.
+        traits.boundary_only = !matches!(flat[output].inputs[0], Src::Out(..));
+    }
+    traits
+}
+
+fn surface_traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
     let surface = match &flat[output].inputs[0] {
         Src::Out(n, _) => *n,
         // The default surface: grey, opaque, not emissive.
@@ -1073,8 +1090,8 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         }
     };
     let node = &flat[surface];
-    // Only nodes with a BSDF output feed the material output, and each declares its
-    // traits (a test checks the library).
+    // Only nodes with a BSDF output feed the surface, and each declares its traits (a
+    // test checks the library).
     let traits = node.def.traits.expect("a surface node declares its traits");
     let known = |name: &str| {
         // The traits read the inputs of their own declaration.
@@ -1153,7 +1170,7 @@ fn packed_constant(v: &Value, ty: SocketType) -> [f32; 4] {
             };
             [x, y, 0.0, 0.0]
         }
-        SocketType::Vector | SocketType::Color | SocketType::Bsdf => {
+        SocketType::Vector | SocketType::Color | SocketType::Bsdf | SocketType::Volume => {
             let [x, y, z] = v.as_vec3();
             [x, y, z, 0.0]
         }
@@ -1165,7 +1182,7 @@ fn swizzle(ty: SocketType) -> &'static str {
     match ty {
         SocketType::Float => ".x",
         SocketType::Vec2 => ".xy",
-        SocketType::Vector | SocketType::Color | SocketType::Bsdf => ".xyz",
+        SocketType::Vector | SocketType::Color | SocketType::Bsdf | SocketType::Volume => ".xyz",
     }
 }
 

@@ -19,6 +19,8 @@ pub enum SocketType {
     Vector,
     Color,
     Bsdf,
+    /// A volume shader: what fills a closed mesh (`VolumeEval`).
+    Volume,
 }
 
 impl SocketType {
@@ -29,6 +31,7 @@ impl SocketType {
             SocketType::Vector => "vector",
             SocketType::Color => "color",
             SocketType::Bsdf => "bsdf",
+            SocketType::Volume => "volume",
         }
     }
 
@@ -38,7 +41,14 @@ impl SocketType {
             SocketType::Vec2 => "vec2<f32>",
             SocketType::Vector | SocketType::Color => "vec3<f32>",
             SocketType::Bsdf => "MaterialEval",
+            SocketType::Volume => "VolumeEval",
         }
+    }
+
+    /// A shader (surface or volume): a closure, not a value; it has no constant and is
+    /// never held in an interpreter register.
+    pub fn is_shader(self) -> bool {
+        matches!(self, SocketType::Bsdf | SocketType::Volume)
     }
 
     /// Whether a value of `self` may feed an input of type `to`, and how: the implicit

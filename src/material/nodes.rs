@@ -120,6 +120,10 @@ pub const DETAIL: FloatRange = FloatRange::new(0.0, 15.0);
 /// Offsets and distortions, `[-1000, 1000]`, dragged within ±10.
 pub const LARGE: FloatRange = FloatRange::new(-1000.0, 1000.0).soft(-10.0, 10.0);
 /// An index of refraction: at least 1, dragged within [1, 3].
+/// A volume's density: coefficients per scene unit.
+pub const DENSITY: FloatRange = FloatRange::new(0.0, f32::INFINITY).soft(0.0, 100.0);
+/// A phase function's mean cosine (|g| is kept below 0.999 where it is used).
+pub const ANISOTROPY: FloatRange = FloatRange::new(-1.0, 1.0);
 pub const IOR: FloatRange = FloatRange::new(1.0, 1000.0).soft(1.0, 3.0);
 
 #[derive(Clone, Debug)]
@@ -283,7 +287,7 @@ pub fn identity(ty: SocketType) -> Option<(&'static str, &'static str, &'static 
         SocketType::Float => Some(("value", "value", "value")),
         SocketType::Color => Some(("rgb", "color", "color")),
         SocketType::Vector => Some(("vector", "vector", "vector")),
-        SocketType::Vec2 | SocketType::Bsdf => None,
+        SocketType::Vec2 | SocketType::Bsdf | SocketType::Volume => None,
     }
 }
 
@@ -1460,22 +1464,91 @@ fn build() -> Vec<NodeDef> {
             code: Code::Generated(generate_principled_bsdf),
         },
         NodeDef {
+            kind: "volume_absorption",
+            label: "Volume Absorption",
+            category: "Shader",
+            doc: "A volume that only absorbs: light passing through keeps its colour's fraction per unit of density and length (Beer–Lambert).",
+            inputs: vec![
+                color("color", [0.8; 3], "the colour light keeps"),
+                float("density", 1.0, DENSITY, "absorption per scene unit"),
+            ],
+            outputs: vec![out("volume", Volume, "", "the volume")],
+            params: vec![],
+            traits: None,
+            fold: None,
+            code: Code::Template("nd_volume_absorption({color}, {density})"),
+        },
+        NodeDef {
+            kind: "volume_scatter",
+            label: "Volume Scatter",
+            category: "Shader",
+            doc: "A volume that scatters light without absorbing it, by the Henyey–Greenstein phase function.",
+            inputs: vec![
+                color("color", [0.8; 3], "scattering per unit of density, per channel"),
+                float("density", 1.0, DENSITY, "scattering per scene unit"),
+                float("anisotropy", 0.0, ANISOTROPY, "mean cosine of the scattering angle: 0 isotropic, > 0 forward, < 0 backward"),
+            ],
+            outputs: vec![out("volume", Volume, "", "the volume")],
+            params: vec![],
+            traits: None,
+            fold: None,
+            code: Code::Template("nd_volume_scatter({color}, {density}, {anisotropy})"),
+        },
+        NodeDef {
+            kind: "principled_volume",
+            label: "Principled Volume",
+            category: "Shader",
+            doc: "Scattering, absorption and emission in one volume, as Cycles' Principled Volume: scattering colour × density, absorption (1 − colour)(1 − √absorption colour) × density, emission strength × colour per unit length.",
+            inputs: vec![
+                color("color", [0.5; 3], "scattering colour"),
+                float("density", 1.0, DENSITY, "scattering and absorption per scene unit"),
+                float("anisotropy", 0.0, ANISOTROPY, "mean cosine of the scattering angle"),
+                color("absorption_color", [0.0; 3], "tint of what is absorbed"),
+                float(
+                    "emission_strength",
+                    0.0,
+                    FloatRange::new(0.0, f32::INFINITY).soft(0.0, 100.0),
+                    "emitted radiance per scene unit",
+                ),
+                color("emission_color", [1.0; 3], "colour of the emission"),
+            ],
+            outputs: vec![out("volume", Volume, "", "the volume")],
+            params: vec![],
+            traits: None,
+            fold: None,
+            code: Code::Template(
+                "nd_principled_volume({color}, {density}, {anisotropy}, {absorption_color}, {emission_strength}, {emission_color})",
+            ),
+        },
+        NodeDef {
             kind: MATERIAL_OUTPUT,
             label: "Material Output",
             category: "Output",
-            doc: "The surface the material renders.",
-            inputs: vec![SocketDef {
-                name: "surface",
-                ty: Bsdf,
-                default: Default::Implicit("nd_default_surface(sp)", "the default grey surface"),
-                range: None,
-                doc: "the surface shader",
-            }],
+            doc: "The surface the material renders and the volume inside it. With a volume and no surface, the surface lets light through unchanged (index-matched).",
+            inputs: vec![
+                SocketDef {
+                    name: "surface",
+                    ty: Bsdf,
+                    default: Default::Implicit(
+                        "nd_default_surface(sp)",
+                        "the default grey surface",
+                    ),
+                    range: None,
+                    doc: "the surface shader",
+                },
+                SocketDef {
+                    name: "volume",
+                    ty: Volume,
+                    default: Default::Implicit("nd_no_volume()", "no volume"),
+                    range: None,
+                    doc: "the volume inside a closed mesh",
+                },
+            ],
             outputs: vec![],
             params: vec![],
             traits: None,
             fold: None,
-            code: Code::Template("{surface}"),
+            code: Code::Template("nd_material_output({surface}, {volume})"),
         },
     ]
 }
@@ -1714,6 +1787,7 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         constant_emission,
         varying_emission,
         lobes,
+        boundary_only: false,
     }
 }
 

@@ -194,7 +194,8 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
         principled: m.principled.pack(),
         emission: m.emission().extend(0.0).into(),
         transmissive: m.is_transmissive() as u32,
-        _pad: [0; 3],
+        boundary_only: m.is_boundary_only() as u32,
+        _pad: [0; 2],
     }
 }
 

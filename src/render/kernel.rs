@@ -199,7 +199,9 @@ pub fn path_tracing_kernel(
     for (label, wgsl) in materials {
         source.push(label, wgsl);
     }
-    source.push(PATH_INTEGRATOR.path, PATH_INTEGRATOR.source);
+    for file in PATH_INTEGRATOR {
+        source.push(file.path, file.source);
+    }
     source
 }
 

@@ -142,6 +142,12 @@ impl Material {
         self.principled.transmission_weight > 0.0 || self.principled.thin_walled
     }
 
+    /// Whether the surface is only a volume's boundary (a graph with a volume and no
+    /// surface), which light crosses unchanged.
+    pub fn is_boundary_only(&self) -> bool {
+        self.graph.as_ref().is_some_and(|g| g.traits.boundary_only)
+    }
+
     pub fn validate(&self) -> Result<(), String> {
         self.principled.validate()
     }

@@ -90,7 +90,9 @@ pub struct GpuMaterial {
     pub emission: [f32; 4],
     /// 1 if light passes through (the surface keeps its geometric orientation).
     pub transmissive: u32,
-    pub _pad: [u32; 3],
+    /// 1 for a volume's boundary without a surface: light crosses it unchanged.
+    pub boundary_only: u32,
+    pub _pad: [u32; 2],
 }
 
 #[repr(C)]
@@ -255,7 +257,7 @@ mod tests {
             &module,
             GpuMaterial,
             "Material",
-            [principled, emission, transmissive, _pad]
+            [principled, emission, transmissive, boundary_only, _pad]
         );
         assert_same_layout!(
             &module,

@@ -59,8 +59,11 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("lights/analytic.wgsl"),
 ];
 
-/// The path-tracing entry point `render`.
-pub const PATH_INTEGRATOR: ShaderFile = shader_file!("integrator/path.wgsl");
+/// The path-tracing entry point `render` and the media it tracks.
+pub const PATH_INTEGRATOR: &[ShaderFile] = &[
+    shader_file!("integrator/media.wgsl"),
+    shader_file!("integrator/path.wgsl"),
+];
 
 /// The principled surface's lobes, one bit each, as [`KernelFeatures::lobes`] counts them.
 pub mod lobes {
@@ -73,8 +76,11 @@ pub mod lobes {
     pub const DIFFUSE: u32 = 32;
     /// The random walk under the surface (`shaders/media/subsurface.wgsl`).
     pub const SUBSURFACE: u32 = 64;
-    pub const ALL: u32 = 127;
-    pub const NAMES: [(u32, &str); 7] = [
+    /// Not a lobe of the surface: a volume inside it (`shaders/nodes/volume.wgsl`), which
+    /// the kernel specialises on like a lobe.
+    pub const VOLUME: u32 = 128;
+    pub const ALL: u32 = 255;
+    pub const NAMES: [(u32, &str); 8] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
         (METAL, "METAL"),
@@ -82,5 +88,6 @@ pub mod lobes {
         (SPECULAR, "SPECULAR"),
         (DIFFUSE, "DIFFUSE"),
         (SUBSURFACE, "SUBSURFACE"),
+        (VOLUME, "VOLUME"),
     ];
 }

@@ -156,7 +156,7 @@ fn check_sockets(group: &str, sockets: &[GroupSocket], side: &str) -> Result<(),
             ));
         }
         match &socket.default {
-            Some(_) if socket.ty == SocketType::Bsdf => {
+            Some(_) if socket.ty.is_shader() => {
                 return Err(format!(
                     "group \"{group}\": shader {side} \"{}\" takes no default",
                     socket.name
@@ -308,6 +308,7 @@ pub fn add_group_socket(
         SocketType::Vector => "Vector",
         SocketType::Color => "Color",
         SocketType::Bsdf => "Shader",
+        SocketType::Volume => "Volume",
     };
     let (mut inputs, mut outputs) = (group.inputs.clone(), group.outputs.clone());
     let list = if output { &mut outputs } else { &mut inputs };

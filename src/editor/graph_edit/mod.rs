@@ -228,7 +228,7 @@ impl GraphEdit {
                                 ));
                             }
                         }
-                        if to_ty == SocketType::Bsdf {
+                        if to_ty.is_shader() {
                             return Err(format!(
                                 "input \"{input}\" of \"{node}\" takes a shader, not a value"
                             ));

@@ -80,7 +80,7 @@ pub fn socket_color(ty: SocketType) -> Color32 {
         SocketType::Vec2 => Color32::from_rgb(0x63, 0xa1, 0xc7),
         SocketType::Vector => Color32::from_rgb(0x63, 0x63, 0xc7),
         SocketType::Color => Color32::from_rgb(0xc7, 0xc7, 0x29),
-        SocketType::Bsdf => Color32::from_rgb(0x63, 0xc7, 0x63),
+        SocketType::Bsdf | SocketType::Volume => Color32::from_rgb(0x63, 0xc7, 0x63),
     }
 }
 
@@ -1276,7 +1276,7 @@ impl<'a> Viewer<'a> {
                     });
                 }
             }
-            SocketType::Bsdf => {}
+            SocketType::Bsdf | SocketType::Volume => {}
         }
         if let Some(v) = changed {
             self.try_edit(
@@ -1489,7 +1489,7 @@ impl SnarlViewer<String> for Viewer<'_> {
         }
         let label = ui.label(&name);
         let takes_values = self.node(&id).is_some_and(|n| n.kind != GROUP_OUTPUT);
-        if pin.remotes.is_empty() && ty != SocketType::Bsdf && takes_values {
+        if pin.remotes.is_empty() && !ty.is_shader() && takes_values {
             self.value_ui(ui, &id, &name, ty, label.id);
         }
         self.pin(&id, Side::Input, &name, ty)

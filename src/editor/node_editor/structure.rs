@@ -94,12 +94,13 @@ pub(super) fn group_default(graph: &Graph, node: &Node, input: &str) -> Option<V
 }
 
 /// The socket types a group's interface offers, in the order of its "+" menus.
-const SOCKET_TYPES: [SocketType; 5] = [
+const SOCKET_TYPES: [SocketType; 6] = [
     SocketType::Float,
     SocketType::Vector,
     SocketType::Color,
     SocketType::Vec2,
     SocketType::Bsdf,
+    SocketType::Volume,
 ];
 
 /// `edit`, made on the canvas showing group `group` (`None`: the material's graph), as
@@ -501,7 +502,7 @@ fn with_input_node(
 fn default_ui(ui: &mut Ui, socket: &GroupSocket) -> Option<(Value, Option<GestureId>)> {
     let current = socket.default.clone();
     match socket.ty {
-        SocketType::Bsdf => None,
+        SocketType::Bsdf | SocketType::Volume => None,
         SocketType::Float => {
             let mut x = current.map_or(0.0, |v| v.as_f32());
             let r = ui.add(egui::DragValue::new(&mut x).speed(0.01).max_decimals(3));

@@ -143,7 +143,7 @@ fn register_reads(flat: &[super::FlatNode], n: usize) -> impl Iterator<Item = (u
     (flat[n].inputs.iter().enumerate()).filter_map(move |(i, src)| match *src {
         Src::Out(m, o)
             if !(def.kind == BUMP && def.inputs[i].name == "height")
-                && output_type(flat, m, o) != SocketType::Bsdf =>
+                && !output_type(flat, m, o).is_shader() =>
         {
             Some((m, o))
         }
@@ -265,7 +265,7 @@ impl Writer<'_> {
             .expect("a flattened node's type is in the library");
         self.words.push(op as u32);
         for (o, out) in def.outputs.iter().enumerate() {
-            if out.ty != SocketType::Bsdf {
+            if !out.ty.is_shader() {
                 self.words
                     .push(registers.get(&(n, o)).copied().unwrap_or(SINK));
             }
@@ -402,7 +402,7 @@ fn layout(def: &NodeDef) -> Layout {
         at
     };
     let outputs = (def.outputs.iter())
-        .map(|o| (o.ty != SocketType::Bsdf).then(|| take(1)))
+        .map(|o| (!o.ty.is_shader()).then(|| take(1)))
         .collect();
     let inputs = def.inputs.iter().map(|_| take(1)).collect();
     let params = (def.params.iter())
@@ -501,7 +501,7 @@ fn pack(expr: &str, ty: SocketType) -> String {
     match ty {
         SocketType::Float => format!("vec4<f32>({expr}, 0.0, 0.0, 0.0)"),
         SocketType::Vec2 => format!("vec4<f32>({expr}, 0.0, 0.0)"),
-        SocketType::Vector | SocketType::Color | SocketType::Bsdf => {
+        SocketType::Vector | SocketType::Color | SocketType::Bsdf | SocketType::Volume => {
             format!("vec4<f32>({expr}, 0.0)")
         }
     }
@@ -511,6 +511,8 @@ fn generate(textures: bool) -> Interpreter {
     let library = nodes::library();
     let mut calls: BTreeSet<String> = [
         "nd_default_surface",
+        "nd_material_output",
+        "nd_no_volume",
         "nd_ramp_mix",
         "nd_bump",
         "nd_bump_step",
@@ -526,7 +528,7 @@ fn generate(textures: bool) -> Interpreter {
     let mut shading_points: Vec<&'static str> = Vec::new();
     for socket in library.iter().flat_map(|d| &d.inputs) {
         if let Default::Implicit(expr, _) = socket.default {
-            if socket.ty != SocketType::Bsdf && !shading_points.contains(&expr) {
+            if !socket.ty.is_shader() && !shading_points.contains(&expr) {
                 shading_points.push(expr);
                 calls.extend(super::called_functions(expr));
             }
@@ -583,7 +585,11 @@ fn generate(textures: bool) -> Interpreter {
                     );
                 }
                 None => {
-                    let _ = writeln!(cases, "                surface = r{};", out.field);
+                    let target = match out.ty {
+                        SocketType::Volume => "volume",
+                        _ => "surface",
+                    };
+                    let _ = writeln!(cases, "                {target} = r{};", out.field);
                 }
             }
         }
@@ -707,6 +713,7 @@ fn nd_ramp_interpret(first: u32, count: u32, t: f32, mode: u32) -> vec4<f32> {
 fn nd_interpret(start: u32, constants: u32, sp0: ShadingPoint) -> MaterialEval {
     var registers: array<vec4<f32>, REGISTERS>;
     var surface: MaterialEval;
+    var volume = nd_no_volume();
     var sp = sp0;
     var pc = start;
     // A bump's height subroutine: the bump's instruction, which height is being
@@ -718,10 +725,10 @@ fn nd_interpret(start: u32, constants: u32, sp0: ShadingPoint) -> MaterialEval {
         switch (nd_word(pc)) {
 //CASES
             case OP_RETURNu: {
-                if (nd_word(pc + 1u) != 0u) {
-                    return surface;
+                if (nd_word(pc + 1u) == 0u) {
+                    surface = nd_default_surface(sp0);
                 }
-                return nd_default_surface(sp0);
+                return nd_material_output(surface, volume);
             }
             case OP_SUBROUTINE_ENDu: {
                 heights[phase] = nd_arg(nd_word(pc + 1u), constants, &registers, sp).x;
