@@ -141,7 +141,12 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
         scenes.push((sphere, large_scene(args.triangles)));
     }
     // The bundled material scenes, when run from the source tree.
-    for file in ["materials.kiln", "showcase.kiln", "subsurface.kiln"] {
+    for file in [
+        "materials.kiln",
+        "showcase.kiln",
+        "subsurface.kiln",
+        "volumes.kiln",
+    ] {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets/scenes")
             .join(file);

@@ -179,11 +179,19 @@ fn a_topology_edit_is_a_parameter_write_in_the_interpreting_kernel() {
 
 /// One material per case: output `output` of a `kind` node with its defaults as the
 /// emission colour of a principled surface; negated first when `negate` (emission is
-/// clamped at 0, so negative values show through the negated case).
+/// clamped at 0, so negative values show through the negated case). A volume goes to the
+/// material's volume.
 fn node_case(kind: &str, output: &str, ty: SocketType, negate: bool) -> kiln::material::Graph {
     let mut g = kiln::material::Graph::default();
     g.add("n", Node::new(kind));
     let mut from = link("n", output);
+    if ty == SocketType::Volume {
+        g.add(
+            "out",
+            Node::new("material_output").input("volume", link("n", output)),
+        );
+        return g;
+    }
     if negate {
         let negated = match ty {
             SocketType::Float => Node::new("math")
@@ -216,7 +224,7 @@ fn node_case(kind: &str, output: &str, ty: SocketType, negate: bool) -> kiln::ma
     g
 }
 
-/// The emission (xyz) and opacity (w) of material `which` of `scene` at `points`, with
+/// The emission and volume (xyz) and opacity (w) of material `which` of `scene` at `points`, with
 /// the scene's materials as a kernel of kind `kernel` holds them.
 fn evaluate(scene: &Scene, kernel: KernelKind, cases: &[(u32, [f32; 3])]) -> Vec<[f32; 4]> {
     let materials = scene_materials(scene, kernel).expect("compiles");
@@ -247,7 +255,10 @@ fn material_probe(@builtin(global_invocation_id) gid: vec3<u32>) {
         a.xyz, n, fract(a.xyz), vec4<f32>(0.2, 0.5, 0.8, 1.0), 0.25, vec3<f32>(1.0, 2.0, 3.0), false,
     );
     let m = evaluate_material(u32(a.w), sp);
-    probe_out[i] = vec4<f32>(m.emission, m.opacity);
+    // The volume's coefficients, weighted apart so that no error in one hides another.
+    let v = m.volume;
+    let volume = v.absorption + 2.0 * v.scattering + 4.0 * v.emission + vec3<f32>(8.0 * v.g);
+    probe_out[i] = vec4<f32>(m.emission + volume, m.opacity);
 }
 ",
     );
@@ -280,7 +291,13 @@ fn every_library_node_interprets_as_it_compiles() {
             continue;
         }
         for out in def.outputs.iter().filter(|o| o.ty != SocketType::Bsdf) {
-            for negate in [false, true] {
+            // A volume is read as it is: shaders cannot be negated.
+            let negations: &[bool] = if out.ty == SocketType::Volume {
+                &[false]
+            } else {
+                &[false, true]
+            };
+            for &negate in negations {
                 let name = format!(
                     "{}.{}{}",
                     def.kind,

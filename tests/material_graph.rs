@@ -3,15 +3,26 @@
 
 use kiln::material::compile::link;
 use kiln::material::graph::{GROUP, GROUP_INPUT, REROUTE};
-use kiln::material::nodes::{Default as SocketDefault, ParamKind, library};
+use kiln::material::nodes::{self, Default as SocketDefault, ParamKind, library};
 use kiln::material::{Graph, Node, Param, SocketType, compile, materials_wgsl, parse_material};
 use kiln::render::kernel::path_tracing_kernel;
 use kiln::shader::KernelFeatures;
 
-/// A graph whose principled base colour is fed by `node`'s output `output`.
+/// A graph whose principled base colour is fed by `node`'s output `output`; a volume
+/// output feeds the material's volume instead.
 fn feeding_base_color(node: Node, output: &str) -> Graph {
     let mut g = Graph::default();
+    let volume = nodes::find(&node.kind)
+        .and_then(|d| d.output(output))
+        .is_some_and(|(_, o)| o.ty == SocketType::Volume);
     g.add("n", node);
+    if volume {
+        g.add(
+            "out",
+            Node::new("material_output").input("volume", link("n", output)),
+        );
+        return g;
+    }
     g.add(
         "surface",
         Node::new("principled_bsdf").input("base_color", link("n", output)),

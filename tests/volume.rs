@@ -82,7 +82,10 @@ fn a_white_scattering_volume_in_a_white_furnace_is_one_in_every_channel() {
     // the boundary.
     let glass = "\"glass\": (type: \"principled_bsdf\", inputs: { \"base_color\": (1.0, 1.0, 1.0), \"transmission_weight\": 1.0, \"roughness\": 0.0, \"ior\": 1.5 }),";
     let cases = [
-        ("bare, grey", bare_volume("bare", &scatter([1.0; 3], 2.0, 0.0))),
+        (
+            "bare, grey",
+            bare_volume("bare", &scatter([1.0; 3], 2.0, 0.0)),
+        ),
         (
             "bare, chromatic, forward",
             bare_volume("chromatic", &scatter([1.0, 0.5, 0.25], 4.0, 0.7)),
@@ -180,7 +183,10 @@ fn absorption_through_nested_volumes_is_beer_lambert() {
         // And the centre pixels, whose rays are all but on the axis, close to it.
         let centre = px[8 * 16 + 8];
         assert!(
-            (centre - shortest_of(sigma_outer + sigma_inner)).abs().max_element() < 2e-3,
+            (centre - shortest_of(sigma_outer + sigma_inner))
+                .abs()
+                .max_element()
+                < 2e-3,
             "centre {centre}"
         );
     }
@@ -260,7 +266,10 @@ fn single_scattering_in_a_slab_matches_the_integrated_closed_form() {
         );
         // Grey in, grey out.
         let rgb = mean(&px);
-        assert!((rgb.x - rgb.z).abs() < 1e-3 && (rgb.x - rgb.y).abs() < 1e-3, "{rgb}");
+        assert!(
+            (rgb.x - rgb.z).abs() < 1e-3 && (rgb.x - rgb.y).abs() < 1e-3,
+            "{rgb}"
+        );
     }
 }
 
@@ -269,7 +278,11 @@ fn volumes_stay_finite_at_parameter_extremes() {
     let ctx = gpu();
     let mut checked = 0;
     for density in [0.0, 1e-6, 1.0, 1e6] {
-        for (color, anisotropy) in [([0.0; 3], 0.0), ([1.0; 3], 0.999), ([1.0, 0.5, 0.0], -0.999)] {
+        for (color, anisotropy) in [
+            ([0.0; 3], 0.0),
+            ([1.0; 3], 0.999),
+            ([1.0, 0.5, 0.0], -0.999),
+        ] {
             for scale in [1e-4f32, 1e4] {
                 let v = format!(
                     "(type: \"principled_volume\", inputs: {{ \"color\": ({}, {}, {}), \"density\": {density:?}, \"anisotropy\": {anisotropy:?}, \"emission_strength\": 1.0 }})",

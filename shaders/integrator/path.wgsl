@@ -103,14 +103,15 @@ fn sample_light(p: vec3<f32>) -> LightSample {
 var<private> media: Media;
 
 // The fraction of light that crosses the segment from `origin` along `dir` to `t_max`:
-// through the media the path is in, across the bare boundaries of volumes (entering and
-// leaving their media on the way); 0 where any other surface blocks it.
-fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
+// through the media `start` (the media at the origin), across the bare boundaries of
+// volumes (entering and leaving their media on the way); 0 where any other surface
+// blocks it. Without volumes in the kernel, only whether it is blocked.
+fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) -> vec3<f32> {
     if (!FEATURE_VOLUME) {
         rays_traced++;
         return select(vec3<f32>(1.0), vec3<f32>(0.0), occluded(Ray(origin, dir), t_max));
     }
-    var inside = media;
+    var inside = start;
     var o = origin;
     var tr = vec3<f32>(1.0);
     for (var i = 0u; i <= MAX_PASS_THROUGH; i++) {
@@ -150,7 +151,7 @@ fn sample_direct_medium(p: vec3<f32>, d: vec3<f32>, g: f32) -> vec3<f32> {
         return vec3<f32>(0.0);
     }
     let phase = hg_phase(dot(d, ls.wi), g);
-    let tr = transmittance(p, ls.wi, ls.dist * (1.0 - 1e-4));
+    let tr = transmittance(p, ls.wi, ls.dist * (1.0 - 1e-4), media);
     if (!any(tr > vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
@@ -159,8 +160,9 @@ fn sample_direct_medium(p: vec3<f32>, d: vec3<f32>, g: f32) -> vec3<f32> {
 }
 
 // Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
-// geometric normal on the side the shading frame's z points to.
-fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled) -> vec3<f32> {
+// geometric normal on the side the shading frame's z points to; `beyond` is the media on
+// the far side of the surface from `wo`, where a light sampled through it is seen from.
+fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled, beyond: Media) -> vec3<f32> {
     let ls = sample_light(s.pe.p);
     if (ls.pdf <= 0.0) {
         return vec3<f32>(0.0);
@@ -177,7 +179,11 @@ fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principl
     }
     let origin = offset_ray_origin(s.pe, ng, ls.wi);
     // Stop short of the light by its own rounding error: the light must not shadow itself.
-    let tr = transmittance(origin, ls.wi, ls.dist * (1.0 - 1e-4));
+    var start = media;
+    if (wo.z * wi.z < 0.0) {
+        start = beyond;
+    }
+    let tr = transmittance(origin, ls.wi, ls.dist * (1.0 - 1e-4), start);
     if (!any(tr > vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
@@ -267,7 +273,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             let exit_frame = frame_from_normal(exit.ns);
             let up = vec3<f32>(0.0, 0.0, 1.0);
             if (nee) {
-                radiance += throughput * sample_direct(exit, ng_out, exit_frame, up, walk_exit_surface());
+                radiance += throughput * sample_direct(exit, ng_out, exit_frame, up, walk_exit_surface(), media);
             }
             if (depth >= params.max_bounces) {
                 break;
@@ -418,7 +424,16 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         }
 
         if (nee) {
-            radiance += throughput * sample_direct(s, ng, frame, wo, p);
+            // Light through a transmissive surface is seen from the media on its far side.
+            var beyond = media;
+            if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
+                if (front) {
+                    beyond = media_entered(media, s.material, inside_medium(me), me.volume.emission);
+                } else {
+                    beyond = media_left(media, s.material);
+                }
+            }
+            radiance += throughput * sample_direct(s, ng, frame, wo, p, beyond);
         }
 
         let bs = principled_sample(p, wo, rand(), rand(), rand2());

@@ -354,17 +354,19 @@ fn preview_wgsl(
         "material_eval".to_owned(),
         "nd_finite3".to_owned(),
     ]);
-    let (code, body) = if ty == SocketType::Bsdf {
-        // The node's surface as a material: an output node reading it.
+    let (code, body) = if ty.is_shader() {
+        // The node's shader as a material: an output node reading it.
         let mut surface = graph.clone();
         let mut output = format!("{node}~preview_output");
         while surface.nodes.contains_key(&output) {
             output.push('~');
         }
-        surface.add(
-            &output,
-            Node::new(MATERIAL_OUTPUT).input("surface", at.clone()),
-        );
+        let input = if ty == SocketType::Volume {
+            "volume"
+        } else {
+            "surface"
+        };
+        surface.add(&output, Node::new(MATERIAL_OUTPUT).input(input, at.clone()));
         surface.output = Some(output);
         let compiled = compile_with(
             material,
@@ -376,11 +378,22 @@ fn preview_wgsl(
         .map_err(|e| e.to_string())?;
         calls.extend(compiled.calls);
         let [lx, ly, lz] = LIGHT_DIRECTION;
+        let shade = if ty == SocketType::Volume {
+            // A unit thickness of the volume: what it scatters, lit, and what it emits.
+            "let v = e.volume;\n    \
+             let sigma_t = v.absorption + v.scattering;\n    \
+             let kept = exp(-sigma_t);\n    \
+             let albedo = select(vec3<f32>(0.0), v.scattering / sigma_t, sigma_t > vec3<f32>(0.0));\n    \
+             let glow = select(v.emission, v.emission * (1.0 - kept) / sigma_t, sigma_t > vec3<f32>(0.0));\n    \
+             return albedo * (1.0 - kept) * lit + glow;\n"
+        } else {
+            "return e.principled.base_color * e.principled.base_weight * lit + e.emission;\n"
+        };
         let body = format!(
             "    let e = node_preview_surface(sp);\n    \
              let light = normalize(vec3<f32>({lx:?}, {ly:?}, {lz:?}));\n    \
              let lit = {AMBIENT:?} + {:?} * max(dot(e.normal, light), 0.0);\n    \
-             return e.principled.base_color * e.principled.base_weight * lit + e.emission;\n",
+             {shade}",
             1.0 - AMBIENT
         );
         (compiled.code, body)

@@ -1467,7 +1467,7 @@ fn build() -> Vec<NodeDef> {
             kind: "volume_absorption",
             label: "Volume Absorption",
             category: "Shader",
-            doc: "A volume that only absorbs: light passing through keeps its colour's fraction per unit of density and length (Beer–Lambert).",
+            doc: "A volume that only absorbs: (1 − colour) × density per scene unit, so light crossing it keeps e^(−(1 − colour) density length) (Beer–Lambert).",
             inputs: vec![
                 color("color", [0.8; 3], "the colour light keeps"),
                 float("density", 1.0, DENSITY, "absorption per scene unit"),
@@ -1484,9 +1484,18 @@ fn build() -> Vec<NodeDef> {
             category: "Shader",
             doc: "A volume that scatters light without absorbing it, by the Henyey–Greenstein phase function.",
             inputs: vec![
-                color("color", [0.8; 3], "scattering per unit of density, per channel"),
+                color(
+                    "color",
+                    [0.8; 3],
+                    "scattering per unit of density, per channel",
+                ),
                 float("density", 1.0, DENSITY, "scattering per scene unit"),
-                float("anisotropy", 0.0, ANISOTROPY, "mean cosine of the scattering angle: 0 isotropic, > 0 forward, < 0 backward"),
+                float(
+                    "anisotropy",
+                    0.0,
+                    ANISOTROPY,
+                    "mean cosine of the scattering angle: 0 isotropic, > 0 forward, < 0 backward",
+                ),
             ],
             outputs: vec![out("volume", Volume, "", "the volume")],
             params: vec![],
@@ -1501,8 +1510,18 @@ fn build() -> Vec<NodeDef> {
             doc: "Scattering, absorption and emission in one volume, as Cycles' Principled Volume: scattering colour × density, absorption (1 − colour)(1 − √absorption colour) × density, emission strength × colour per unit length.",
             inputs: vec![
                 color("color", [0.5; 3], "scattering colour"),
-                float("density", 1.0, DENSITY, "scattering and absorption per scene unit"),
-                float("anisotropy", 0.0, ANISOTROPY, "mean cosine of the scattering angle"),
+                float(
+                    "density",
+                    1.0,
+                    DENSITY,
+                    "scattering and absorption per scene unit",
+                ),
+                float(
+                    "anisotropy",
+                    0.0,
+                    ANISOTROPY,
+                    "mean cosine of the scattering angle",
+                ),
                 color("absorption_color", [0.0; 3], "tint of what is absorbed"),
                 float(
                     "emission_strength",
