@@ -90,6 +90,11 @@ struct Material {
     // 1 for a volume's boundary without a surface: light crosses it unchanged.
     boundary_only: u32,
     _pad: array<u32, 2>,
+    // The homogeneous volume inside: absorption per unit length (w: the phase function's
+    // g), scattering, emission per unit length; zero without one.
+    volume_absorption: vec4<f32>,
+    volume_scattering: vec4<f32>,
+    volume_emission: vec4<f32>,
 };
 
 // An emissive triangle in world space, for next-event estimation.

@@ -314,3 +314,32 @@ fn volumes_stay_finite_at_parameter_extremes() {
     }
     assert_eq!(checked, 24);
 }
+
+#[test]
+fn a_volume_whose_density_varies_is_refused_naming_the_node() {
+    // Heterogeneous media are not rendered yet: a texture feeding a volume's density is
+    // an error naming the volume node, not a volume silently rendered as something else.
+    let text = "(version: 1, name: \"cloud\", nodes: {
+        \"noise\": (type: \"noise_texture\"),
+        \"cloud\": (type: \"principled_volume\", inputs: { \"density\": \"noise.fac\" }),
+        \"out\": (type: \"material_output\", inputs: { \"volume\": \"cloud.volume\" }),
+    })";
+    let (_, graph) = parse_material(text, "cloud.kmat").expect("parses");
+    let err = Material::from_graph("cloud", graph.clone())
+        .expect_err("a varying volume is refused")
+        .to_string();
+    assert!(
+        err.contains("\"cloud\"") && err.contains("constants"),
+        "{err}"
+    );
+    // Constant arithmetic feeding it is folded first, so it counts as constant.
+    let text = "(version: 1, name: \"fog\", nodes: {
+        \"half\": (type: \"math\", params: { \"operation\": \"multiply\" }, inputs: { \"a\": 0.5, \"b\": 3.0 }),
+        \"fog\": (type: \"volume_scatter\", inputs: { \"density\": \"half.value\" }),
+        \"out\": (type: \"material_output\", inputs: { \"volume\": \"fog.volume\" }),
+    })";
+    let (_, graph) = parse_material(text, "fog.kmat").expect("parses");
+    let m = Material::from_graph("fog", graph).expect("constant arithmetic is constant");
+    let v = m.volume().expect("a homogeneous volume");
+    assert_eq!(v.scattering, [0.8 * 1.5; 3]);
+}

@@ -9,8 +9,8 @@
 // a medium inside a glass inside fog sees the medium, then the glass's, then the fog's.
 // Objects nested deeper than MEDIA_DEPTH are treated as vacuum inside.
 //
-// A volume is homogeneous within one entry: its coefficients are evaluated where the path
-// enters it.
+// Volumes are homogeneous: their coefficients are the material buffer's, which the
+// compiler computes from the volume node's constant inputs.
 
 const MEDIA_DEPTH: u32 = 4u;
 
@@ -66,13 +66,14 @@ fn media_left(media_in: Media, material: u32) -> Media {
     return media;
 }
 
-// The homogeneous medium of a volume's coefficients, with `absorption` more (a
-// transmissive surface's Beer–Lambert extinction).
-fn volume_medium(v: VolumeEval, absorption: vec3<f32>) -> Medium {
-    let sigma_s = max(v.scattering, vec3<f32>(0.0));
-    let sigma_t = max(v.absorption, vec3<f32>(0.0)) + max(absorption, vec3<f32>(0.0)) + sigma_s;
+// The medium inside material `id`: its homogeneous volume (the material buffer's), with
+// `absorption` more (a transmissive surface's Beer–Lambert extinction).
+fn material_medium(id: u32, absorption: vec3<f32>) -> Medium {
+    let m = materials[id];
+    let sigma_s = max(m.volume_scattering.xyz, vec3<f32>(0.0));
+    let sigma_t = max(m.volume_absorption.xyz, vec3<f32>(0.0)) + max(absorption, vec3<f32>(0.0)) + sigma_s;
     let albedo = select(vec3<f32>(0.0), min(sigma_s / sigma_t, vec3<f32>(1.0)), sigma_t > vec3<f32>(0.0));
-    return Medium(sigma_t, albedo, v.g);
+    return Medium(sigma_t, albedo, m.volume_absorption.w);
 }
 
 // ∫₀ᵗ e^(-σt s) Le ds per channel: what an emitting medium adds along a segment.

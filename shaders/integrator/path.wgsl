@@ -133,8 +133,8 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
             return vec3<f32>(0.0);
         }
         if (dot(dir, s.ng) < 0.0) {
-            let v = evaluate_material(s.material, shading_point(s, hit, -dir, true)).volume;
-            inside = media_entered(inside, s.material, volume_medium(v, vec3<f32>(0.0)), v.emission);
+            let medium = material_medium(s.material, vec3<f32>(0.0));
+            inside = media_entered(inside, s.material, medium, materials[s.material].volume_emission.xyz);
         } else {
             inside = media_left(inside, s.material);
         }
@@ -217,15 +217,6 @@ fn survives_roulette(depth: u32, throughput: ptr<function, vec3<f32>>) -> bool {
     return true;
 }
 
-// The medium inside an object the path enters through a surface: the material's volume
-// (evaluated where it enters) with the surface's Beer–Lambert absorption.
-fn inside_medium(me: MaterialEval) -> Medium {
-    var v = nd_no_volume();
-    if (FEATURE_VOLUME) {
-        v = me.volume;
-    }
-    return volume_medium(v, principled_extinction(me.principled));
-}
 
 fn trace_path(primary: Ray) -> vec3<f32> {
     var ray = primary;
@@ -356,11 +347,10 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         var s = surface_at(hit);
         let material = materials[s.material];
         let front = dot(ray.dir, s.ng) < 0.0;
-        let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
         if (FEATURE_VOLUME && material.boundary_only != 0u) {
             // A volume's bare boundary: the path enters or leaves its medium unchanged.
             if (front) {
-                media = media_entered(media, s.material, volume_medium(me.volume, vec3<f32>(0.0)), me.volume.emission);
+                media = media_entered(media, s.material, material_medium(s.material, vec3<f32>(0.0)), material.volume_emission.xyz);
             } else {
                 media = media_left(media, s.material);
             }
@@ -371,6 +361,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
             continue;
         }
+        let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
         // A normal from a normal map or bump on the other side of the surface than its
         // geometry would let light leak: keep the interpolated one then.
         if (dot(me.normal, s.ng) > 0.0) {
@@ -428,7 +419,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             var beyond = media;
             if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
                 if (front) {
-                    beyond = media_entered(media, s.material, inside_medium(me), me.volume.emission);
+                    beyond = media_entered(media, s.material, material_medium(s.material, principled_extinction(p)), material.volume_emission.xyz);
                 } else {
                     beyond = media_left(media, s.material);
                 }
@@ -457,7 +448,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         } else if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
             if (dot(wi, s.ng) < 0.0) {
-                media = media_entered(media, s.material, inside_medium(me), me.volume.emission);
+                media = media_entered(media, s.material, material_medium(s.material, principled_extinction(p)), material.volume_emission.xyz);
             } else {
                 media = media_left(media, s.material);
             }

@@ -60,6 +60,20 @@ pub struct MaterialTraits {
     /// A volume without a surface: the boundary only marks where the volume begins
     /// and ends, and light crosses it unchanged.
     pub boundary_only: bool,
+    /// The volume inside, homogeneous (its inputs are constants).
+    pub volume: Option<VolumeCoefficients>,
+}
+
+/// A homogeneous volume's coefficients per scene unit and channel (what
+/// shaders/nodes/volume.wgsl computes from the same inputs).
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct VolumeCoefficients {
+    pub absorption: [f32; 3],
+    pub scattering: [f32; 3],
+    /// Emitted radiance per unit length.
+    pub emission: [f32; 3],
+    /// The Henyey–Greenstein anisotropy, within ±0.999.
+    pub g: f32,
 }
 
 /// Where a compiled material's constant inputs live.
@@ -157,6 +171,8 @@ pub fn compile_with(
     let flat = Flattener::new(&ctx, graph).run()?;
     check_types(&ctx, &flat)?;
     let output = find_output(&ctx, graph, &flat)?;
+    reject_cycles(&ctx, &flat, output)?;
+    check_volume(&ctx, &flat, output)?;
     emit_function(
         &ctx,
         flat,
@@ -1059,16 +1075,56 @@ fn merge_identical(flat: &mut [FlatNode], root: usize) {
 // ---------------------------------------------------------------------- traits
 
 fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
-    let volume = matches!(flat[output].inputs[1], Src::Out(..));
     let mut traits = surface_traits(flat, output);
-    if volume {
+    if let Src::Out(volume, _) = flat[output].inputs[1] {
         // The inside is entered and left: the surface keeps its front.
         traits.transmissive = true;
         traits.lobes |= crate::shader::lobes::VOLUME;
         // A volume without a surface: the boundary lets light through unchanged.
         traits.boundary_only = !matches!(flat[output].inputs[0], Src::Out(..));
+        // Read after folding, so that constant arithmetic feeding it counts as constant
+        // whether or not the code keeps its constants live.
+        let mut folded = flat.to_vec();
+        fold_constants(&mut folded, output);
+        traits.volume = node_traits(&folded[volume]).volume;
     }
     traits
+}
+
+/// Volumes are homogeneous: a volume whose coefficients vary (a texture feeding its
+/// density) is refused, naming the node, until heterogeneous media are rendered.
+fn check_volume(ctx: &Ctx, flat: &[FlatNode], output: usize) -> Result<(), GraphError> {
+    let Src::Out(volume, _) = flat[output].inputs[1] else {
+        return Ok(());
+    };
+    if traits(flat, output).volume.is_some() {
+        return Ok(());
+    }
+    Err(ctx.err(
+        Some(&flat[volume].id),
+        None,
+        "a volume's inputs must be constants: volumes whose density or colour vary inside \
+         (heterogeneous media) are not rendered yet"
+            .into(),
+    ))
+}
+
+/// What a shader node declares of the material it makes.
+fn node_traits(node: &FlatNode) -> MaterialTraits {
+    // Only shader nodes feed the material output, and each declares its traits (a test
+    // checks the library).
+    let traits = node.def.traits.expect("a shader node declares its traits");
+    let known = |name: &str| {
+        // The traits read the inputs of their own declaration.
+        let i = node
+            .def
+            .inputs
+            .iter()
+            .position(|s| s.name == name)
+            .unwrap_or_else(|| panic!("{} has no input {name}", node.def.kind));
+        constant(node, i)
+    };
+    traits(&known, params(node))
 }
 
 fn surface_traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
@@ -1089,21 +1145,7 @@ fn surface_traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
             };
         }
     };
-    let node = &flat[surface];
-    // Only nodes with a BSDF output feed the surface, and each declares its traits (a
-    // test checks the library).
-    let traits = node.def.traits.expect("a surface node declares its traits");
-    let known = |name: &str| {
-        // The traits read the inputs of their own declaration.
-        let i = node
-            .def
-            .inputs
-            .iter()
-            .position(|s| s.name == name)
-            .unwrap_or_else(|| panic!("{} has no input {name}", node.def.kind));
-        constant(node, i)
-    };
-    traits(&known, params(node))
+    node_traits(&flat[surface])
 }
 
 // -------------------------------------------------------------------- emission

@@ -14,7 +14,7 @@
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
-use super::compile::{GraphError, MaterialTraits};
+use super::compile::{GraphError, MaterialTraits, VolumeCoefficients};
 use super::graph::{Param, RampStop, SocketType, Value};
 use crate::shader::principled::{self, ParamValue};
 
@@ -1474,7 +1474,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("volume", Volume, "", "the volume")],
             params: vec![],
-            traits: None,
+            traits: Some(volume_absorption_traits),
             fold: None,
             code: Code::Template("nd_volume_absorption({color}, {density})"),
         },
@@ -1499,7 +1499,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("volume", Volume, "", "the volume")],
             params: vec![],
-            traits: None,
+            traits: Some(volume_scatter_traits),
             fold: None,
             code: Code::Template("nd_volume_scatter({color}, {density}, {anisotropy})"),
         },
@@ -1533,7 +1533,7 @@ fn build() -> Vec<NodeDef> {
             ],
             outputs: vec![out("volume", Volume, "", "the volume")],
             params: vec![],
-            traits: None,
+            traits: Some(principled_volume_traits),
             fold: None,
             code: Code::Template(
                 "nd_principled_volume({color}, {density}, {anisotropy}, {absorption_color}, {emission_strength}, {emission_color})",
@@ -1777,6 +1777,76 @@ fn principled_params() -> Vec<ParamDef> {
 
 // ------------------------------------------------------------------ surface traits
 
+// The volume nodes' coefficients from constant inputs, as shaders/nodes/volume.wgsl
+// computes them; `None` where an input varies.
+
+fn volume_traits(volume: Option<VolumeCoefficients>) -> MaterialTraits {
+    MaterialTraits {
+        volume,
+        ..MaterialTraits::default()
+    }
+}
+
+fn known_inputs<const N: usize>(
+    known: &dyn Fn(&str) -> Option<Value>,
+    names: [&str; N],
+) -> Option<[Value; N]> {
+    let values: Option<Vec<Value>> = names.iter().map(|n| known(n)).collect();
+    values.and_then(|v| v.try_into().ok())
+}
+
+fn phase_g(v: &Value) -> f32 {
+    v.as_f32().clamp(-0.999, 0.999)
+}
+
+fn volume_absorption_traits(known: &dyn Fn(&str) -> Option<Value>, _: Params) -> MaterialTraits {
+    volume_traits(known_inputs(known, ["color", "density"]).map(|[c, d]| {
+        let d = d.as_f32().max(0.0);
+        VolumeCoefficients {
+            absorption: c.as_vec3().map(|c| (1.0 - c.clamp(0.0, 1.0)) * d),
+            ..VolumeCoefficients::default()
+        }
+    }))
+}
+
+fn volume_scatter_traits(known: &dyn Fn(&str) -> Option<Value>, _: Params) -> MaterialTraits {
+    volume_traits(
+        known_inputs(known, ["color", "density", "anisotropy"]).map(|[c, d, g]| {
+            let d = d.as_f32().max(0.0);
+            VolumeCoefficients {
+                scattering: c.as_vec3().map(|c| c.max(0.0) * d),
+                g: phase_g(&g),
+                ..VolumeCoefficients::default()
+            }
+        }),
+    )
+}
+
+fn principled_volume_traits(known: &dyn Fn(&str) -> Option<Value>, _: Params) -> MaterialTraits {
+    let names = [
+        "color",
+        "density",
+        "anisotropy",
+        "absorption_color",
+        "emission_strength",
+        "emission_color",
+    ];
+    volume_traits(known_inputs(known, names).map(|[c, d, g, a, s, e]| {
+        let d = d.as_f32().max(0.0);
+        let (c, a, e) = (c.as_vec3(), a.as_vec3(), e.as_vec3());
+        let s = s.as_f32().max(0.0);
+        VolumeCoefficients {
+            absorption: std::array::from_fn(|i| {
+                let tint = (1.0 - a[i].max(0.0).sqrt()).max(0.0);
+                (1.0 - c[i].max(0.0)).max(0.0) * tint * d
+            }),
+            scattering: c.map(|c| c.max(0.0) * d),
+            emission: e.map(|e| e.max(0.0) * s),
+            g: phase_g(&g),
+        }
+    }))
+}
+
 /// Transmissive where it may let light through, emissive as its emission inputs say, and
 /// the lobes its weights can reach.
 fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params) -> MaterialTraits {
@@ -1806,7 +1876,7 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         constant_emission,
         varying_emission,
         lobes,
-        boundary_only: false,
+        ..MaterialTraits::default()
     }
 }
 

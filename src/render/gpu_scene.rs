@@ -190,12 +190,16 @@ pub fn encode_octahedral(n: Vec3) -> u32 {
 
 /// The GPU form of a material (`Material` in shaders/scene.wgsl).
 pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
+    let v = m.volume().unwrap_or_default();
     GpuMaterial {
         principled: m.principled.pack(),
         emission: m.emission().extend(0.0).into(),
         transmissive: m.is_transmissive() as u32,
         boundary_only: m.is_boundary_only() as u32,
         _pad: [0; 2],
+        volume_absorption: [v.absorption[0], v.absorption[1], v.absorption[2], v.g],
+        volume_scattering: [v.scattering[0], v.scattering[1], v.scattering[2], 0.0],
+        volume_emission: [v.emission[0], v.emission[1], v.emission[2], 0.0],
     }
 }
 

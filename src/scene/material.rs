@@ -142,6 +142,11 @@ impl Material {
         self.principled.transmission_weight > 0.0 || self.principled.thin_walled
     }
 
+    /// The homogeneous volume inside, from a graph's Volume socket.
+    pub fn volume(&self) -> Option<crate::material::compile::VolumeCoefficients> {
+        self.graph.as_ref().and_then(|g| g.traits.volume)
+    }
+
     /// Whether the surface is only a volume's boundary (a graph with a volume and no
     /// surface), which light crosses unchanged.
     pub fn is_boundary_only(&self) -> bool {

@@ -45,10 +45,12 @@ impl Default for KernelFeatures {
 impl KernelFeatures {
     /// Every lobe and light type compiled in: the unspecialised kernel. What changes the
     /// bindings (pages, textures, AOVs, the second UV set) stays the scene's, so the
-    /// kernel fits the scene's bind group layout.
+    /// kernel fits the scene's bind group layout. Volumes too stay the scene's: their
+    /// code (the media, transmittance rays) makes the kernel's build on lavapipe several
+    /// times longer, so a scene gains it when it gains a volume (a kernel build).
     pub fn everything(self) -> Self {
         Self {
-            lobes: lobes::ALL,
+            lobes: (lobes::ALL & !lobes::VOLUME) | (self.lobes & lobes::VOLUME),
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,

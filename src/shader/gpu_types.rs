@@ -93,6 +93,11 @@ pub struct GpuMaterial {
     /// 1 for a volume's boundary without a surface: light crosses it unchanged.
     pub boundary_only: u32,
     pub _pad: [u32; 2],
+    /// The homogeneous volume inside: absorption per unit length (w: the phase
+    /// function's g), scattering, emission per unit length; zero without one.
+    pub volume_absorption: [f32; 4],
+    pub volume_scattering: [f32; 4],
+    pub volume_emission: [f32; 4],
 }
 
 #[repr(C)]
@@ -257,7 +262,16 @@ mod tests {
             &module,
             GpuMaterial,
             "Material",
-            [principled, emission, transmissive, boundary_only, _pad]
+            [
+                principled,
+                emission,
+                transmissive,
+                boundary_only,
+                _pad,
+                volume_absorption,
+                volume_scattering,
+                volume_emission
+            ]
         );
         assert_same_layout!(
             &module,

@@ -22,8 +22,8 @@ use std::fmt::Write as _;
 use std::sync::OnceLock;
 
 use super::{
-    Ctx, Flattener, GraphError, MaterialTraits, Src, check_types, fill_template, find_output,
-    output_type, packed_constant, params, reject_cycles, swizzle, traits,
+    Ctx, Flattener, GraphError, MaterialTraits, Src, check_types, check_volume, fill_template,
+    find_output, output_type, packed_constant, params, reject_cycles, swizzle, traits,
 };
 use crate::material::graph::{Conversion, Graph, Param, RampStop, SocketType};
 use crate::material::nodes::{
@@ -94,6 +94,7 @@ pub fn compile_program(
     check_types(&ctx, &flat)?;
     let output = find_output(&ctx, graph, &flat)?;
     reject_cycles(&ctx, &flat, output)?;
+    check_volume(&ctx, &flat, output)?;
     let mut writer = Writer {
         material,
         flat: &flat,
@@ -142,8 +143,8 @@ fn register_reads(flat: &[super::FlatNode], n: usize) -> impl Iterator<Item = (u
     let def = flat[n].def;
     (flat[n].inputs.iter().enumerate()).filter_map(move |(i, src)| match *src {
         Src::Out(m, o)
-            if !(def.kind == BUMP && def.inputs[i].name == "height")
-                && !output_type(flat, m, o).is_shader() =>
+            if !(output_type(flat, m, o).is_shader()
+                || def.kind == BUMP && def.inputs[i].name == "height") =>
         {
             Some((m, o))
         }
