@@ -296,24 +296,29 @@ fn the_compiler_names_no_node_type() {
     );
 }
 
-/// The compiler learns what a surface does (transmission, emission, lobes) from the
-/// declaration of the node feeding the output: every node with a BSDF output declares it,
-/// and no other node does.
+/// The compiler learns what a surface does (transmission, emission, lobes) and what a
+/// volume holds (its coefficients) from the declaration of the node feeding the output:
+/// every node with a shader output declares it, and no other node does.
 #[test]
-fn every_surface_node_declares_its_traits() {
-    let mut surfaces = 0;
+fn every_shader_node_declares_its_traits() {
+    let (mut surfaces, mut volumes) = (0, 0);
     for def in library() {
-        let surface = def.outputs.iter().any(|o| o.ty == SocketType::Bsdf);
+        let shader = def.outputs.iter().any(|o| o.ty.is_shader());
         assert_eq!(
             def.traits.is_some(),
-            surface,
-            "{}: traits declared {}, BSDF output {surface}",
+            shader,
+            "{}: traits declared {}, shader output {shader}",
             def.kind,
             def.traits.is_some()
         );
-        surfaces += usize::from(surface);
+        surfaces += usize::from(def.outputs.iter().any(|o| o.ty == SocketType::Bsdf));
+        volumes += usize::from(def.outputs.iter().any(|o| o.ty == SocketType::Volume));
     }
     assert!(surfaces >= 1, "no surface node in the library");
+    assert_eq!(
+        volumes, 3,
+        "Volume Absorption, Volume Scatter, Principled Volume"
+    );
 }
 
 #[test]
