@@ -29,14 +29,15 @@ fn media_empty() -> Media {
     return m;
 }
 
-// The media after entering the inside of `material`, which holds `medium`.
-fn media_entered(media_in: Media, material: u32, medium: Medium, emission: vec3<f32>) -> Media {
+// The media after entering the inside of `material`: its volume (the material buffer's)
+// with `absorption` more (a transmissive surface's Beer–Lambert extinction).
+fn media_entered(media_in: Media, material: u32, absorption: vec3<f32>) -> Media {
     var media = media_in;
     let i = media.count;
     if (i < MEDIA_DEPTH) {
         media.material[i] = material;
-        media.medium[i] = medium;
-        media.emission[i] = emission;
+        media.medium[i] = material_medium(material, absorption);
+        media.emission[i] = materials[material].volume_emission.xyz;
         media.count = i + 1u;
     }
     return media;

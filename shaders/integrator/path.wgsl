@@ -133,8 +133,7 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
             return vec3<f32>(0.0);
         }
         if (dot(dir, s.ng) < 0.0) {
-            let medium = material_medium(s.material, vec3<f32>(0.0));
-            inside = media_entered(inside, s.material, medium, materials[s.material].volume_emission.xyz);
+            inside = media_entered(inside, s.material, vec3<f32>(0.0));
         } else {
             inside = media_left(inside, s.material);
         }
@@ -216,7 +215,6 @@ fn survives_roulette(depth: u32, throughput: ptr<function, vec3<f32>>) -> bool {
     *throughput = t / (1.0 - q);
     return true;
 }
-
 
 fn trace_path(primary: Ray) -> vec3<f32> {
     var ray = primary;
@@ -350,7 +348,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         if (FEATURE_VOLUME && material.boundary_only != 0u) {
             // A volume's bare boundary: the path enters or leaves its medium unchanged.
             if (front) {
-                media = media_entered(media, s.material, material_medium(s.material, vec3<f32>(0.0)), material.volume_emission.xyz);
+                media = media_entered(media, s.material, vec3<f32>(0.0));
             } else {
                 media = media_left(media, s.material);
             }
@@ -419,7 +417,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             var beyond = media;
             if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
                 if (front) {
-                    beyond = media_entered(media, s.material, material_medium(s.material, principled_extinction(p)), material.volume_emission.xyz);
+                    beyond = media_entered(media, s.material, principled_extinction(p));
                 } else {
                     beyond = media_left(media, s.material);
                 }
@@ -448,7 +446,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         } else if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
             if (dot(wi, s.ng) < 0.0) {
-                media = media_entered(media, s.material, material_medium(s.material, principled_extinction(p)), material.volume_emission.xyz);
+                media = media_entered(media, s.material, principled_extinction(p));
             } else {
                 media = media_left(media, s.material);
             }
