@@ -142,52 +142,80 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
     return vec3<f32>(0.0);
 }
 
-// Next-event estimation at a point in a medium: one light sample, weighted against
-// phase-function sampling. `d` is the direction the path arrived in.
-fn sample_direct_medium(p: vec3<f32>, d: vec3<f32>, g: f32) -> vec3<f32> {
-    let ls = sample_light(p);
-    if (ls.pdf <= 0.0) {
-        return vec3<f32>(0.0);
-    }
-    let phase = hg_phase(dot(d, ls.wi), g);
-    let tr = transmittance(p, ls.wi, ls.dist * (1.0 - 1e-4), media);
-    if (!any(tr > vec3<f32>(0.0))) {
-        return vec3<f32>(0.0);
-    }
-    let w = select(1.0, power_heuristic(ls.pdf, phase), ls.mis);
-    return tr * ls.radiance * (phase * w / ls.pdf);
+// Where next-event estimation samples a light from: a surface seen through its shading
+// frame, or a point in a medium.
+struct ScatterVertex {
+    pe: PointError,
+    in_medium: bool,
+    // On a surface: the geometric normal on the frame's side, the shading frame, and the
+    // direction back along the path in that frame.
+    ng: vec3<f32>,
+    frame: Frame,
+    wo: vec3<f32>,
+    // In a medium: the direction the path arrived in, and the phase function's g.
+    dir: vec3<f32>,
+    g: f32,
+};
+
+fn surface_vertex(pe: PointError, ng: vec3<f32>, frame: Frame, wo: vec3<f32>) -> ScatterVertex {
+    var v: ScatterVertex;
+    v.pe = pe;
+    v.ng = ng;
+    v.frame = frame;
+    v.wo = wo;
+    return v;
 }
 
-// Next-event estimation: one light sample, weighted against BSDF sampling. `ng` is the
-// geometric normal on the side the shading frame's z points to; `beyond` is the media on
-// the far side of the surface from `wo`, where a light sampled through it is seen from.
-fn sample_direct(s: Surface, ng: vec3<f32>, f: Frame, wo: vec3<f32>, p: Principled, beyond: Media) -> vec3<f32> {
-    let ls = sample_light(s.pe.p);
+fn medium_vertex(p: vec3<f32>, dir: vec3<f32>, g: f32) -> ScatterVertex {
+    var v: ScatterVertex;
+    v.pe = PointError(p, vec3<f32>(0.0));
+    v.in_medium = true;
+    v.dir = dir;
+    v.g = g;
+    return v;
+}
+
+// Next-event estimation: one light sample, weighted against BSDF or phase-function
+// sampling. A surface scatters by `p`; `beyond` is the media on the far side of it from
+// `wo`, where a light sampled through it is seen from. The path's only call site: the
+// light sampling and the transmittance ray (a traversal) are compiled once.
+fn sample_direct(v: ScatterVertex, p: Principled, beyond: Media) -> vec3<f32> {
+    let ls = sample_light(v.pe.p);
     if (ls.pdf <= 0.0) {
         return vec3<f32>(0.0);
     }
-    let wi = to_local(f, ls.wi);
-    // The shading and geometric normals must agree on which side the light is, or light
-    // would leak through the surface.
-    if (dot(ls.wi, ng) * wi.z <= 0.0) {
-        return vec3<f32>(0.0);
-    }
-    let e = principled_eval(p, wo, wi);
-    if (all(e.value == vec3<f32>(0.0))) {
-        return vec3<f32>(0.0);
-    }
-    let origin = offset_ray_origin(s.pe, ng, ls.wi);
-    // Stop short of the light by its own rounding error: the light must not shadow itself.
+    var f: vec3<f32>;
+    var scatter_pdf: f32;
+    var origin = v.pe.p;
     var start = media;
-    if (wo.z * wi.z < 0.0) {
-        start = beyond;
+    if (v.in_medium) {
+        scatter_pdf = hg_phase(dot(v.dir, ls.wi), v.g);
+        f = vec3<f32>(scatter_pdf);
+    } else {
+        let wi = to_local(v.frame, ls.wi);
+        // The shading and geometric normals must agree on which side the light is, or
+        // light would leak through the surface.
+        if (dot(ls.wi, v.ng) * wi.z <= 0.0) {
+            return vec3<f32>(0.0);
+        }
+        let e = principled_eval(p, v.wo, wi);
+        if (all(e.value == vec3<f32>(0.0))) {
+            return vec3<f32>(0.0);
+        }
+        f = e.value;
+        scatter_pdf = e.pdf;
+        origin = offset_ray_origin(v.pe, v.ng, ls.wi);
+        if (v.wo.z * wi.z < 0.0) {
+            start = beyond;
+        }
     }
+    // Stop short of the light by its own rounding error: the light must not shadow itself.
     let tr = transmittance(origin, ls.wi, ls.dist * (1.0 - 1e-4), start);
     if (!any(tr > vec3<f32>(0.0))) {
         return vec3<f32>(0.0);
     }
-    let w = select(1.0, power_heuristic(ls.pdf, e.pdf), ls.mis);
-    return e.value * tr * ls.radiance * (w / ls.pdf);
+    let w = select(1.0, power_heuristic(ls.pdf, scatter_pdf), ls.mis);
+    return f * tr * ls.radiance * (w / ls.pdf);
 }
 
 // What a random walk leaves by: a white Lambertian surface.
@@ -216,6 +244,11 @@ fn survives_roulette(depth: u32, throughput: ptr<function, vec3<f32>>) -> bool {
     return true;
 }
 
+// What a path's vertex is, for the code after next-event estimation.
+const EVENT_SURFACE: u32 = 0u;
+const EVENT_MEDIUM: u32 = 1u;
+const EVENT_WALK_EXIT: u32 = 2u;
+
 fn trace_path(primary: Ray) -> vec3<f32> {
     var ray = primary;
     var radiance = vec3<f32>(0.0);
@@ -236,6 +269,15 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     loop {
         rays_traced++;
         let hit = intersect_scene(ray);
+        // Each pass of the loop finds one vertex to scatter at (a surface, where a walk
+        // leaves, or a point in a medium), samples a light from it at the one call site
+        // below, then samples the next direction.
+        var event = EVENT_SURFACE;
+        var v: ScatterVertex;
+        var p: Principled;
+        var beyond = media;
+        var s: Surface;
+        var transmissive = false;
         if (FEATURE_SUBSURFACE && walking) {
             // Whatever surface the walk meets is where it leaves: the object's own
             // boundary (or, in an open or overlapping mesh, the first surface ahead).
@@ -256,183 +298,188 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             // The exit: a white Lambertian facing out, lit by next-event estimation as
             // part of the bounce that entered (so one bounce sees subsurface light).
             walking = false;
-            var exit = surface_at(hit);
-            let ng_out = select(-exit.ng, exit.ng, dot(ray.dir, exit.ng) > 0.0);
-            exit.ns = select(exit.ns, -exit.ns, dot(exit.ns, ng_out) < 0.0);
-            let exit_frame = frame_from_normal(exit.ns);
-            let up = vec3<f32>(0.0, 0.0, 1.0);
-            if (nee) {
-                radiance += throughput * sample_direct(exit, ng_out, exit_frame, up, walk_exit_surface(), media);
+            event = EVENT_WALK_EXIT;
+            s = surface_at(hit);
+            let ng_out = select(-s.ng, s.ng, dot(ray.dir, s.ng) > 0.0);
+            let ns_out = select(s.ns, -s.ns, dot(s.ns, ng_out) < 0.0);
+            v = surface_vertex(s.pe, ng_out, frame_from_normal(ns_out), vec3<f32>(0.0, 0.0, 1.0));
+            p = walk_exit_surface();
+        } else {
+            let t_scene = select(3.0e38, hit.t, hit.hit);
+            // Sphere lights and sun disks in front of the surface (or the sky).
+            var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
+            if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
+                light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
             }
+            if (media.count > 0u) {
+                // The segment runs through the innermost medium; a medium without an exit
+                // absorbs everything.
+                let top = media.count - 1u;
+                let m = media.medium[top];
+                let t_segment = min(t_scene, light_hit.t);
+                if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
+                    radiance += throughput * medium_emission(m, media.emission[top], t_segment);
+                }
+                if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
+                    let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
+                    if (!flight.valid) {
+                        break;
+                    }
+                    throughput *= flight.weight;
+                    if (flight.scattered) {
+                        vertex = ray.origin + ray.dir * flight.t;
+                        if (depth >= params.max_bounces) {
+                            break;
+                        }
+                        event = EVENT_MEDIUM;
+                        v = medium_vertex(vertex, ray.dir, m.g);
+                    }
+                } else {
+                    // Beer–Lambert: the medium only absorbs.
+                    throughput *= exp(-m.sigma_t * t_segment);
+                }
+            }
+            if (event == EVENT_SURFACE) {
+                if (light_hit.hit) {
+                    var w = 1.0;
+                    if (nee && !prev_delta) {
+                        w = power_heuristic(prev_bsdf_pdf, light_hit.pdf);
+                    }
+                    radiance += throughput * light_hit.radiance * w;
+                    if (light_hit.t < t_scene) {
+                        // The sphere light is opaque: the path ends on it.
+                        break;
+                    }
+                }
+                if (!hit.hit) {
+                    var w = 1.0;
+                    if (nee && !prev_delta && params.environment.w > 0.0) {
+                        w = power_heuristic(prev_bsdf_pdf, params.environment.w * environment_pdf(ray.dir));
+                    }
+                    radiance += throughput * environment_radiance(ray.dir) * w;
+                    break;
+                }
+                s = surface_at(hit);
+                let material = materials[s.material];
+                let front = dot(ray.dir, s.ng) < 0.0;
+                if (FEATURE_VOLUME && material.boundary_only != 0u) {
+                    // A volume's bare boundary: the path enters or leaves its medium unchanged.
+                    if (front) {
+                        media = media_entered(media, s.material, vec3<f32>(0.0));
+                    } else {
+                        media = media_left(media, s.material);
+                    }
+                    passes++;
+                    if (passes > MAX_PASS_THROUGH) {
+                        break;
+                    }
+                    ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
+                    continue;
+                }
+                let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
+                // A normal from a normal map or bump on the other side of the surface than its
+                // geometry would let light leak: keep the interpolated one then.
+                if (dot(me.normal, s.ng) > 0.0) {
+                    s.ns = me.normal;
+                }
+
+                // Alpha cut-out: the path continues through the surface without scattering.
+                let opacity = me.opacity;
+                if (opacity < 1.0 && rand() >= opacity) {
+                    passes++;
+                    if (passes > MAX_PASS_THROUGH) {
+                        break;
+                    }
+                    ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
+                    continue;
+                }
+
+                let emission = me.emission;
+                if (front && any(emission > vec3<f32>(0.0))) {
+                    var w = 1.0;
+                    if (nee && !prev_delta) {
+                        // Light sampling knows the surface by its buffer emission (0 for emission
+                        // that varies over it, which only BSDF sampling finds).
+                        let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, distance(vertex, s.pe.p), -dot(ray.dir, s.ng));
+                        w = power_heuristic(prev_bsdf_pdf, light_pdf);
+                    }
+                    radiance += throughput * emission * w;
+                }
+                // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
+                // Surfaces light passes through keep their front, so inside and outside differ.
+                transmissive = material.transmissive != 0u;
+                let flip = !transmissive && !front;
+                let ng = select(s.ng, -s.ng, flip);
+                let ns = select(s.ns, -s.ns, flip);
+                p = me.principled;
+                // Anisotropic highlights follow the texture's u direction, turned by the material.
+                var frame = frame_from_normal(ns);
+                if (p.anisotropy > 0.0) {
+                    frame = frame_from_normal_tangent(ns, s.dpdu, me.anisotropy_rotation);
+                }
+                let wo = to_local(frame, -ray.dir);
+                if (FEATURE_AOVS && depth == 0u) {
+                    let dielectric = 1.0 - p.metallic;
+                    aov_albedo = mix(p.base_color * mix(p.base_weight, 1.0, p.metallic), p.transmission_color, p.transmission_weight * dielectric);
+                    aov_normal = ns;
+                    aov_depth = hit.t;
+                }
+                // Past the AOVs, so that a render without bounces still has its first hit's.
+                if (depth >= params.max_bounces) {
+                    break;
+                }
+                v = surface_vertex(s.pe, ng, frame, wo);
+                // Light through a transmissive surface is seen from the media on its far side.
+                if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
+                    if (front) {
+                        beyond = media_entered(media, s.material, principled_extinction(p));
+                    } else {
+                        beyond = media_left(media, s.material);
+                    }
+                }
+            }
+        }
+
+        if (nee) {
+            radiance += throughput * sample_direct(v, p, beyond);
+        }
+
+        if (event == EVENT_MEDIUM) {
+            let wi = hg_sample(ray.dir, v.g, rand2());
+            prev_bsdf_pdf = hg_phase(dot(ray.dir, wi), v.g);
+            prev_delta = false;
+            if (!survives_roulette(depth, &throughput)) {
+                break;
+            }
+            ray = Ray(vertex, wi);
+            depth++;
+            continue;
+        }
+        if (event == EVENT_WALK_EXIT) {
             if (depth >= params.max_bounces) {
                 break;
             }
             let local = sample_cosine_hemisphere(rand2());
-            let wi = normalize(frame_to_world(exit_frame, local));
-            if (dot(wi, ng_out) <= 0.0 || local.z <= 0.0) {
+            let wi = normalize(frame_to_world(v.frame, local));
+            if (dot(wi, v.ng) <= 0.0 || local.z <= 0.0) {
                 break;
             }
             prev_bsdf_pdf = local.z / PI;
             prev_delta = false;
-            vertex = exit.pe.p;
-            ray = Ray(offset_ray_origin(exit.pe, ng_out, wi), wi);
+            vertex = v.pe.p;
+            ray = Ray(offset_ray_origin(v.pe, v.ng, wi), wi);
             depth++;
             continue;
         }
-        let t_scene = select(3.0e38, hit.t, hit.hit);
-        // Sphere lights and sun disks in front of the surface (or the sky).
-        var light_hit = AnalyticHit(false, t_scene, vec3<f32>(0.0), 0.0);
-        if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
-            light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene);
-        }
-        if (media.count > 0u) {
-            // The segment runs through the innermost medium; a medium without an exit
-            // absorbs everything.
-            let top = media.count - 1u;
-            let m = media.medium[top];
-            let t_segment = min(t_scene, light_hit.t);
-            if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
-                radiance += throughput * medium_emission(m, media.emission[top], t_segment);
-            }
-            if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
-                let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
-                if (!flight.valid) {
-                    break;
-                }
-                throughput *= flight.weight;
-                if (flight.scattered) {
-                    vertex = ray.origin + ray.dir * flight.t;
-                    if (depth >= params.max_bounces) {
-                        break;
-                    }
-                    if (nee) {
-                        radiance += throughput * sample_direct_medium(vertex, ray.dir, m.g);
-                    }
-                    let wi = hg_sample(ray.dir, m.g, rand2());
-                    prev_bsdf_pdf = hg_phase(dot(ray.dir, wi), m.g);
-                    prev_delta = false;
-                    if (!survives_roulette(depth, &throughput)) {
-                        break;
-                    }
-                    ray = Ray(vertex, wi);
-                    depth++;
-                    continue;
-                }
-            } else {
-                // Beer–Lambert: the medium only absorbs.
-                throughput *= exp(-m.sigma_t * t_segment);
-            }
-        }
-        if (light_hit.hit) {
-            var w = 1.0;
-            if (nee && !prev_delta) {
-                w = power_heuristic(prev_bsdf_pdf, light_hit.pdf);
-            }
-            radiance += throughput * light_hit.radiance * w;
-            if (light_hit.t < t_scene) {
-                // The sphere light is opaque: the path ends on it.
-                break;
-            }
-        }
-        if (!hit.hit) {
-            var w = 1.0;
-            if (nee && !prev_delta && params.environment.w > 0.0) {
-                w = power_heuristic(prev_bsdf_pdf, params.environment.w * environment_pdf(ray.dir));
-            }
-            radiance += throughput * environment_radiance(ray.dir) * w;
-            break;
-        }
-        var s = surface_at(hit);
-        let material = materials[s.material];
-        let front = dot(ray.dir, s.ng) < 0.0;
-        if (FEATURE_VOLUME && material.boundary_only != 0u) {
-            // A volume's bare boundary: the path enters or leaves its medium unchanged.
-            if (front) {
-                media = media_entered(media, s.material, vec3<f32>(0.0));
-            } else {
-                media = media_left(media, s.material);
-            }
-            passes++;
-            if (passes > MAX_PASS_THROUGH) {
-                break;
-            }
-            ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
-            continue;
-        }
-        let me = evaluate_material(s.material, shading_point(s, hit, -ray.dir, front));
-        // A normal from a normal map or bump on the other side of the surface than its
-        // geometry would let light leak: keep the interpolated one then.
-        if (dot(me.normal, s.ng) > 0.0) {
-            s.ns = me.normal;
-        }
 
-        // Alpha cut-out: the path continues through the surface without scattering.
-        let opacity = me.opacity;
-        if (opacity < 1.0 && rand() >= opacity) {
-            passes++;
-            if (passes > MAX_PASS_THROUGH) {
-                break;
-            }
-            ray = Ray(offset_ray_origin(s.pe, s.ng, ray.dir), ray.dir);
-            continue;
-        }
-
-        let emission = me.emission;
-        if (front && any(emission > vec3<f32>(0.0))) {
-            var w = 1.0;
-            if (nee && !prev_delta) {
-                // Light sampling knows the surface by its buffer emission (0 for emission
-                // that varies over it, which only BSDF sampling finds).
-                let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, distance(vertex, s.pe.p), -dot(ray.dir, s.ng));
-                w = power_heuristic(prev_bsdf_pdf, light_pdf);
-            }
-            radiance += throughput * emission * w;
-        }
-        // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
-        // Surfaces light passes through keep their front, so inside and outside differ.
-        let transmissive = material.transmissive != 0u;
-        let flip = !transmissive && !front;
-        let ng = select(s.ng, -s.ng, flip);
-        let ns = select(s.ns, -s.ns, flip);
-        let p = me.principled;
-        // Anisotropic highlights follow the texture's u direction, turned by the material.
-        var frame = frame_from_normal(ns);
-        if (p.anisotropy > 0.0) {
-            frame = frame_from_normal_tangent(ns, s.dpdu, me.anisotropy_rotation);
-        }
-        let wo = to_local(frame, -ray.dir);
-        if (FEATURE_AOVS && depth == 0u) {
-            let dielectric = 1.0 - p.metallic;
-            aov_albedo = mix(p.base_color * mix(p.base_weight, 1.0, p.metallic), p.transmission_color, p.transmission_weight * dielectric);
-            aov_normal = ns;
-            aov_depth = hit.t;
-        }
-        // Past the AOVs, so that a render without bounces still has its first hit's.
-        if (depth >= params.max_bounces) {
-            break;
-        }
-
-        if (nee) {
-            // Light through a transmissive surface is seen from the media on its far side.
-            var beyond = media;
-            if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
-                if (front) {
-                    beyond = media_entered(media, s.material, principled_extinction(p));
-                } else {
-                    beyond = media_left(media, s.material);
-                }
-            }
-            radiance += throughput * sample_direct(s, ng, frame, wo, p, beyond);
-        }
-
-        let bs = principled_sample(p, wo, rand(), rand(), rand2());
+        let bs = principled_sample(p, v.wo, rand(), rand(), rand2());
         if (!bs.valid) {
             break;
         }
-        let wi = normalize(frame_to_world(frame, bs.wi));
+        let wi = normalize(frame_to_world(v.frame, bs.wi));
         // A direction the shading frame calls reflection but the geometry calls
         // transmission (or the reverse) would pass through the surface: the path ends.
-        if (dot(wi, ng) * bs.wi.z <= 0.0) {
+        if (dot(wi, v.ng) * bs.wi.z <= 0.0) {
             break;
         }
         throughput *= bs.weight;
@@ -455,7 +502,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         if (!survives_roulette(depth, &throughput)) {
             break;
         }
-        ray = Ray(offset_ray_origin(s.pe, ng, wi), wi);
+        ray = Ray(offset_ray_origin(s.pe, v.ng, wi), wi);
         depth++;
     }
     return radiance;
