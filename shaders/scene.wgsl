@@ -89,7 +89,10 @@ struct Material {
     transmissive: u32,
     // 1 for a volume's boundary without a surface: light crosses it unchanged.
     boundary_only: u32,
-    _pad: array<u32, 2>,
+    // A heterogeneous volume inside: the extinction per unit length no point of it
+    // exceeds (its coefficients come from `evaluate_volume`); 0 for a homogeneous one.
+    volume_majorant: f32,
+    _pad: u32,
     // The homogeneous volume inside: absorption per unit length (w: the phase function's
     // g), scattering, emission per unit length; zero without one.
     volume_absorption: vec4<f32>,

@@ -9,16 +9,25 @@
 // a medium inside a glass inside fog sees the medium, then the glass's, then the fog's.
 // Objects nested deeper than MEDIA_DEPTH are treated as vacuum inside.
 //
-// Volumes are homogeneous: their coefficients are the material buffer's, which the
-// compiler computes from the volume node's constant inputs.
+// A homogeneous volume's coefficients are the material buffer's, which the compiler
+// computes from the volume node's constant inputs. A heterogeneous one (its inputs vary)
+// is evaluated at points inside by `evaluate_volume`, the material graph's volume alone;
+// paths track through it against its majorant, an extinction the compiler proved no
+// point exceeds: delta tracking for free flights, ratio tracking for transmittance.
 
 const MEDIA_DEPTH: u32 = 4u;
 
 struct Media {
     count: u32,
-    // The material whose inside each entry is.
+    // The material whose inside each entry is, and the instance (for object space).
     material: array<u32, 4>,
+    instance: array<u32, 4>,
+    // Homogeneous: the medium. Heterogeneous: the constant part (a transmissive
+    // surface's absorption) the graph's volume adds to.
     medium: array<Medium, 4>,
+    // A heterogeneous medium's majorant (its graph's, plus the constant part); 0 for a
+    // homogeneous one.
+    majorant: array<f32, 4>,
     // Emitted radiance per unit length.
     emission: array<vec3<f32>, 4>,
 };
@@ -31,12 +40,19 @@ fn media_empty() -> Media {
 
 // The media after entering the inside of `material`: its volume (the material buffer's)
 // with `absorption` more (a transmissive surface's Beer–Lambert extinction).
-fn media_entered(media_in: Media, material: u32, absorption: vec3<f32>) -> Media {
+fn media_entered(media_in: Media, material: u32, instance: u32, absorption: vec3<f32>) -> Media {
     var media = media_in;
     let i = media.count;
     if (i < MEDIA_DEPTH) {
         media.material[i] = material;
+        media.instance[i] = instance;
         media.medium[i] = material_medium(material, absorption);
+        media.majorant[i] = 0.0;
+        let majorant = materials[material].volume_majorant;
+        if (FEATURE_HETEROGENEOUS && majorant > 0.0) {
+            let a = max(absorption, vec3<f32>(0.0));
+            media.majorant[i] = majorant + max(a.x, max(a.y, a.z));
+        }
         media.emission[i] = materials[material].volume_emission.xyz;
         media.count = i + 1u;
     }
@@ -56,7 +72,9 @@ fn media_left(media_in: Media, material: u32) -> Media {
             found = true;
             for (var j = i; j + 1u < n; j++) {
                 media.material[j] = media.material[j + 1u];
+                media.instance[j] = media.instance[j + 1u];
                 media.medium[j] = media.medium[j + 1u];
+                media.majorant[j] = media.majorant[j + 1u];
                 media.emission[j] = media.emission[j + 1u];
             }
         }
@@ -84,4 +102,118 @@ fn medium_emission(m: Medium, emission: vec3<f32>, t: f32) -> vec3<f32> {
     // Thin: the series 1 - σt t / 2, which the formula above loses to rounding.
     let thin = emission * t * (vec3<f32>(1.0) - 0.5 * m.sigma_t * t);
     return select(thin, exact, thick);
+}
+
+// ---- Heterogeneous media ----
+
+// A tracked path gives up after this many tentative collisions in one segment (its
+// energy is lost; a majorant of 100 per unit crosses 40 units before).
+const HETEROGENEOUS_MAX_STEPS: u32 = 4096u;
+
+// A heterogeneous medium at a point: absorption, scattering and emission per unit length
+// and the phase function's g.
+struct MediumPoint {
+    sigma_a: vec3<f32>,
+    sigma_s: vec3<f32>,
+    emission: vec3<f32>,
+    g: f32,
+};
+
+// Entry `i` of `media` at `p`, for a path travelling along `dir`.
+fn medium_at(media: Media, i: u32, p: vec3<f32>, dir: vec3<f32>) -> MediumPoint {
+    let v = evaluate_volume(media.material[i], volume_point(media.instance[i], p, dir));
+    return MediumPoint(
+        max(v.absorption, vec3<f32>(0.0)) + media.medium[i].sigma_t,
+        max(v.scattering, vec3<f32>(0.0)),
+        max(v.emission, vec3<f32>(0.0)),
+        clamp(v.g, -HG_MAX_G, HG_MAX_G),
+    );
+}
+
+struct Tracked {
+    // Scattered inside the medium at distance t (else it reached t_max).
+    scattered: bool,
+    t: f32,
+    g: f32,
+    // The path's throughput after the segment, or at the scattering point.
+    throughput: vec3<f32>,
+    // Radiance the medium emitted toward the path's start, weighted by the throughput.
+    emitted: vec3<f32>,
+    // False when the path was absorbed (or ran out of steps): it ends.
+    valid: bool,
+};
+
+// A free flight through the innermost medium of `media`, heterogeneous, toward a boundary
+// `t_max` away, by delta tracking with a scalar majorant σ̄ made spectral as Kutz et al.
+// ("Spectral and Decomposition Tracking", 2017): tentative collisions come at rate σ̄; at
+// each the path scatters or passes on (a null collision) with probabilities in
+// proportion to throughput × σs and throughput × σn (σn = σ̄ - σt), and is weighted by
+// the coefficient over σ̄ times that probability, so that absorption lowers its weight
+// instead of ending it. Emission adds throughput × Le / σ̄ at every tentative collision,
+// whose expectation is the segment's integral of transmittance × Le.
+fn heterogeneous_flight(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, throughput: vec3<f32>) -> Tracked {
+    let top = media.count - 1u;
+    let majorant = media.majorant[top];
+    var r: Tracked;
+    r.throughput = throughput;
+    r.emitted = vec3<f32>(0.0);
+    r.valid = true;
+    var t = 0.0;
+    for (var i = 0u; i < HETEROGENEOUS_MAX_STEPS; i++) {
+        t -= log(1.0 - rand()) / majorant;
+        if (t >= t_max) {
+            r.t = t_max;
+            return r;
+        }
+        let c = medium_at(media, top, origin + dir * t, dir);
+        r.emitted += r.throughput * c.emission / majorant;
+        let sigma_n = max(vec3<f32>(majorant) - c.sigma_a - c.sigma_s, vec3<f32>(0.0));
+        let ws = r.throughput * c.sigma_s;
+        let wn = r.throughput * sigma_n;
+        let ps = ws.x + ws.y + ws.z;
+        let pn = wn.x + wn.y + wn.z;
+        if (!(ps + pn > 0.0)) {
+            r.valid = false;
+            return r;
+        }
+        if (rand() * (ps + pn) < ps) {
+            r.throughput *= c.sigma_s * ((ps + pn) / (majorant * ps));
+            r.scattered = true;
+            r.t = t;
+            r.g = c.g;
+            return r;
+        }
+        r.throughput *= sigma_n * ((ps + pn) / (majorant * pn));
+    }
+    r.valid = false;
+    return r;
+}
+
+// The transmittance of the innermost medium of `media`, heterogeneous, from `origin` along
+// `dir` to `t_max`, by ratio tracking (Novák et al. 2014): the product of σn / σ̄ over
+// tentative collisions, per channel. Russian roulette ends estimates that fall low.
+fn ratio_tracking(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -> vec3<f32> {
+    let top = media.count - 1u;
+    let majorant = media.majorant[top];
+    var tr = vec3<f32>(1.0);
+    var t = 0.0;
+    for (var i = 0u; i < HETEROGENEOUS_MAX_STEPS; i++) {
+        t -= log(1.0 - rand()) / majorant;
+        if (t >= t_max) {
+            return tr;
+        }
+        let c = medium_at(media, top, origin + dir * t, dir);
+        tr *= max(vec3<f32>(1.0) - (c.sigma_a + c.sigma_s) / majorant, vec3<f32>(0.0));
+        let m = max(tr.x, max(tr.y, tr.z));
+        if (!(m > 0.0)) {
+            return vec3<f32>(0.0);
+        }
+        if (m < 0.1) {
+            if (rand() < 0.5) {
+                return vec3<f32>(0.0);
+            }
+            tr *= 2.0;
+        }
+    }
+    return vec3<f32>(0.0);
 }

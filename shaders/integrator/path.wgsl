@@ -45,18 +45,42 @@ fn instance_random(i: u32) -> f32 {
     return f32(x >> 8u) / 16777216.0;
 }
 
+// Where a world-space point lies in an instance's object: its object-space position and
+// its generated coordinates (the position within the object's bounds, [0, 1]³ inside).
+fn generated_coordinates(inst: Instance, p_object: vec3<f32>) -> vec3<f32> {
+    let bounds = fetch_blas_node(inst.blas_root);
+    let extent = bounds.max - bounds.min;
+    return (p_object - bounds.min) / select(extent, vec3<f32>(1.0), extent <= vec3<f32>(0.0));
+}
+
+fn instance_location(inst: Instance) -> vec3<f32> {
+    return vec3<f32>(inst.to_world[0].w, inst.to_world[1].w, inst.to_world[2].w);
+}
+
 // What material graphs see of a hit (shaders/nodes/inputs.wgsl).
 fn shading_point(s: Surface, hit: SceneHit, wo: vec3<f32>, front: bool) -> ShadingPoint {
     let inst = instances[hit.instance];
     let p_object = transform_point(inst.to_object, s.pe.p);
-    let bounds = fetch_blas_node(inst.blas_root);
-    let extent = bounds.max - bounds.min;
-    let generated = (p_object - bounds.min) / select(extent, vec3<f32>(1.0), extent <= vec3<f32>(0.0));
     let n_object = normalize(transform_vector(transpose_rows(inst.to_world), s.ns));
-    let location = vec3<f32>(inst.to_world[0].w, inst.to_world[1].w, inst.to_world[2].w);
     return ShadingPoint(
-        s.pe.p, s.ns, s.ng, s.uv, s.uv1, s.dpdu, s.dpdv, wo, p_object, n_object, generated, s.color,
-        instance_random(hit.instance), location, !front,
+        s.pe.p, s.ns, s.ng, s.uv, s.uv1, s.dpdu, s.dpdv, wo, p_object, n_object,
+        generated_coordinates(inst, p_object), s.color, instance_random(hit.instance),
+        instance_location(inst), !front,
+    );
+}
+
+// What a volume's graph sees at a point `p` inside instance `instance`, for a path
+// travelling along `dir`: as in Cycles, the normal faces back along the path; there are
+// no texture coordinates or vertex colours inside.
+fn volume_point(instance: u32, p: vec3<f32>, dir: vec3<f32>) -> ShadingPoint {
+    let inst = instances[instance];
+    let p_object = transform_point(inst.to_object, p);
+    let n = -dir;
+    let n_object = normalize(transform_vector(transpose_rows(inst.to_world), n));
+    return ShadingPoint(
+        p, n, n, vec2<f32>(0.0), vec2<f32>(0.0), vec3<f32>(0.0), vec3<f32>(0.0), n, p_object,
+        n_object, generated_coordinates(inst, p_object), vec4<f32>(1.0),
+        instance_random(instance), instance_location(inst), false,
     );
 }
 
@@ -123,7 +147,11 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
         let hit = traverse_scene(Ray(o, dir), remaining, false);
         let t = select(remaining, hit.t, hit.hit);
         if (inside.count > 0u) {
-            tr *= exp(-inside.medium[inside.count - 1u].sigma_t * t);
+            if (FEATURE_HETEROGENEOUS && inside.majorant[inside.count - 1u] > 0.0) {
+                tr *= ratio_tracking(inside, o, dir, t);
+            } else {
+                tr *= exp(-inside.medium[inside.count - 1u].sigma_t * t);
+            }
         }
         if (!hit.hit) {
             return tr;
@@ -133,7 +161,7 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
             return vec3<f32>(0.0);
         }
         if (dot(dir, s.ng) < 0.0) {
-            inside = media_entered(inside, s.material, vec3<f32>(0.0));
+            inside = media_entered(inside, s.material, hit.instance, vec3<f32>(0.0));
         } else {
             inside = media_left(inside, s.material);
         }
@@ -317,26 +345,43 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 let top = media.count - 1u;
                 let m = media.medium[top];
                 let t_segment = min(t_scene, light_hit.t);
-                if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
-                    radiance += throughput * medium_emission(m, media.emission[top], t_segment);
-                }
-                if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
-                    let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
-                    if (!flight.valid) {
+                if (FEATURE_HETEROGENEOUS && media.majorant[top] > 0.0) {
+                    let tracked = heterogeneous_flight(media, ray.origin, ray.dir, t_segment, throughput);
+                    radiance += tracked.emitted;
+                    throughput = tracked.throughput;
+                    if (!tracked.valid) {
                         break;
                     }
-                    throughput *= flight.weight;
-                    if (flight.scattered) {
-                        vertex = ray.origin + ray.dir * flight.t;
+                    if (tracked.scattered) {
+                        vertex = ray.origin + ray.dir * tracked.t;
                         if (depth >= params.max_bounces) {
                             break;
                         }
                         event = EVENT_MEDIUM;
-                        v = medium_vertex(vertex, ray.dir, m.g);
+                        v = medium_vertex(vertex, ray.dir, tracked.g);
                     }
                 } else {
-                    // Beer–Lambert: the medium only absorbs.
-                    throughput *= exp(-m.sigma_t * t_segment);
+                    if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
+                        radiance += throughput * medium_emission(m, media.emission[top], t_segment);
+                    }
+                    if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
+                        let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
+                        if (!flight.valid) {
+                            break;
+                        }
+                        throughput *= flight.weight;
+                        if (flight.scattered) {
+                            vertex = ray.origin + ray.dir * flight.t;
+                            if (depth >= params.max_bounces) {
+                                break;
+                            }
+                            event = EVENT_MEDIUM;
+                            v = medium_vertex(vertex, ray.dir, m.g);
+                        }
+                    } else {
+                        // Beer–Lambert: the medium only absorbs.
+                        throughput *= exp(-m.sigma_t * t_segment);
+                    }
                 }
             }
             if (event == EVENT_SURFACE) {
@@ -365,7 +410,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 if (FEATURE_VOLUME && material.boundary_only != 0u) {
                     // A volume's bare boundary: the path enters or leaves its medium unchanged.
                     if (front) {
-                        media = media_entered(media, s.material, vec3<f32>(0.0));
+                        media = media_entered(media, s.material, hit.instance, vec3<f32>(0.0));
                     } else {
                         media = media_left(media, s.material);
                     }
@@ -432,7 +477,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 // Light through a transmissive surface is seen from the media on its far side.
                 if (FEATURE_VOLUME && transmissive && !p.thin_walled) {
                     if (front) {
-                        beyond = media_entered(media, s.material, principled_extinction(p));
+                        beyond = media_entered(media, s.material, hit.instance, principled_extinction(p));
                     } else {
                         beyond = media_left(media, s.material);
                     }
@@ -493,7 +538,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         } else if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
             if (dot(wi, s.ng) < 0.0) {
-                media = media_entered(media, s.material, principled_extinction(p));
+                media = media_entered(media, s.material, hit.instance, principled_extinction(p));
             } else {
                 media = media_left(media, s.material);
             }

@@ -21,6 +21,7 @@ use std::fmt::Write as _;
 
 use thiserror::Error;
 
+use super::bounds::Bounds;
 use super::graph::{
     Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, REROUTE,
     REROUTE_INPUT, REROUTE_OUTPUT, RampStop, SocketType, Value,
@@ -62,6 +63,11 @@ pub struct MaterialTraits {
     pub boundary_only: bool,
     /// The volume inside, homogeneous (its inputs are constants).
     pub volume: Option<VolumeCoefficients>,
+    /// For a heterogeneous volume (its coefficients vary inside): an extinction per scene
+    /// unit that no point of it exceeds in any channel, proved from the bounds of the
+    /// nodes feeding it ([`super::bounds`]); the integrator tracks through it by delta
+    /// and ratio tracking, evaluating the volume's function at points inside.
+    pub volume_majorant: Option<f32>,
 }
 
 /// A homogeneous volume's coefficients per scene unit and channel (what
@@ -93,6 +99,9 @@ pub struct CompiledMaterial {
     pub function: String,
     /// The material's WGSL: helper functions, then `function`.
     pub code: String,
+    /// For a heterogeneous volume: `fn <volume_function>(sp: ShadingPoint) -> VolumeEval`
+    /// in `code`, the volume at a point inside.
+    pub volume_function: Option<String>,
     /// Node-library functions `code` calls (entry points; kernel assembly adds what
     /// they call in turn).
     pub calls: BTreeSet<String>,
@@ -173,15 +182,43 @@ pub fn compile_with(
     let output = find_output(&ctx, graph, &flat)?;
     reject_cycles(&ctx, &flat, output)?;
     check_volume(&ctx, &flat, output)?;
-    emit_function(
+    let mut material = emit_function(
         &ctx,
-        flat,
+        flat.clone(),
         (output, 0),
         (function, "MaterialEval"),
         textures,
         constants,
         |flat, root| (root.to_owned(), traits(flat, output)),
-    )
+    )?;
+    if material.traits.volume_majorant.is_some() {
+        // The volume alone, for the points inside where the integrator tracks through it.
+        let Src::Out(volume, o) = flat[output].inputs[1] else {
+            unreachable!("a heterogeneous volume is linked")
+        };
+        let name = format!("{function}_volume");
+        let constants = match constants {
+            Constants::Inline => Constants::Inline,
+            Constants::Live { base } => Constants::Live {
+                base: base + material.parameters.len() as u32,
+            },
+        };
+        let inside = emit_function(
+            &ctx,
+            flat,
+            (volume, o),
+            (&name, "VolumeEval"),
+            textures,
+            constants,
+            |_, root| (root.to_owned(), MaterialTraits::default()),
+        )?;
+        material.code.push_str(&inside.code);
+        material.calls.extend(inside.calls);
+        material.images.extend(inside.images);
+        material.parameters.extend(inside.parameters);
+        material.volume_function = Some(name);
+    }
+    Ok(material)
 }
 
 /// Rejects cycles toward `root`, folds constants, merges identical nodes and emits
@@ -227,6 +264,7 @@ fn emit_function(
         material: ctx.material.to_owned(),
         function: function.to_owned(),
         code,
+        volume_function: None,
         calls: emitter.calls,
         traits,
         images: emitter.images,
@@ -1087,26 +1125,110 @@ fn traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
         let mut folded = flat.to_vec();
         fold_constants(&mut folded, output);
         traits.volume = node_traits(&folded[volume]).volume;
+        if traits.volume.is_none() {
+            let mut ranges = Ranges::new(&folded);
+            let sigma_t = ranges.output(volume, 0);
+            let majorant = sigma_t.hi.into_iter().fold(0.0f32, f32::max);
+            traits.volume_majorant = sigma_t.is_finite().then_some(majorant);
+            traits.lobes |= crate::shader::lobes::HETEROGENEOUS;
+        }
     }
     traits
 }
 
-/// Volumes are homogeneous: a volume whose coefficients vary (a texture feeding its
-/// density) is refused, naming the node, until heterogeneous media are rendered.
+/// A heterogeneous volume needs a bounded extinction (its majorant): a volume whose
+/// extinction no bound is known for is refused, naming the node that makes it unbounded.
 fn check_volume(ctx: &Ctx, flat: &[FlatNode], output: usize) -> Result<(), GraphError> {
     let Src::Out(volume, _) = flat[output].inputs[1] else {
         return Ok(());
     };
-    if traits(flat, output).volume.is_some() {
+    let t = traits(flat, output);
+    if t.volume.is_some() || t.volume_majorant.is_some() {
         return Ok(());
     }
-    Err(ctx.err(
-        Some(&flat[volume].id),
-        None,
-        "a volume's inputs must be constants: volumes whose density or colour vary inside \
-         (heterogeneous media) are not rendered yet"
-            .into(),
-    ))
+    let mut folded = flat.to_vec();
+    fold_constants(&mut folded, output);
+    let mut ranges = Ranges::new(&folded);
+    let culprit = ranges.unbounded_source(volume);
+    let node = &folded[culprit];
+    let message = if culprit == volume {
+        "the volume's extinction has no upper bound (its density or colour is unbounded)".to_owned()
+    } else {
+        format!(
+            "feeds a volume's density or colour, and no upper bound of its output is known \
+             ({} node): a heterogeneous volume needs one for its majorant; pass the value \
+             through a Clamp or a clamped Map Range node",
+            node.def.label
+        )
+    };
+    Err(ctx.err(Some(&node.id), None, message))
+}
+
+/// Bounds of node outputs by interval arithmetic ([`super::bounds`]), memoised.
+struct Ranges<'a> {
+    flat: &'a [FlatNode],
+    memo: HashMap<usize, Vec<Bounds>>,
+}
+
+impl<'a> Ranges<'a> {
+    fn new(flat: &'a [FlatNode]) -> Self {
+        Self {
+            flat,
+            memo: HashMap::new(),
+        }
+    }
+
+    /// The bounds of each input of `node`, in the input's type.
+    fn inputs(&mut self, node: usize) -> Vec<Bounds> {
+        let n = &self.flat[node];
+        (0..n.inputs.len())
+            .map(|i| match &n.inputs[i] {
+                Src::Out(m, o) => {
+                    let b = self.output(*m, *o);
+                    let from = output_type(self.flat, *m, *o);
+                    match from.converts_to(n.def.inputs[i].ty) {
+                        Some(Conversion::Luminance) => b.luminance(),
+                        Some(Conversion::Average) => b.average(),
+                        _ => b,
+                    }
+                }
+                // Shading-point values (coordinates, normals) are not bounded.
+                Src::Implicit(..) => Bounds::UNBOUNDED,
+                _ => constant(n, i).map_or(Bounds::UNBOUNDED, |v| Bounds::exact(&v)),
+            })
+            .collect()
+    }
+
+    fn output(&mut self, node: usize, output: usize) -> Bounds {
+        if let Some(b) = self.memo.get(&node) {
+            return b.get(output).copied().unwrap_or(Bounds::UNBOUNDED);
+        }
+        let n = &self.flat[node];
+        let outputs = match n.def.range {
+            Some(range) => {
+                let inputs = self.inputs(node);
+                range(&inputs, params(n))
+            }
+            None => Vec::new(),
+        };
+        let b = outputs.get(output).copied().unwrap_or(Bounds::UNBOUNDED);
+        self.memo.insert(node, outputs);
+        b
+    }
+
+    /// The node whose unbounded output makes `node`'s unbounded while its own inputs are
+    /// bounded (or it declares no range): where a clamp would help.
+    fn unbounded_source(&mut self, node: usize) -> usize {
+        let inputs = self.flat[node].inputs.clone();
+        for src in inputs {
+            if let Src::Out(m, o) = src {
+                if !self.output(m, o).is_finite() {
+                    return self.unbounded_source(m);
+                }
+            }
+        }
+        node
+    }
 }
 
 /// What a shader node declares of the material it makes.

@@ -3,6 +3,7 @@
 //! format ([`load_material`]). Kernel assembly splices compiled materials into the
 //! path-tracing kernel through [`materials_wgsl`].
 
+pub mod bounds;
 pub mod compile;
 pub mod docs;
 pub mod graph;
@@ -181,13 +182,20 @@ pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> 
 }
 
 /// WGSL for a scene's compiled materials: the node-library items they need, each
-/// material's function, and the dispatcher `evaluate_material(id, sp)` the integrator
-/// calls. Materials not listed read their fixed parameters from the material buffer.
+/// material's function, and the dispatchers the integrator calls:
+/// `evaluate_material(id, sp)`, and `evaluate_volume(id, sp)` for heterogeneous volumes
+/// inside. Materials not listed read their fixed parameters from the material buffer.
 pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, String)> {
     // The integrator reads the material buffer through `material_eval` too.
-    let mut roots: BTreeSet<String> = ["ShadingPoint", "MaterialEval", "material_eval"]
-        .map(String::from)
-        .into();
+    let mut roots: BTreeSet<String> = [
+        "ShadingPoint",
+        "MaterialEval",
+        "material_eval",
+        "VolumeEval",
+        "nd_no_volume",
+    ]
+    .map(String::from)
+    .into();
     for (_, m) in materials {
         roots.extend(m.calls.iter().cloned());
     }
@@ -215,6 +223,22 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, St
         dispatcher.push_str("        default: {}\n    }\n");
     }
     dispatcher.push_str("    return material_from_buffer(id, sp);\n}\n");
+    // Heterogeneous volumes at points inside (shaders/integrator/media.wgsl).
+    dispatcher.push_str("fn evaluate_volume(id: u32, sp: ShadingPoint) -> VolumeEval {\n");
+    let volumes: Vec<_> = materials
+        .iter()
+        .filter_map(|(id, m)| Some((id, m.volume_function.as_ref()?)))
+        .collect();
+    if !volumes.is_empty() {
+        dispatcher.push_str("    switch (id) {\n");
+        for (id, function) in volumes {
+            dispatcher.push_str(&format!(
+                "        case {id}u: {{ return {function}(sp); }}\n"
+            ));
+        }
+        dispatcher.push_str("        default: {}\n    }\n");
+    }
+    dispatcher.push_str("    return nd_no_volume();\n}\n");
     parts.push(("material dispatcher (generated)".to_owned(), dispatcher));
     parts
 }

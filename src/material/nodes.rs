@@ -14,6 +14,7 @@
 use std::collections::BTreeMap;
 use std::sync::OnceLock;
 
+use super::bounds::{self, RangeFn};
 use super::compile::{GraphError, MaterialTraits, VolumeCoefficients};
 use super::graph::{Param, RampStop, SocketType, Value};
 use crate::shader::principled::{self, ParamValue};
@@ -250,6 +251,9 @@ pub struct NodeDef {
     pub traits: Option<SurfaceTraits>,
     /// Constant folding; nodes without stay code even when their inputs are constant.
     pub fold: Option<Fold>,
+    /// How bounds of the inputs bound the outputs ([`super::bounds`]); nodes without are
+    /// unbounded, which a heterogeneous volume's density may not depend on.
+    pub range: Option<RangeFn>,
     pub code: Code,
 }
 
@@ -505,6 +509,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: Some(bounds::texture_coordinate),
             code: Code::Template("nd_texture_coordinate(sp)"),
         },
         NodeDef {
@@ -544,6 +549,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_geometry(sp)"),
         },
         NodeDef {
@@ -559,6 +565,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("sp.vertex_color"),
         },
         NodeDef {
@@ -584,6 +591,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_object_info(sp)"),
         },
         NodeDef {
@@ -599,6 +607,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_fresnel({ior}, {normal}, sp)"),
         },
         NodeDef {
@@ -622,6 +631,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_layer_weight({blend}, {normal}, sp)"),
         },
         NodeDef {
@@ -634,6 +644,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_value),
+            range: Some(bounds::identity),
             code: Code::Template("{value}"),
         },
         NodeDef {
@@ -646,6 +657,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_vec3),
+            range: Some(bounds::identity),
             code: Code::Template("{color}"),
         },
         NodeDef {
@@ -658,6 +670,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_vec3),
+            range: Some(bounds::identity),
             code: Code::Template("{vector}"),
         },
         // -------------------------------------------------------------- textures
@@ -700,6 +713,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_image({file}, {vector}.xy, {color_space}, {extension}, {interpolation})",
             ),
@@ -724,6 +738,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("node_checker({vector}, {color1}, {color2}, {scale})"),
         },
         NodeDef {
@@ -753,6 +768,7 @@ fn build() -> Vec<NodeDef> {
             )],
             traits: None,
             fold: None,
+            range: Some(bounds::unit),
             code: Code::Template("node_gradient({vector}, {gradient_type})"),
         },
         NodeDef {
@@ -792,6 +808,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: Some(bounds::unit),
             code: Code::Template(
                 "node_noise({vector}, {scale}, {detail}, {roughness}, {lacunarity}, {distortion})",
             ),
@@ -857,6 +874,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_voronoi({vector}, {scale}, {smoothness}, {exponent}, {randomness}, {feature}, {distance})",
             ),
@@ -906,6 +924,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_wave({vector}, {scale}, {distortion}, {detail}, {detail_scale}, {detail_roughness}, {phase_offset}, {wave_type}, {direction}, {profile})",
             ),
@@ -983,6 +1002,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_brick({vector}, {color1}, {color2}, {mortar}, {scale}, {mortar_size}, {mortar_smooth}, {bias}, {brick_width}, {row_height}, {offset}, {offset_frequency}, {squash}, {squash_frequency})",
             ),
@@ -1005,6 +1025,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: Some(bounds::unit),
             code: Code::Template("node_white_noise({vector})"),
         },
         // ------------------------------------------------------------------ math
@@ -1034,6 +1055,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: Some(fold_math),
+            range: Some(bounds::math),
             code: Code::Template("nd_clamp_if(node_math({operation}, {a}, {b}, {c}), {clamp})"),
         },
         NodeDef {
@@ -1054,6 +1076,7 @@ fn build() -> Vec<NodeDef> {
             )],
             traits: None,
             fold: Some(fold_clamp),
+            range: Some(bounds::clamp),
             code: Code::Template("node_clamp({clamp_type}, {value}, {min}, {max})"),
         },
         NodeDef {
@@ -1089,6 +1112,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: Some(bounds::map_range),
             code: Code::Template(
                 "node_map_range({interpolation}, {value}, {from_min}, {from_max}, {to_min}, {to_max}, {steps}, {clamp})",
             ),
@@ -1120,6 +1144,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![choice("operation", VECTOR_MATH_OPERATIONS, "the operation")],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("node_vector_math({operation}, {a}, {b}, {c}, {scale})"),
         },
         NodeDef {
@@ -1140,6 +1165,7 @@ fn build() -> Vec<NodeDef> {
             }],
             traits: None,
             fold: Some(fold_mix_float),
+            range: Some(bounds::mix),
             code: Code::Template("mix({a}, {b}, nd_clamp_if({factor}, {clamp_factor}))"),
         },
         NodeDef {
@@ -1160,6 +1186,7 @@ fn build() -> Vec<NodeDef> {
             }],
             traits: None,
             fold: None,
+            range: Some(bounds::mix),
             code: Code::Template("mix({a}, {b}, vec3<f32>(nd_clamp_if({factor}, {clamp_factor})))"),
         },
         // ----------------------------------------------------------------- colour
@@ -1184,6 +1211,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: Some(bounds::mix_color),
             code: Code::Template(
                 "nd_clamp3_if(node_mix_color({blend}, clamp({factor}, 0.0, 1.0), {a}, {b}), {clamp_result})",
             ),
@@ -1212,6 +1240,7 @@ fn build() -> Vec<NodeDef> {
             ],
             traits: None,
             fold: None,
+            range: Some(bounds::color_ramp),
             code: Code::Generated(generate_color_ramp),
         },
         NodeDef {
@@ -1235,6 +1264,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_hue_saturation_value({hue}, {saturation}, {value}, {fac}, {color})",
             ),
@@ -1252,6 +1282,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_invert),
+            range: Some(bounds::invert),
             code: Code::Template("node_invert({fac}, {color})"),
         },
         NodeDef {
@@ -1267,6 +1298,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("node_gamma({color}, {gamma})"),
         },
         NodeDef {
@@ -1293,6 +1325,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("node_bright_contrast({color}, {bright}, {contrast})"),
         },
         NodeDef {
@@ -1305,6 +1338,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: Some(bounds::rgb_to_bw),
             code: Code::Template("node_rgb_to_bw({color})"),
         },
         // ------------------------------------------------------------- converters
@@ -1322,6 +1356,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![choice("mode", &["rgb", "hsv"], "channels")],
             traits: None,
             fold: None,
+            range: Some(bounds::separate),
             code: Code::Template("nd_separate_color({color}, {mode})"),
         },
         NodeDef {
@@ -1338,6 +1373,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![choice("mode", &["rgb", "hsv"], "channels")],
             traits: None,
             fold: None,
+            range: Some(bounds::combine),
             code: Code::Template("nd_combine_color(vec3<f32>({red}, {green}, {blue}), {mode})"),
         },
         NodeDef {
@@ -1354,6 +1390,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_separate_xyz),
+            range: Some(bounds::separate),
             code: Code::Template("{vector}"),
         },
         NodeDef {
@@ -1370,6 +1407,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: Some(fold_combine_xyz),
+            range: Some(bounds::combine),
             code: Code::Template("vec3<f32>({x}, {y}, {z})"),
         },
         NodeDef {
@@ -1391,6 +1429,7 @@ fn build() -> Vec<NodeDef> {
             )],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template(
                 "node_mapping({vector_type}, {vector}, {location}, {rotation}, {scale})",
             ),
@@ -1417,6 +1456,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_normal_map({strength}, {color}, sp)"),
         },
         NodeDef {
@@ -1448,6 +1488,7 @@ fn build() -> Vec<NodeDef> {
             }],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Generated(generate_bump),
         },
         // ---------------------------------------------------------------- shaders
@@ -1461,6 +1502,7 @@ fn build() -> Vec<NodeDef> {
             params: principled_params(),
             traits: Some(principled_bsdf_traits),
             fold: None,
+            range: None,
             code: Code::Generated(generate_principled_bsdf),
         },
         NodeDef {
@@ -1476,6 +1518,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: Some(volume_absorption_traits),
             fold: None,
+            range: Some(bounds::volume_absorption),
             code: Code::Template("nd_volume_absorption({color}, {density})"),
         },
         NodeDef {
@@ -1501,6 +1544,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: Some(volume_scatter_traits),
             fold: None,
+            range: Some(bounds::volume_scatter),
             code: Code::Template("nd_volume_scatter({color}, {density}, {anisotropy})"),
         },
         NodeDef {
@@ -1535,6 +1579,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: Some(principled_volume_traits),
             fold: None,
+            range: Some(bounds::principled_volume),
             code: Code::Template(
                 "nd_principled_volume({color}, {density}, {anisotropy}, {absorption_color}, {emission_strength}, {emission_color})",
             ),
@@ -1567,6 +1612,7 @@ fn build() -> Vec<NodeDef> {
             params: vec![],
             traits: None,
             fold: None,
+            range: None,
             code: Code::Template("nd_material_output({surface}, {volume})"),
         },
     ]

@@ -135,10 +135,16 @@ fn interpreted_scene_materials(scene: &Scene) -> Result<SceneMaterials, ProgramE
 /// The interpreter and a dispatcher that runs each graph material's program.
 fn interpreter_wgsl(textures: bool) -> Vec<(String, String)> {
     let interpreter = interpreter(textures);
-    let roots = ["ShadingPoint", "MaterialEval", "material_eval"]
-        .map(String::from)
-        .into_iter()
-        .chain(interpreter.calls.iter().cloned());
+    let roots = [
+        "ShadingPoint",
+        "MaterialEval",
+        "material_eval",
+        "VolumeEval",
+        "nd_no_volume",
+    ]
+    .map(String::from)
+    .into_iter()
+    .chain(interpreter.calls.iter().cloned());
     vec![
         (
             "node library items used (shaders/nodes/)".to_owned(),
@@ -158,6 +164,10 @@ fn interpreter_wgsl(textures: bool) -> Vec<(String, String)> {
         }
     }
     return material_from_buffer(id, sp);
+}
+// The interpreted graph computes its volume with its surface.
+fn evaluate_volume(id: u32, sp: ShadingPoint) -> VolumeEval {
+    return evaluate_material(id, sp).volume;
 }
 "
             .to_owned(),

@@ -147,6 +147,11 @@ impl Material {
         self.graph.as_ref().and_then(|g| g.traits.volume)
     }
 
+    /// A heterogeneous volume's majorant ([`crate::material::compile::MaterialTraits`]).
+    pub fn volume_majorant(&self) -> Option<f32> {
+        self.graph.as_ref().and_then(|g| g.traits.volume_majorant)
+    }
+
     /// Whether the surface is only a volume's boundary (a graph with a volume and no
     /// surface), which light crosses unchanged.
     pub fn is_boundary_only(&self) -> bool {

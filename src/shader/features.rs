@@ -50,7 +50,7 @@ impl KernelFeatures {
     /// times longer, so a scene gains it when it gains a volume (a kernel build).
     pub fn everything(self) -> Self {
         Self {
-            lobes: (lobes::ALL & !lobes::VOLUME) | (self.lobes & lobes::VOLUME),
+            lobes: (lobes::ALL & !lobes::VOLUMES) | (self.lobes & lobes::VOLUMES),
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,

@@ -92,7 +92,10 @@ pub struct GpuMaterial {
     pub transmissive: u32,
     /// 1 for a volume's boundary without a surface: light crosses it unchanged.
     pub boundary_only: u32,
-    pub _pad: [u32; 2],
+    /// A heterogeneous volume's majorant: the extinction per unit length no point of it
+    /// exceeds; 0 for a homogeneous one.
+    pub volume_majorant: f32,
+    pub _pad: u32,
     /// The homogeneous volume inside: absorption per unit length (w: the phase
     /// function's g), scattering, emission per unit length; zero without one.
     pub volume_absorption: [f32; 4],
@@ -267,6 +270,7 @@ mod tests {
                 emission,
                 transmissive,
                 boundary_only,
+                volume_majorant,
                 _pad,
                 volume_absorption,
                 volume_scattering,

@@ -79,8 +79,13 @@ pub mod lobes {
     /// Not a lobe of the surface: a volume inside it (`shaders/nodes/volume.wgsl`), which
     /// the kernel specialises on like a lobe.
     pub const VOLUME: u32 = 128;
-    pub const ALL: u32 = 255;
-    pub const NAMES: [(u32, &str); 8] = [
+    /// A volume whose coefficients vary inside: delta and ratio tracking, and the
+    /// volume functions of the material graphs (`evaluate_volume`).
+    pub const HETEROGENEOUS: u32 = 256;
+    /// What a volume adds to a kernel.
+    pub const VOLUMES: u32 = VOLUME | HETEROGENEOUS;
+    pub const ALL: u32 = 511;
+    pub const NAMES: [(u32, &str); 9] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
         (METAL, "METAL"),
@@ -89,5 +94,6 @@ pub mod lobes {
         (DIFFUSE, "DIFFUSE"),
         (SUBSURFACE, "SUBSURFACE"),
         (VOLUME, "VOLUME"),
+        (HETEROGENEOUS, "HETEROGENEOUS"),
     ];
 }
