@@ -146,6 +146,7 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
         "showcase.kiln",
         "subsurface.kiln",
         "volumes.kiln",
+        "cloud.kiln",
     ] {
         let path = std::path::Path::new(env!("CARGO_MANIFEST_DIR"))
             .join("assets/scenes")
