@@ -37,6 +37,8 @@ struct Principled {
     sheen_weight: f32,
     sheen_roughness: f32,
     diffuse_roughness: f32,
+    subsurface_weight: f32,
+    thin_walled: bool,
 }
 
 impl Principled {
@@ -51,6 +53,8 @@ impl Principled {
             sheen_weight: 0.0,
             sheen_roughness: 0.3,
             diffuse_roughness: 0.0,
+            subsurface_weight: 0.0,
+            thin_walled: false,
         }
     }
 }
@@ -99,6 +103,7 @@ impl Lobe {
             sheen_weight: p.sheen_weight,
             sheen_color: Vec3::new(1.0, 0.9, 0.8),
             sheen_roughness: p.sheen_roughness,
+            subsurface_weight: p.subsurface_weight,
             thin_walled: self.thin,
             ..Default::default()
         };
@@ -216,7 +221,7 @@ fn principled_lobes() -> Vec<Lobe> {
     let base = |label: String, wo: Vec3, principled: Principled| Lobe {
         label,
         kind: 5,
-        thin: false,
+        thin: principled.thin_walled,
         roughness: 0.5,
         anisotropy: 0.0,
         eta: 1.5,
@@ -277,9 +282,20 @@ fn principled_lobes() -> Vec<Lobe> {
                 ..Principled::plastic()
             },
         ),
+        (
+            // Diffuse transmission through a thin wall, under rough thin glass: two lobes
+            // on the far side.
+            "translucent leaf",
+            Principled {
+                subsurface_weight: 0.6,
+                transmission_weight: 0.3,
+                thin_walled: true,
+                ..Principled::plastic()
+            },
+        ),
     ];
     for (name, material) in materials {
-        let transmissive = material.transmission_weight > 0.0;
+        let transmissive = material.transmission_weight > 0.0 || material.thin_walled;
         for angle in [0.0, 45.0, 80.0] {
             for inside in [false, true] {
                 if inside && !transmissive {

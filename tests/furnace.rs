@@ -4,7 +4,7 @@
 
 mod common;
 
-use common::{furnace_scene, gpu, mean, render, settings};
+use common::{furnace_render, furnace_scene, gpu, mean, render, settings};
 use glam::{Affine3A, Vec3};
 use kiln::scene::{Camera, Material, Scene, shapes};
 use kiln::shader::principled::Principled;
@@ -143,14 +143,7 @@ fn principled_furnace_pixels(
     };
     let mut s = settings(SIZE, SIZE, spp);
     s.light_sampling = light_sampling;
-    let px = render(&ctx, &scene, s).radiance();
-    let coverage = render(&ctx, &furnace_scene(0.0, 1.0), s).radiance();
-    let on_sphere: Vec<Vec3> = px
-        .iter()
-        .zip(&coverage)
-        .filter(|(_, c)| c.x < 1e-3)
-        .map(|(p, _)| *p)
-        .collect();
+    let (px, on_sphere) = furnace_render(&ctx, &scene, s);
     (mean(&px).x, on_sphere)
 }
 
@@ -189,7 +182,7 @@ fn white() -> Material {
 
 #[test]
 fn furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors() {
-    // Smooth glass, smooth white metal, a smooth coat over white diffuse, a thin wall:
+    // Smooth glass, smooth white metal, a smooth coat over white diffuse, thin walls:
     // no energy is lost or created, so the sphere reads exactly 1 up to Monte Carlo noise.
     let cases = [
         (
@@ -232,6 +225,19 @@ fn furnace_smooth_layers_of_white_reflect_one_within_four_standard_errors() {
                 principled: Principled {
                     transmission_weight: 1.0,
                     roughness: 0.0,
+                    thin_walled: true,
+                    ..white().principled
+                },
+                ..white()
+            },
+        ),
+        (
+            // Diffuse reflection and diffuse transmission through the wall, white.
+            "translucent thin wall",
+            Material {
+                principled: Principled {
+                    subsurface_weight: 0.5,
+                    specular_weight: 0.0,
                     thin_walled: true,
                     ..white().principled
                 },

@@ -91,3 +91,22 @@ struct DiffuseSample {
     weight: vec3<f32>,
     pdf: f32,
 };
+
+// Lambertian transmission of albedo 1 (f · |cos θi| over the side opposite wo, local
+// frame): the way into a subsurface random walk, and the diffuse transmission of a thin
+// wall (a leaf, paper, a lampshade).
+fn diffuse_transmission_eval(wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
+    return vec3<f32>(diffuse_transmission_pdf(wo, wi));
+}
+
+fn diffuse_transmission_pdf(wo: vec3<f32>, wi: vec3<f32>) -> f32 {
+    if (wo.z * wi.z >= 0.0) {
+        return 0.0;
+    }
+    return abs(wi.z) * INV_PI;
+}
+
+fn diffuse_transmission_sample(wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
+    let d = sample_cosine_hemisphere(u);
+    return vec3<f32>(d.x, d.y, select(d.z, -d.z, wo.z >= 0.0));
+}

@@ -9,6 +9,7 @@
 //         ├ glass (rough or smooth, thin or solid)         weight transmission
 //         └ specular reflection over diffuse               weight 1 - transmission
 //             └ diffuse split with subsurface              weight subsurface
+//               (in a thin wall: with diffuse transmission)
 //
 // A sample picks one lobe with probability proportional to its estimated albedo toward wo;
 // the pdf for MIS is the mixture of every non-delta lobe's pdf, so any direction any lobe
@@ -23,6 +24,9 @@
 // The subsurface lobe is a Lambertian transmission of albedo 1 into the object: the colour
 // comes from the random walk that follows (shaders/media/subsurface.wgsl), which the
 // integrator starts when this lobe was the one sampled (`principled_sampled_lobe`).
+// A thin wall has no inside to walk in: there the subsurface weight is diffuse
+// transmission through the wall, tinted by the transmission colour (OpenPBR's thin-walled
+// subsurface; glTF's KHR_materials_diffuse_transmission).
 
 // `struct Principled`, its packed form and defaults are generated from the parameter table
 // (src/shader/principled.rs).
@@ -37,7 +41,9 @@ const LOBE_DIFFUSE: u32 = 5u;
 const LOBE_METAL_MS: u32 = 6u;
 // Into the object, for a random walk (shaders/media/subsurface.wgsl).
 const LOBE_SUBSURFACE: u32 = 7u;
-const LOBE_COUNT: u32 = 8u;
+// Through a thin wall, to its other side.
+const LOBE_TRANSLUCENT: u32 = 8u;
+const LOBE_COUNT: u32 = 9u;
 
 // The lobe the last principled_sample drew from.
 var<private> principled_sampled_lobe: u32;
@@ -81,9 +87,12 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     w.scale[LOBE_SPECULAR] = opaque * spec;
     let spec_albedo = fresnel_dielectric(cos_o, max(p.ior, 1.0)) * min(max(spec.r, max(spec.g, spec.b)), 1.0);
     let under_spec = opaque * (1.0 - spec_albedo);
-    let sss = select(0.0, clamp(p.subsurface_weight, 0.0, 1.0), subsurface_enabled(p));
+    let walk = subsurface_enabled(p);
+    let translucent = FEATURE_TRANSLUCENT && p.thin_walled;
+    let sss = select(0.0, clamp(p.subsurface_weight, 0.0, 1.0), walk || translucent);
     w.scale[LOBE_DIFFUSE] = select(vec3<f32>(0.0), under_spec * (1.0 - sss), FEATURE_DIFFUSE);
-    w.scale[LOBE_SUBSURFACE] = under_spec * (sss * clamp(p.base_weight, 0.0, 1.0));
+    w.scale[LOBE_SUBSURFACE] = select(vec3<f32>(0.0), under_spec * (sss * clamp(p.base_weight, 0.0, 1.0)), walk);
+    w.scale[LOBE_TRANSLUCENT] = select(vec3<f32>(0.0), under_spec * sss * p.transmission_color, translucent);
 
     // Selection by estimated albedo toward wo.
     var e: array<f32, LOBE_COUNT>;
@@ -99,6 +108,7 @@ fn principled_weights(p: Principled, wo: vec3<f32>) -> LobeWeights {
     // thick object, more from a thin one (a dark medium with a long radius is nearly
     // clear): the floor keeps such walks from being rare and heavily weighted.
     e[LOBE_SUBSURFACE] = luminance(w.scale[LOBE_SUBSURFACE]) * max(luminance(p.base_color), 0.2);
+    e[LOBE_TRANSLUCENT] = luminance(w.scale[LOBE_TRANSLUCENT]);
     var total = 0.0;
     for (var i = 0u; i < LOBE_COUNT; i++) {
         // Every lobe with any weight keeps some probability, so its pdf is never 0 where
@@ -125,6 +135,7 @@ fn principled_lobe_compiled(lobe: u32) -> bool {
         case LOBE_GLASS: { return FEATURE_GLASS; }
         case LOBE_SPECULAR: { return FEATURE_SPECULAR; }
         case LOBE_SUBSURFACE: { return FEATURE_SUBSURFACE; }
+        case LOBE_TRANSLUCENT: { return FEATURE_TRANSLUCENT; }
         default: { return FEATURE_DIFFUSE; }
     }
 }
@@ -148,7 +159,7 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         case LOBE_METAL_MS: {
             return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);
         }
-        case LOBE_SUBSURFACE: { return subsurface_entry_eval(wo, wi); }
+        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: { return diffuse_transmission_eval(wo, wi); }
         // The diffuse lobe carries its albedo itself: its energy compensation depends on
         // the albedo non-linearly.
         default: { return energy_preserving_diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness); }
@@ -166,7 +177,7 @@ fn principled_lobe_pdf(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -
         case LOBE_METAL: { return conductor_pdf(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha); }
         case LOBE_GLASS: { return dielectric_pdf(wo, wi, alpha, p.ior, p.thin_walled); }
         case LOBE_SPECULAR: { return dielectric_reflection_pdf(wo, wi, alpha); }
-        case LOBE_SUBSURFACE: { return subsurface_entry_pdf(wo, wi); }
+        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: { return diffuse_transmission_pdf(wo, wi); }
         default: { return diffuse_pdf(wo, wi); }
     }
 }
@@ -181,12 +192,12 @@ struct PrincipledEval {
 // (which is exact here too, only slower).
 fn principled_is_diffuse(p: Principled) -> bool {
     if (!FEATURE_COAT && !FEATURE_SHEEN && !FEATURE_METAL && !FEATURE_GLASS && !FEATURE_SPECULAR
-        && !FEATURE_SUBSURFACE) {
+        && !FEATURE_SUBSURFACE && !FEATURE_TRANSLUCENT) {
         return true;
     }
     return p.metallic == 0.0 && p.specular_weight == 0.0 && p.coat_weight == 0.0
         && p.sheen_weight == 0.0 && p.transmission_weight == 0.0
-        && (p.subsurface_weight == 0.0 || !FEATURE_SUBSURFACE);
+        && (p.subsurface_weight == 0.0 || (!FEATURE_SUBSURFACE && !FEATURE_TRANSLUCENT));
 }
 
 // Sum over the non-delta lobes (delta lobes are 0 for every direction given). The
@@ -260,9 +271,9 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
         }
         case LOBE_GLASS: { s = dielectric_sample(wo, alpha, p.ior, principled_glass_tint(p), p.thin_walled, ul, u); }
         case LOBE_SPECULAR: { s = dielectric_reflection_sample(wo, alpha, p.ior, vec3<f32>(1.0), u); }
-        case LOBE_SUBSURFACE: {
-            let wi = subsurface_entry_sample(wo, u);
-            s = BsdfSample(wi, vec3<f32>(1.0), subsurface_entry_pdf(wo, wi), false, wi.z != 0.0);
+        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: {
+            let wi = diffuse_transmission_sample(wo, u);
+            s = BsdfSample(wi, vec3<f32>(1.0), diffuse_transmission_pdf(wo, wi), false, wi.z != 0.0);
         }
         default: {
             let d = diffuse_sample(wo, vec3<f32>(1.0), u);

@@ -107,21 +107,3 @@ fn medium_free_flight(m: Medium, throughput: vec3<f32>, t_max: f32, u_channel: f
     }
     return FreeFlight(false, t_max, tr / p, true);
 }
-
-// The entry: a Lambertian transmission of albedo 1 (f · |cos θi| over the side opposite
-// wo), the lobe the principled surface samples into the object.
-fn subsurface_entry_eval(wo: vec3<f32>, wi: vec3<f32>) -> vec3<f32> {
-    return vec3<f32>(subsurface_entry_pdf(wo, wi));
-}
-
-fn subsurface_entry_pdf(wo: vec3<f32>, wi: vec3<f32>) -> f32 {
-    if (wo.z * wi.z >= 0.0) {
-        return 0.0;
-    }
-    return abs(wi.z) / PI;
-}
-
-fn subsurface_entry_sample(wo: vec3<f32>, u: vec2<f32>) -> vec3<f32> {
-    let d = sample_cosine_hemisphere(u);
-    return vec3<f32>(d.x, d.y, select(d.z, -d.z, wo.z >= 0.0));
-}

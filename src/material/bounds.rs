@@ -366,6 +366,50 @@ mod tests {
     }
 
     #[test]
+    fn a_volume_node_bounds_its_extinction_as_its_traits_compute_it() {
+        // For constant inputs the bounds are a point: the extinction the node's traits
+        // compute for the material buffer (σa + σs), so the two formulas cannot drift.
+        let cases = [
+            ([0.8, 0.5, 0.1], 2.0, [0.0; 3]),
+            ([0.0, 1.0, 1.5], 0.5, [0.3, 0.6, 1.0]),
+            ([1.0; 3], 10.0, [1.0; 3]),
+        ];
+        for kind in ["volume_absorption", "volume_scatter", "principled_volume"] {
+            let def = super::super::nodes::find(kind).expect("a volume node");
+            let values = std::collections::BTreeMap::new();
+            let params = Params::new(def, &values);
+            for (color, density, absorption_color) in cases {
+                let value = |name: &str| {
+                    Some(match name {
+                        "color" => Value::Vec3(color),
+                        "density" => Value::Float(density),
+                        "absorption_color" => Value::Vec3(absorption_color),
+                        "emission_color" => Value::Vec3([1.0; 3]),
+                        _ => Value::Float(0.2),
+                    })
+                };
+                let traits = (def.traits.expect("volume traits"))(&value, params);
+                let v = traits
+                    .volume
+                    .expect("constant inputs make a homogeneous volume");
+                let inputs: Vec<Bounds> = def
+                    .inputs
+                    .iter()
+                    .map(|i| Bounds::exact(&value(i.name).expect("every input")))
+                    .collect();
+                let b = (def.range.expect("a volume node declares its range"))(&inputs, params)[0];
+                for c in 0..3 {
+                    let sigma_t = v.absorption[c] + v.scattering[c];
+                    assert!(
+                        (b.lo[c] - sigma_t).abs() < 1e-6 && (b.hi[c] - sigma_t).abs() < 1e-6,
+                        "{kind} {color:?} {density} {absorption_color:?}: bounds {b:?}, σt {sigma_t}"
+                    );
+                }
+            }
+        }
+    }
+
+    #[test]
     fn mixing_with_an_unclamped_factor_is_unbounded_outside_the_unit_interval() {
         let a = Bounds::scalar(0.0, 1.0);
         let b = Bounds::scalar(2.0, 3.0);

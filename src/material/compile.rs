@@ -1262,6 +1262,7 @@ fn surface_traits(flat: &[FlatNode], output: usize) -> MaterialTraits {
                     Some(0.0),
                     Some(1.0),
                     Some(0.0),
+                    false,
                 ),
                 ..MaterialTraits::default()
             };

@@ -244,7 +244,8 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, St
 }
 
 /// The principled lobes a surface with these weights can reach ([`crate::shader::lobes`]);
-/// `None` is a weight that varies over the surface.
+/// `None` is a weight that varies over the surface. A thin wall's subsurface is diffuse
+/// transmission, not a random walk.
 pub fn principled_lobes(
     coat: Option<f32>,
     sheen: Option<f32>,
@@ -252,6 +253,7 @@ pub fn principled_lobes(
     transmission: Option<f32>,
     specular: Option<f32>,
     subsurface: Option<f32>,
+    thin_walled: bool,
 ) -> u32 {
     use crate::shader::lobes;
     let some = |w: Option<f32>| w.is_none_or(|w| w > 0.0);
@@ -276,7 +278,11 @@ pub fn principled_lobes(
             set |= lobes::SPECULAR;
         }
         if some(subsurface) {
-            set |= lobes::SUBSURFACE;
+            set |= if thin_walled {
+                lobes::TRANSLUCENT
+            } else {
+                lobes::SUBSURFACE
+            };
         }
     }
     set

@@ -1916,6 +1916,7 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         transmission,
         weight("specular_weight"),
         weight("subsurface_weight"),
+        params.flag("thin_walled"),
     );
     MaterialTraits {
         transmissive,

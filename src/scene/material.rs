@@ -121,6 +121,7 @@ impl Material {
             Some(p.transmission_weight),
             Some(p.specular_weight),
             Some(p.subsurface_weight),
+            p.thin_walled,
         )
     }
 

@@ -84,8 +84,10 @@ pub mod lobes {
     pub const HETEROGENEOUS: u32 = 256;
     /// What a volume adds to a kernel.
     pub const VOLUMES: u32 = VOLUME | HETEROGENEOUS;
-    pub const ALL: u32 = 511;
-    pub const NAMES: [(u32, &str); 9] = [
+    /// Diffuse transmission through a thin wall: the subsurface of a thin-walled surface.
+    pub const TRANSLUCENT: u32 = 512;
+    pub const ALL: u32 = 1023;
+    pub const NAMES: [(u32, &str); 10] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
         (METAL, "METAL"),
@@ -95,5 +97,6 @@ pub mod lobes {
         (SUBSURFACE, "SUBSURFACE"),
         (VOLUME, "VOLUME"),
         (HETEROGENEOUS, "HETEROGENEOUS"),
+        (TRANSLUCENT, "TRANSLUCENT"),
     ];
 }

@@ -199,11 +199,12 @@ principled_parameters! {
     specular_color: Vec3 = Vec3::ONE, Unit,
         "Tints dielectric reflection; for metals, the edge tint at 82° (F82).";
     transmission_weight: f32 = 0.0, Unit, "0 opaque, 1 glass.";
-    transmission_color: Vec3 = Vec3::ONE, Unit, "Glass tint.";
+    transmission_color: Vec3 = Vec3::ONE, Unit,
+        "Glass tint; in a thin wall, the tint of everything that passes through it (glass and diffuse transmission).";
     transmission_depth: f32 = 0.0, NonNegative,
         "Depth at which light inside reaches the transmission colour (Beer–Lambert); 0 tints the surface instead.";
     subsurface_weight: f32 = 0.0, Unit,
-        "Share of the diffuse base that enters the object and scatters inside it (a random walk) before leaving.";
+        "Share of the diffuse base that enters the object and scatters inside it (a random walk) before leaving; in a thin wall, that passes through it diffusely (translucency).";
     subsurface_radius: Vec3 = Vec3::new(1.0, 0.2, 0.1), NonNegative,
         "Mean free path per channel, times the subsurface scale: how far each colour travels under the surface.";
     subsurface_scale: f32 = 0.05, NonNegative, "Scales the subsurface radius, in scene units.";
@@ -220,7 +221,7 @@ principled_parameters! {
     emission_strength: f32 = 0.0, NonNegative, "Emitted radiance per unit of colour.";
     alpha: f32 = 1.0, Unit, "Opacity: 1 opaque, 0 invisible (alpha cut-out).";
     thin_walled: bool = false, Flag,
-        "A surface with no inside (leaves, paper, soap film): light passes without bending.";
+        "A surface with no inside (leaves, paper, soap film): light passes without bending, and subsurface becomes diffuse transmission.";
 }
 
 /// The vec4s of the packed form (`PRINCIPLED_VEC4S` in WGSL).

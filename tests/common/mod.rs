@@ -55,6 +55,24 @@ pub fn furnace_scene(albedo: f32, environment: f32) -> Scene {
     scene
 }
 
+/// A render of `scene` (a [`furnace_scene`] with its sphere's material changed) and the
+/// pixels of it fully on the sphere: those a black sphere covers in every sample.
+pub fn furnace_render(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    settings: RenderSettings,
+) -> (Vec<Vec3>, Vec<Vec3>) {
+    let px = render(ctx, scene, settings).radiance();
+    let coverage = render(ctx, &furnace_scene(0.0, 1.0), settings).radiance();
+    let on_sphere = px
+        .iter()
+        .zip(&coverage)
+        .filter(|(_, c)| c.x < 1e-3)
+        .map(|(p, _)| *p)
+        .collect();
+    (px, on_sphere)
+}
+
 pub fn mean(values: &[Vec3]) -> Vec3 {
     values.iter().copied().sum::<Vec3>() / values.len() as f32
 }

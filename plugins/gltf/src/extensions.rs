@@ -14,6 +14,7 @@ pub const HANDLED: &[&str] = &[
     "KHR_materials_ior",
     "KHR_materials_transmission",
     "KHR_materials_volume",
+    "KHR_materials_diffuse_transmission",
     "KHR_materials_specular",
     "KHR_materials_clearcoat",
     "KHR_materials_sheen",

@@ -11,6 +11,7 @@
 //! | KHR_materials_ior | `ior` |
 //! | KHR_materials_transmission (factor × texture R) | `transmission_weight`; thin-walled without volume |
 //! | KHR_materials_volume (attenuation colour, distance) | `transmission_color`, `transmission_depth` |
+//! | KHR_materials_diffuse_transmission (factor × texture A, colour × RGB) | `subsurface_weight`, `transmission_color`; thin-walled (diffuse transmission) |
 //! | KHR_materials_specular (factor × A, colour × RGB) | `specular_weight`, `specular_color` |
 //! | KHR_materials_clearcoat (factor × R, roughness × G) | `coat_weight`, `coat_roughness` |
 //! | KHR_materials_sheen (colour × RGB, roughness × A) | `sheen_weight` 1, `sheen_color`, `sheen_roughness` |
@@ -366,14 +367,56 @@ fn surface(t: &mut Translation, m: &json::Material, vertex_colors: bool) -> bool
             let distance = volume.map_or(f32::INFINITY, |v| v.attenuation_distance.0);
             if thickness <= 0.0 {
                 thin_walled = true;
-                t.set("transmission_color", base);
+                t.set("transmission_color", base.clone());
             } else if distance.is_finite() && distance > 0.0 {
                 let color = volume.map_or([1.0; 3], |v| unit3(v.attenuation_color.0, 1.0));
                 t.set("transmission_color", Value::Color(color));
                 t.set("transmission_depth", Value::Float(distance));
             } else {
-                t.set("transmission_color", base);
+                t.set("transmission_color", base.clone());
             }
+        }
+    }
+
+    let others = ext.map(|e| &e.others);
+    if let Some(dt) = others.and_then(|o| o.get("KHR_materials_diffuse_transmission")) {
+        let factor = unit(number(dt, "diffuseTransmissionFactor", 0.0), 0.0);
+        let glass = ext
+            .and_then(|e| e.transmission.as_ref())
+            .is_some_and(|tr| unit(tr.transmission_factor.0, 0.0) > 0.0);
+        let thick = ext
+            .and_then(|e| e.volume.as_ref())
+            .is_some_and(|v| finite_or(v.thickness_factor.0, 0.0) > 0.0);
+        if factor > 0.0 && glass && thick {
+            t.warnings.push(
+                "diffuse transmission into a volume behind glass is not supported: the glass is kept, the diffuse transmission ignored"
+                    .into(),
+            );
+        } else if factor > 0.0 {
+            // Kiln's thin wall passes the subsurface share of the diffuse base through
+            // diffusely, tinted by the transmission colour: glTF's
+            // mix(diffuse BRDF(base colour), diffuse BTDF(its colour), factor).
+            if thick {
+                t.warnings.push(
+                    "diffuse transmission into a volume is rendered through a thin wall: the volume's attenuation does not apply to it"
+                        .into(),
+                );
+            }
+            let r = TextureRef::from_value(dt.get("diffuseTransmissionTexture"));
+            let weight = t.scalar(factor, r, "diffuse_transmission", "alpha");
+            let r = TextureRef::from_value(dt.get("diffuseTransmissionColorTexture"));
+            let factor =
+                color3(dt, "diffuseTransmissionColorFactor", [1.0; 3]).map(|v| unit(v, 1.0));
+            let (color, _) = t.color(factor, r, "diffuse_transmission_color");
+            if glass && color != base {
+                t.warnings.push(
+                    "a thin wall tints its glass and its diffuse transmission alike: the glass takes the diffuse transmission colour"
+                        .into(),
+                );
+            }
+            t.set("subsurface_weight", weight);
+            t.set("transmission_color", color);
+            thin_walled = true;
         }
     }
 
@@ -395,7 +438,6 @@ fn surface(t: &mut Translation, m: &json::Material, vertex_colors: bool) -> bool
         }
     }
 
-    let others = ext.map(|e| &e.others);
     if let Some(cc) = others.and_then(|o| o.get("KHR_materials_clearcoat")) {
         let factor = unit(number(cc, "clearcoatFactor", 0.0), 0.0);
         if factor > 0.0 {

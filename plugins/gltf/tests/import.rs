@@ -366,6 +366,9 @@ fn material_extensions_translate_to_graphs_that_compile() {
       "KHR_materials_volume": {{"thicknessFactor": 1, "attenuationDistance": 2, "attenuationColor": [0.5, 0.9, 0.5]}},
       "KHR_materials_ior": {{"ior": 1.33}}}}}},
     {{"name": "thin", "extensions": {{"KHR_materials_transmission": {{"transmissionFactor": 0.5}}}}}},
+    {{"name": "leaf", "pbrMetallicRoughness": {{"baseColorFactor": [0.2, 0.5, 0.1, 1]}}, "extensions": {{
+      "KHR_materials_diffuse_transmission": {{"diffuseTransmissionFactor": 0.4, "diffuseTransmissionTexture": {t0},
+                                             "diffuseTransmissionColorFactor": [0.6, 0.9, 0.2]}}}}}},
     {{"name": "coated", "normalTexture": {{"index": 1, "scale": 0.5, "extensions": {{"KHR_texture_transform": {{"offset": [0.1, 0.2]}}}}}},
       "pbrMetallicRoughness": {{"metallicRoughnessTexture": {t1}, "baseColorTexture": {transformed}}},
       "alphaMode": "BLEND",
@@ -388,7 +391,7 @@ fn material_extensions_translate_to_graphs_that_compile() {
     );
     let path = write(dir.path(), "materials.gltf", &text);
     let texts = kiln_gltf::material_texts(&path).expect("translates");
-    assert_eq!(texts.len(), 6 * 2 + 1);
+    assert_eq!(texts.len(), 7 * 2 + 1);
     for (name, kmat) in &texts {
         common::compile_kmat(name, kmat).unwrap_or_else(|e| panic!("{name}: {e}"));
     }
@@ -408,6 +411,16 @@ fn material_extensions_translate_to_graphs_that_compile() {
     assert!(glass.contains(r#""ior": 1.33"#), "{glass}");
     assert!(!glass.contains("thin_walled"), "{glass}");
     assert!(find("thin").contains(r#""thin_walled": true"#));
+    // Diffuse transmission: the subsurface share of a thin wall, tinted by its colour,
+    // its factor times the texture's alpha.
+    let leaf = find("leaf");
+    assert!(leaf.contains(r#""thin_walled": true"#), "{leaf}");
+    assert!(
+        leaf.contains(r#""transmission_color": (0.6, 0.9, 0.2)"#),
+        "{leaf}"
+    );
+    assert!(leaf.contains(r#""subsurface_weight": "#), "{leaf}");
+    assert!(leaf.contains(r#""base_color": (0.2, 0.5, 0.1)"#), "{leaf}");
     let coated = find("coated");
     for input in [
         "coat_weight",

@@ -477,6 +477,22 @@ const MATERIAL_RANGES: &[(&[&str], Range)] = &[
         Range::Unit,
     ),
     (
+        &[
+            "extensions",
+            "KHR_materials_diffuse_transmission",
+            "diffuseTransmissionFactor",
+        ],
+        Range::Unit,
+    ),
+    (
+        &[
+            "extensions",
+            "KHR_materials_diffuse_transmission",
+            "diffuseTransmissionColorFactor",
+        ],
+        Range::Unit,
+    ),
+    (
         &["extensions", "KHR_materials_volume", "thicknessFactor"],
         Range::NonNegative,
     ),
