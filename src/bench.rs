@@ -27,6 +27,14 @@ pub struct BenchArgs {
     /// times. Every scene by default.
     #[arg(long = "scene", value_name = "TEXT")]
     pub scenes: Vec<String>,
+    /// Instead of samples/s: each scene's error against a reference as its samples grow
+    /// (RMSE against time, at the specialised kernel). Use a small --size.
+    #[arg(long)]
+    pub convergence: bool,
+    /// Samples per pixel of the --convergence reference (two halves of different seeds);
+    /// the measured renders go up to an eighth of it.
+    #[arg(long, default_value_t = 1024, value_name = "SPP")]
+    pub reference_spp: u32,
 }
 
 impl BenchArgs {
@@ -130,8 +138,17 @@ fn measure(
 /// passes standard output).
 pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Write) -> Result<()> {
     // The import first, so the memory it measures is not hidden under the renders' peak.
-    let import = measure_import(args.triangles);
+    let import = (!args.convergence).then(|| measure_import(args.triangles));
     let ctx = GpuContext::new(backend)?;
+    let scenes = bench_scenes(args)?;
+    match import {
+        None => convergence(&ctx, &scenes, args, out),
+        Some(import) => throughput(&ctx, &scenes, import, args, out),
+    }
+}
+
+/// The scenes --scene asks for (every one by default).
+fn bench_scenes(args: &BenchArgs) -> Result<Vec<(String, Scene)>> {
     let mut scenes = Vec::new();
     if args.wants("Cornell box") {
         scenes.push(("Cornell box".to_owned(), scene::default_scene()?));
@@ -161,6 +178,125 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
             args.scenes.join(", --scene ")
         );
     }
+    Ok(scenes)
+}
+
+/// Mean over pixels and channels of the squared difference of two images.
+fn mean_square_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
+    let sum: f64 = a
+        .iter()
+        .zip(b)
+        .map(|(a, b)| (*a - *b).as_dvec3().length_squared())
+        .sum();
+    sum / (3 * a.len().max(1)) as f64
+}
+
+/// Each scene's error against a reference as samples grow: the RMSE of linear radiance
+/// over every pixel and channel, with the reference's own noise (measured from its two
+/// halves, rendered with different seeds) taken out. At the Monte Carlo rate the RMSE
+/// falls as 1 / √spp and RMSE × √seconds stays constant: that product is the efficiency
+/// to compare between renderers and settings (lower is better).
+fn convergence(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    let half = (args.reference_spp / 2).max(1);
+    let max_spp = (args.reference_spp / 8).max(1);
+    writeln!(
+        out,
+        "Adapter: {}; {}x{} px, specialised kernels, reference {} spp (two seeds), max bounces from each scene, NEE + MIS.",
+        ctx.describe(),
+        args.size,
+        args.size,
+        2 * half
+    )?;
+    writeln!(out)?;
+    writeln!(out, "| scene | spp | seconds | RMSE | RMSE × √seconds |")?;
+    writeln!(out, "|---|---:|---:|---:|---:|")?;
+    let mut slopes = Vec::new();
+    for (name, scene) in scenes {
+        let renderer = |seed: u32| {
+            let settings = RenderSettings {
+                width: args.size,
+                height: args.size,
+                samples_per_pixel: u32::MAX,
+                seed,
+                kernel: KernelKind::Specialized,
+                ..RenderSettings::from_scene(scene)
+            };
+            Renderer::new(Arc::clone(ctx), scene, settings)
+        };
+        let mut halves = Vec::new();
+        for seed in [0x5eed_0001, 0x5eed_0002] {
+            let mut r = renderer(seed)?;
+            r.render(0..half, RenderControl::default())?;
+            halves.push(r.read_film()?.radiance());
+        }
+        let reference: Vec<Vec3> = halves[0]
+            .iter()
+            .zip(&halves[1])
+            .map(|(a, b)| (*a + *b) * 0.5)
+            .collect();
+        // Each half's variance is twice the reference's: the halves differ by four times it.
+        let reference_noise = mean_square_difference(&halves[0], &halves[1]) / 4.0;
+        // The kernel is the references' (the driver has compiled it): the timed renders
+        // start warm.
+        let mut measured = renderer(1)?;
+        let (mut done, mut seconds, mut fit) = (0, 0.0, Vec::new());
+        let mut spp = 1;
+        while spp <= max_spp {
+            seconds += measured
+                .render(done..spp, RenderControl::default())?
+                .elapsed
+                .as_secs_f64();
+            done = spp;
+            let image = measured.read_film()?.radiance();
+            let mse = (mean_square_difference(&image, &reference) - reference_noise).max(0.0);
+            let rmse = mse.sqrt();
+            if rmse > 0.0 {
+                fit.push(((spp as f64).ln(), rmse.ln()));
+            }
+            writeln!(
+                out,
+                "| {name} | {spp} | {seconds:.3} | {rmse:.5} | {:.5} |",
+                rmse * seconds.sqrt()
+            )?;
+            spp *= 2;
+        }
+        slopes.push((name, slope(&fit)));
+    }
+    writeln!(out)?;
+    for (name, slope) in slopes {
+        writeln!(
+            out,
+            "{name}: RMSE ∝ spp^{slope:.2} (the Monte Carlo rate is -0.5)"
+        )?;
+    }
+    Ok(())
+}
+
+/// The least-squares slope of y against x.
+fn slope(points: &[(f64, f64)]) -> f64 {
+    let n = points.len() as f64;
+    let (mx, my) = points
+        .iter()
+        .fold((0.0, 0.0), |(x, y), p| (x + p.0 / n, y + p.1 / n));
+    let (sxy, sxx) = points.iter().fold((0.0, 0.0), |(sxy, sxx), (x, y)| {
+        (sxy + (x - mx) * (y - my), sxx + (x - mx) * (x - mx))
+    });
+    if sxx > 0.0 { sxy / sxx } else { f64::NAN }
+}
+
+/// Samples/s and rays/s of each scene at each kernel kind, then the import's time.
+fn throughput(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    import: Result<(Duration, Option<u64>, u64)>,
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
     writeln!(
         out,
         "Adapter: {}; {}x{} px, max bounces from each scene, NEE + MIS.",
@@ -174,13 +310,13 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
         "| scene | kernel | triangles | BVH build | kernel build (naga + pipeline) | first dispatch | Msamples/s | Mrays/s |"
     )?;
     writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|")?;
-    for (name, scene) in &scenes {
+    for (name, scene) in scenes {
         for kernel in [
             KernelKind::Specialized,
             KernelKind::General,
             KernelKind::Interpreted,
         ] {
-            let row = measure(&ctx, name, scene, args, kernel)?;
+            let row = measure(ctx, name, scene, args, kernel)?;
             writeln!(
                 out,
                 "| {} | {} | {} | {:.1} ms | {:.0} ms | {:.0} ms | {:.3} | {:.2} |",

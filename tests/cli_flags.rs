@@ -526,3 +526,55 @@ fn bench_prints_a_markdown_table_of_its_measurements() {
     assert_eq!(none.status.code(), Some(1));
     assert!(stderr(&none).contains("no benchmark scene matches"));
 }
+
+#[test]
+fn bench_convergence_falls_at_the_monte_carlo_rate() {
+    let out = kiln()
+        .args([
+            "bench",
+            "--convergence",
+            "--scene",
+            "sphere",
+            "--triangles",
+            "2000",
+            "--size",
+            "16",
+            "--reference-spp",
+            "512",
+        ])
+        .output()
+        .unwrap();
+    assert!(out.status.success(), "{}", stderr(&out));
+    let text = String::from_utf8(out.stdout).unwrap();
+    let header = text
+        .lines()
+        .find(|l| l.starts_with("| scene |"))
+        .unwrap_or_else(|| panic!("no table header:\n{text}"));
+    assert_eq!(
+        cells(header),
+        ["scene", "spp", "seconds", "RMSE", "RMSE × √seconds"]
+    );
+    let rows: Vec<Vec<&str>> = text
+        .lines()
+        .filter(|l| l.starts_with("| displaced"))
+        .map(cells)
+        .collect();
+    // Doubling from 1 to an eighth of the reference's samples.
+    let spp: Vec<u32> = rows.iter().map(|r| r[1].parse().unwrap()).collect();
+    assert_eq!(spp, [1, 2, 4, 8, 16, 32, 64], "{text}");
+    let rmse: Vec<f64> = rows.iter().map(|r| number(r[3], "")).collect();
+    // 64 times the samples: 8 times less error at the Monte Carlo rate; at least 4 (the
+    // estimate of each RMSE has its own noise).
+    assert!(rmse[0] > 4.0 * rmse[6] && rmse[6] > 0.0, "{text}");
+    let slope_line = text
+        .lines()
+        .find(|l| l.contains("RMSE ∝ spp^"))
+        .unwrap_or_else(|| panic!("no fitted rate:\n{text}"));
+    let slope: f64 = slope_line
+        .split("spp^")
+        .nth(1)
+        .and_then(|r| r.split_whitespace().next())
+        .and_then(|v| v.parse().ok())
+        .unwrap_or_else(|| panic!("{slope_line}"));
+    assert!((-0.7..=-0.35).contains(&slope), "{slope_line}");
+}

@@ -427,13 +427,21 @@ fn sphere_channel_means(
     })
 }
 
-fn white_subsurface(radius: Vec3, scale: f32, anisotropy: f32, ior: f32) -> Material {
+/// `entry_ior` is the subsurface IOR (the walk's refractive entry), `ior` the boundary's.
+fn white_subsurface(
+    radius: Vec3,
+    scale: f32,
+    anisotropy: f32,
+    ior: f32,
+    entry_ior: f32,
+) -> Material {
     Material {
         principled: Principled {
             subsurface_weight: 1.0,
             subsurface_radius: radius,
             subsurface_scale: scale,
             subsurface_anisotropy: anisotropy,
+            subsurface_ior: entry_ior,
             ior,
             roughness: 0.0,
             ..white().principled
@@ -450,14 +458,17 @@ fn furnace_white_subsurface_is_one_in_every_channel() {
     // every channel when the radius differs per channel (sampled by MIS over the
     // channels). Radii are the sphere's size, so walks end well within their step bound.
     let cases = [
-        ("index-matched", white_subsurface(Vec3::ONE, 0.5, 0.0, 1.0)),
         (
-            "behind a smooth dielectric",
-            white_subsurface(Vec3::ONE, 0.5, 0.0, 1.5),
+            "index-matched",
+            white_subsurface(Vec3::ONE, 0.5, 0.0, 1.0, 1.01),
+        ),
+        (
+            "behind a smooth dielectric, entry IOR 3.8",
+            white_subsurface(Vec3::ONE, 0.5, 0.0, 1.5, 3.8),
         ),
         (
             "chromatic radius, forward scattering",
-            white_subsurface(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.7, 1.5),
+            white_subsurface(Vec3::new(1.0, 0.5, 0.25), 1.0, 0.7, 1.5, 1.4),
         ),
     ];
     for (name, material) in cases {
@@ -487,7 +498,10 @@ fn subsurface_stays_finite_at_parameter_extremes() {
     let mut checked = 0;
     for radius in [0.0, 1e-6, 1.0, 1e6] {
         for scale in [1e-4, 1e4] {
-            for (base, anisotropy) in [(0.0, 0.0), (1.0, 1.0), (0.5, 0.999)] {
+            // The entry IOR beyond Cycles' range on both sides (clamped to [1.01, 3.8]).
+            for (base, anisotropy, entry_ior) in
+                [(0.0, 0.0, 1.0), (1.0, 1.0, 3.8), (0.5, 0.999, 100.0)]
+            {
                 let mut scene = furnace_scene(0.5, 1.0);
                 scene.materials[0] = Material {
                     name: "extreme".into(),
@@ -497,6 +511,7 @@ fn subsurface_stays_finite_at_parameter_extremes() {
                         subsurface_radius: Vec3::new(radius, radius * 0.5, radius * 0.1),
                         subsurface_scale: scale,
                         subsurface_anisotropy: anisotropy,
+                        subsurface_ior: entry_ior,
                         ..Principled::default()
                     },
                     ..Material::default()
@@ -506,7 +521,7 @@ fn subsurface_stays_finite_at_parameter_extremes() {
                 for p in px {
                     assert!(
                         p.is_finite() && p.max_element() < 20.0,
-                        "radius {radius}, scale {scale}, base {base}, g {anisotropy}: {p}"
+                        "radius {radius}, scale {scale}, base {base}, g {anisotropy}, IOR {entry_ior}: {p}"
                     );
                 }
                 checked += 1;

@@ -498,7 +498,7 @@ fn mesh() -> impl Strategy<Value = Mesh> {
 
 fn material() -> impl Strategy<Value = Material> {
     (
-        prop::collection::vec(0.0f32..=1.0, 16),
+        prop::collection::vec(0.0f32..=1.0, 17),
         prop::collection::vec(colour(), 5),
         (
             -4.0f32..4.0,
@@ -531,6 +531,7 @@ fn material() -> impl Strategy<Value = Material> {
                         subsurface_radius: c[2] * 2.0,
                         subsurface_scale: u[15],
                         subsurface_anisotropy: u[14],
+                        subsurface_ior: 1.0 + 2.0 * u[16],
                         coat_weight: u[6],
                         coat_roughness: u[7],
                         coat_ior,

@@ -21,8 +21,9 @@
 // (multiple_scattering.wgsl, dielectric_energy.wgsl), so white ones stay white at every
 // roughness. Not yet: coat/base layering beyond albedo scaling.
 //
-// The subsurface lobe is a Lambertian transmission of albedo 1 into the object: the colour
-// comes from the random walk that follows (shaders/media/subsurface.wgsl), which the
+// The subsurface lobe is a transmission of albedo 1 into the object (half Lambertian, half
+// refracted through a rough interface of the subsurface IOR): the colour comes from the
+// random walk that follows (shaders/media/subsurface.wgsl), which the
 // integrator starts when this lobe was the one sampled (`principled_sampled_lobe`).
 // A thin wall has no inside to walk in: there the subsurface weight is diffuse
 // transmission through the wall, tinted by the transmission colour (OpenPBR's thin-walled
@@ -159,7 +160,8 @@ fn principled_lobe_eval(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) 
         case LOBE_METAL_MS: {
             return conductor_ms_eval(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), p.roughness, p.base_color * p.base_weight);
         }
-        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: { return diffuse_transmission_eval(wo, wi); }
+        case LOBE_SUBSURFACE: { return vec3<f32>(subsurface_entry_pdf(wo, wi, subsurface_entry_ior(p))); }
+        case LOBE_TRANSLUCENT: { return diffuse_transmission_eval(wo, wi); }
         // The diffuse lobe carries its albedo itself: its energy compensation depends on
         // the albedo non-linearly.
         default: { return energy_preserving_diffuse_eval(wo, wi, p.base_color * clamp(p.base_weight, 0.0, 1.0), p.diffuse_roughness); }
@@ -177,7 +179,8 @@ fn principled_lobe_pdf(p: Principled, lobe: u32, wo: vec3<f32>, wi: vec3<f32>) -
         case LOBE_METAL: { return conductor_pdf(vec3<f32>(wo.xy, abs(wo.z)), vec3<f32>(wi.xy, wi.z * sign(wo.z)), alpha); }
         case LOBE_GLASS: { return dielectric_pdf(wo, wi, alpha, p.ior, p.thin_walled); }
         case LOBE_SPECULAR: { return dielectric_reflection_pdf(wo, wi, alpha); }
-        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: { return diffuse_transmission_pdf(wo, wi); }
+        case LOBE_SUBSURFACE: { return subsurface_entry_pdf(wo, wi, subsurface_entry_ior(p)); }
+        case LOBE_TRANSLUCENT: { return diffuse_transmission_pdf(wo, wi); }
         default: { return diffuse_pdf(wo, wi); }
     }
 }
@@ -271,7 +274,12 @@ fn principled_sample(p: Principled, wo: vec3<f32>, uc: f32, ul: f32, u: vec2<f32
         }
         case LOBE_GLASS: { s = dielectric_sample(wo, alpha, p.ior, principled_glass_tint(p), p.thin_walled, ul, u); }
         case LOBE_SPECULAR: { s = dielectric_reflection_sample(wo, alpha, p.ior, vec3<f32>(1.0), u); }
-        case LOBE_SUBSURFACE, LOBE_TRANSLUCENT: {
+        case LOBE_SUBSURFACE: {
+            let eta = subsurface_entry_ior(p);
+            let wi = subsurface_entry_sample(wo, eta, ul, u);
+            s = BsdfSample(wi, vec3<f32>(1.0), subsurface_entry_pdf(wo, wi, eta), false, wi.z != 0.0);
+        }
+        case LOBE_TRANSLUCENT: {
             let wi = diffuse_transmission_sample(wo, u);
             s = BsdfSample(wi, vec3<f32>(1.0), diffuse_transmission_pdf(wo, wi), false, wi.z != 0.0);
         }

@@ -56,6 +56,67 @@ fn subsurface_medium(p: Principled) -> Medium {
     return Medium(total, sigma_s / total, g);
 }
 
+// The direction a walk enters the object by, as Cycles' Random Walk enters: half the time
+// a cosine-weighted direction into the surface, half the time the view direction refracted
+// through a rough interface (GGX α = 1) of the subsurface IOR. A refraction through a
+// steep microfacet can point back out of the surface; it is mirrored into the object, and
+// the density counts both directions that land on the same one. The entry carries no
+// Fresnel weight (the specular layer above took its reflection already) and no microfacet
+// shadowing (as in Cycles): its value is its density, so every sample has weight 1 and
+// the entry only shapes where the walk starts heading. wo and wi on opposite sides; a wo
+// below the surface enters upward, mirrored.
+const SUBSURFACE_ENTRY_ALPHA: vec2<f32> = vec2<f32>(1.0, 1.0);
+
+fn subsurface_entry_ior(p: Principled) -> f32 {
+    return clamp(p.subsurface_ior, 1.01, 3.8);
+}
+
+// Density of refracting wo (above) into wi through a microfacet of the entry interface,
+// wi on either side (Walter et al. 2007, eq. 17).
+fn subsurface_refraction_pdf(wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
+    let h = -(wo + eta * wi);
+    if (!(dot(h, h) > 0.0)) {
+        return 0.0;
+    }
+    let m = normalize(h);
+    let cos_om = dot(wo, m);
+    let cos_im = dot(wi, m);
+    if (m.z <= 0.0 || cos_om <= 0.0 || cos_im >= 0.0) {
+        return 0.0;
+    }
+    let denom = cos_im + cos_om / eta;
+    return ggx_vndf_pdf(wo, m, SUBSURFACE_ENTRY_ALPHA) * abs(cos_im) / (denom * denom);
+}
+
+fn subsurface_entry_pdf(wo: vec3<f32>, wi: vec3<f32>, eta: f32) -> f32 {
+    if (wo.z * wi.z >= 0.0) {
+        return 0.0;
+    }
+    // Mirrored so that wo is above and wi below.
+    let s = select(-1.0, 1.0, wo.z > 0.0);
+    let o = vec3<f32>(wo.xy, s * wo.z);
+    let i = vec3<f32>(wi.xy, s * wi.z);
+    let folded = vec3<f32>(i.xy, -i.z);
+    let refraction = subsurface_refraction_pdf(o, i, eta) + subsurface_refraction_pdf(o, folded, eta);
+    return 0.5 * abs(wi.z) * INV_PI + 0.5 * refraction;
+}
+
+fn subsurface_entry_sample(wo: vec3<f32>, eta: f32, uc: f32, u: vec2<f32>) -> vec3<f32> {
+    let s = select(-1.0, 1.0, wo.z > 0.0);
+    var wi: vec3<f32>;
+    if (uc < 0.5) {
+        wi = sample_cosine_hemisphere(u);
+    } else {
+        let o = vec3<f32>(wo.xy, s * wo.z);
+        let m = ggx_sample_vndf(o, SUBSURFACE_ENTRY_ALPHA, u);
+        // From outside into a denser medium (eta > 1): never total internal reflection.
+        let rf = refract_dir(o, m, eta);
+        wi = select(vec3<f32>(0.0, 0.0, 1.0), rf.wt, rf.ok);
+    }
+    // Below the surface, in the mirrored frame, then back.
+    return vec3<f32>(wi.xy, -s * abs(wi.z));
+}
+
 // Whether the subsurface lobe has any weight: a walk needs a radius.
 fn subsurface_enabled(p: Principled) -> bool {
     let d = p.subsurface_radius * p.subsurface_scale;

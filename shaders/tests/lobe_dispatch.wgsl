@@ -7,7 +7,7 @@
 // surface's PRINCIPLED_VEC4S packed vec4s (principled_unpack).
 // Kinds: 0 diffuse, 1 conductor, 2 dielectric, 3 sheen (roughness in alpha.x), 4 dielectric
 // reflection only (scale in tint), 5 the principled surface, 6 single-scattering rough
-// diffuse (sigma in alpha.x).
+// diffuse (sigma in alpha.x), 7 the subsurface entry (its IOR in eta).
 
 const CONFIG_STRIDE: u32 = 5u + PRINCIPLED_VEC4S;
 
@@ -48,6 +48,7 @@ fn lobe_eval(p: LobeParams, wi: vec3<f32>) -> vec3<f32> {
         case 4u: { return dielectric_reflection_eval(p.wo, wi, p.alpha, p.eta, p.tint); }
         case 5u: { return principled_eval(p.principled, p.wo, wi).value; }
         case 6u: { return rough_diffuse_eval(p.wo, wi, p.f0, p.alpha.x); }
+        case 7u: { return vec3<f32>(subsurface_entry_pdf(p.wo, wi, p.eta)); }
         default: { return dielectric_eval(p.wo, wi, p.alpha, p.eta, p.tint, p.thin); }
     }
 }
@@ -60,6 +61,7 @@ fn lobe_pdf(p: LobeParams, wi: vec3<f32>) -> f32 {
         case 4u: { return dielectric_reflection_pdf(p.wo, wi, p.alpha); }
         case 5u: { return principled_eval(p.principled, p.wo, wi).pdf; }
         case 6u: { return diffuse_pdf(p.wo, wi); }
+        case 7u: { return subsurface_entry_pdf(p.wo, wi, p.eta); }
         default: { return dielectric_pdf(p.wo, wi, p.alpha, p.eta, p.thin); }
     }
 }
@@ -80,6 +82,11 @@ fn lobe_sample(p: LobeParams) -> BsdfSample {
             let d = diffuse_sample(p.wo, vec3<f32>(1.0), u);
             let f = rough_diffuse_eval(p.wo, d.wi, p.f0, p.alpha.x);
             return BsdfSample(d.wi, f / max(d.pdf, 1e-30), d.pdf, false, d.pdf > 0.0);
+        }
+        case 7u: {
+            let wi = subsurface_entry_sample(p.wo, p.eta, uc, u);
+            let pdf = subsurface_entry_pdf(p.wo, wi, p.eta);
+            return BsdfSample(wi, vec3<f32>(1.0), pdf, false, pdf > 0.0);
         }
         default: { return dielectric_sample(p.wo, p.alpha, p.eta, p.tint, p.thin, uc, u); }
     }

@@ -210,6 +210,8 @@ principled_parameters! {
     subsurface_scale: f32 = 0.05, NonNegative, "Scales the subsurface radius, in scene units.";
     subsurface_anisotropy: f32 = 0.0, Unit,
         "Forward scattering inside the object (Henyey–Greenstein g); 0 is isotropic.";
+    subsurface_ior: f32 = 1.4, Ior,
+        "Index of refraction of the surface light enters the walk through (clamped to [1.01, 3.8], as in Cycles): higher bends entering light further toward the normal.";
     coat_weight: f32 = 0.0, Unit, "Clear coat amount.";
     coat_roughness: f32 = 0.03, Unit, "Coat roughness.";
     coat_ior: f32 = 1.5, Ior, "Coat index of refraction.";
