@@ -38,6 +38,18 @@ pub struct BenchArgs {
 }
 
 impl BenchArgs {
+    /// A scene's render settings for a timed render: the bench's size, unlimited samples
+    /// (the range rendered decides), the scene's own bounces and seed.
+    fn settings(&self, scene: &Scene, kernel: KernelKind) -> RenderSettings {
+        RenderSettings {
+            width: self.size,
+            height: self.size,
+            samples_per_pixel: u32::MAX,
+            kernel,
+            ..RenderSettings::from_scene(scene)
+        }
+    }
+
     fn wants(&self, scene: &str) -> bool {
         let scene = scene.to_lowercase();
         self.scenes.is_empty()
@@ -100,14 +112,7 @@ fn measure(
     let t = Instant::now();
     build_scene_accel(scene)?;
     let bvh = t.elapsed();
-    let settings = RenderSettings {
-        width: args.size,
-        height: args.size,
-        samples_per_pixel: u32::MAX,
-        kernel,
-        ..RenderSettings::from_scene(scene)
-    };
-    let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)?;
+    let mut renderer = Renderer::new(Arc::clone(ctx), scene, args.settings(scene, kernel))?;
     let t = Instant::now();
     renderer.render(0..1, RenderControl::default())?;
     let first_dispatch = t.elapsed();
@@ -137,14 +142,14 @@ fn measure(
 /// keeps it, to `out` row by row as each is measured (the library never prints: the CLI
 /// passes standard output).
 pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Write) -> Result<()> {
-    // The import first, so the memory it measures is not hidden under the renders' peak.
-    let import = (!args.convergence).then(|| measure_import(args.triangles));
-    let ctx = GpuContext::new(backend)?;
-    let scenes = bench_scenes(args)?;
-    match import {
-        None => convergence(&ctx, &scenes, args, out),
-        Some(import) => throughput(&ctx, &scenes, import, args, out),
+    if args.convergence {
+        let ctx = GpuContext::new(backend)?;
+        return convergence(&ctx, &bench_scenes(args)?, args, out);
     }
+    // The import first, so the memory it measures is not hidden under the renders' peak.
+    let import = measure_import(args.triangles);
+    let ctx = GpuContext::new(backend)?;
+    throughput(&ctx, &bench_scenes(args)?, import, args, out)
 }
 
 /// The scenes --scene asks for (every one by default).
@@ -219,12 +224,8 @@ fn convergence(
     for (name, scene) in scenes {
         let renderer = |seed: u32| {
             let settings = RenderSettings {
-                width: args.size,
-                height: args.size,
-                samples_per_pixel: u32::MAX,
                 seed,
-                kernel: KernelKind::Specialized,
-                ..RenderSettings::from_scene(scene)
+                ..args.settings(scene, KernelKind::Specialized)
             };
             Renderer::new(Arc::clone(ctx), scene, settings)
         };
