@@ -46,6 +46,13 @@ struct Params {
     // Index of the first pixel of the film piece bound to this dispatch: the film is split
     // into bands of rows that each fit one binding (src/render/film_pieces.rs).
     film_piece_start: u32,
+    // The instances the camera is inside whose insides hold media (volumes, glass),
+    // outermost first: the media paths start in (src/accel/query.rs finds them).
+    camera_media: vec4<u32>,
+    camera_media_count: u32,
+    _pad0: u32,
+    _pad1: u32,
+    _pad2: u32,
 };
 
 // A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;

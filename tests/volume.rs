@@ -7,10 +7,13 @@
 
 mod common;
 
+use std::sync::Arc;
+
 use common::{gpu, mean, render, settings};
 use glam::{Affine3A, Vec3};
 use kiln::material::parse_material;
-use kiln::render::KernelKind;
+
+use kiln::render::{KernelKind, RenderControl, Renderer};
 use kiln::scene::{Camera, Material, Scene, shapes};
 
 /// A material from the nodes of a `.kmat` file's `nodes` map.
@@ -246,6 +249,58 @@ fn absorption_through_nested_volumes_is_beer_lambert() {
             "centre {centre}"
         );
     }
+}
+
+#[test]
+fn a_camera_inside_nested_volumes_starts_in_their_media() {
+    // The camera at the centre of an absorbing sphere of radius 1 inside another of
+    // radius 2, in a uniform environment: every ray crosses 1 unit of each medium and
+    // keeps exp(-(σi + σo)) (a little more: the faceted spheres are up to 0.3% smaller).
+    // A path started in vacuum would keep 1; one started with the media in the wrong
+    // order, exp(-2 σo).
+    let ctx = gpu();
+    let mut scene = Scene::empty(Camera::look_at(Vec3::ZERO, -Vec3::Z, 60.0));
+    scene.environment = Vec3::ONE;
+    let inner = scene.add_material(bare_volume("inner", &absorption([0.5, 0.75, 0.9], 1.0)));
+    let outer = scene.add_material(bare_volume("outer", &absorption([0.9, 0.5, 0.0], 0.5)));
+    let sphere = scene.add_mesh(shapes::uv_sphere(96, 48, false));
+    scene.add_instance(sphere, inner, Affine3A::IDENTITY);
+    scene.add_instance(sphere, outer, Affine3A::from_scale(Vec3::splat(2.0)));
+    let sigma = Vec3::new(0.5, 0.25, 0.1) + Vec3::new(0.05, 0.25, 0.5);
+    let (lowest, highest) = ((-sigma).exp(), (-sigma * 0.997).exp());
+    let mut renderer =
+        Renderer::new(Arc::clone(&ctx), &scene, settings(12, 12, 2)).expect("renderer");
+    let inside = |renderer: &mut Renderer| {
+        renderer.clear_film();
+        let stats = renderer
+            .render(0..2, RenderControl::default())
+            .expect("render");
+        assert!(stats.completed);
+        renderer.read_film().expect("film").radiance()
+    };
+    for (i, p) in inside(&mut renderer).iter().enumerate() {
+        assert!(
+            p.cmpge(lowest - 1e-4).all() && p.cmple(highest + 1e-4).all(),
+            "pixel {i}: {p} outside [{lowest}, {highest}]"
+        );
+    }
+    // Moved out of both, looking away from them: nothing between the camera and the sky.
+    renderer.set_camera(&Camera::look_at(Vec3::Z * 3.0, Vec3::Z * 4.0, 60.0));
+    for (i, p) in inside(&mut renderer).iter().enumerate() {
+        assert!(
+            (*p - Vec3::ONE).abs().max_element() < 1e-4,
+            "pixel {i} outside: {p}"
+        );
+    }
+    // Between the spheres (z = 1.5), looking out along +z: the rays cross 0.5 units of
+    // the outer medium (up to 0.3% less, to the faceted sphere).
+    renderer.set_camera(&Camera::look_at(Vec3::Z * 1.5, Vec3::Z * 4.0, 1.0));
+    let centre = inside(&mut renderer)[6 * 12 + 6];
+    let expected = (-Vec3::new(0.05, 0.25, 0.5) * 0.5).exp();
+    assert!(
+        (centre - expected).abs().max_element() < 4e-3,
+        "between the spheres: {centre}, expected {expected}"
+    );
 }
 
 fn shortest_of(sigma: Vec3) -> Vec3 {

@@ -1,6 +1,7 @@
 // The media a path is inside, for the volumetric path tracer (shaders/integrator/path.wgsl).
 //
-// Nesting rule: a path starts outside every object (the camera in vacuum). Crossing into
+// Nesting rule: a path starts in the media of the objects around the camera (found on the
+// CPU by ray parity against their closed meshes, outermost first). Crossing into
 // an object that light passes through — through its surface's transmission or through a
 // volume's bare boundary — pushes the medium of that object's inside: its volume
 // (shaders/nodes/volume.wgsl), plus the Beer–Lambert absorption of a transmissive
@@ -55,6 +56,28 @@ fn media_entered(media_in: Media, material: u32, instance: u32, absorption: vec3
         }
         media.emission[i] = materials[material].volume_emission.xyz;
         media.count = i + 1u;
+    }
+    return media;
+}
+
+// The media a camera path starts in: those of the objects around the camera, outermost
+// first (Params.camera_media). A transmissive surface's inside has the Beer–Lambert
+// absorption of its fixed parameters (a graph's, which vary over the surface, are not
+// known here: the path picks them up when it next enters); a thin wall has no inside.
+fn camera_media() -> Media {
+    var media = media_empty();
+    for (var i = 0u; i < min(params.camera_media_count, MEDIA_DEPTH); i++) {
+        let instance = params.camera_media[i];
+        let material = instances[instance].material;
+        var absorption = vec3<f32>(0.0);
+        if (materials[material].boundary_only == 0u) {
+            let p = principled_unpack(materials[material].principled);
+            if (p.thin_walled) {
+                continue;
+            }
+            absorption = principled_extinction(p);
+        }
+        media = media_entered(media, material, instance, absorption);
     }
     return media;
 }

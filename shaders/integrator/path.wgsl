@@ -286,7 +286,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     var prev_delta = true;
     // Where the last scattering event was: what light sampling saw a light from.
     var vertex = primary.origin;
-    media = media_empty();
+    media = camera_media();
     let nee = light_sampling_enabled();
     var depth = 0u;
     var passes = 0u;

@@ -5,6 +5,7 @@
 //! layout, and checked against the depth of the kernel's traversal stacks.
 
 mod bvh;
+pub mod query;
 mod two_level;
 
 pub use bvh::{Bvh, build_bvh};

@@ -6,9 +6,9 @@
 
 use glam::Vec3;
 
+use crate::accel::query::{hit_triangle, traverse};
 use crate::accel::{AccelError, SceneAccel, build_scene_accel};
 use crate::scene::{Camera, Scene};
-use crate::shader::gpu_types::BvhNode;
 
 /// A scene's BVHs kept for picking.
 pub struct Picker {
@@ -27,71 +27,6 @@ pub fn camera_ray(camera: &Camera, u: f32, v: f32, aspect: f32) -> (Vec3, Vec3) 
     (camera.position, d.normalize())
 }
 
-fn hit_box(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> bool {
-    let (lo, hi) = node.bounds();
-    let t0 = (lo - origin) * inv_dir;
-    let t1 = (hi - origin) * inv_dir;
-    let near = t0.min(t1).max_element().max(0.0);
-    let far = t0.max(t1).min_element();
-    near <= far && near < t_max
-}
-
-/// Möller–Trumbore; the distance along `dir` when the ray meets the triangle (either side).
-fn hit_triangle(origin: Vec3, dir: Vec3, [a, b, c]: [Vec3; 3]) -> Option<f32> {
-    let e1 = b - a;
-    let e2 = c - a;
-    let p = dir.cross(e2);
-    let det = e1.dot(p);
-    if det.abs() < 1e-12 {
-        return None;
-    }
-    let inv = 1.0 / det;
-    let s = origin - a;
-    let u = s.dot(p) * inv;
-    if !(0.0..=1.0).contains(&u) {
-        return None;
-    }
-    let q = s.cross(e1);
-    let v = dir.dot(q) * inv;
-    if v < 0.0 || u + v > 1.0 {
-        return None;
-    }
-    let t = e2.dot(q) * inv;
-    (t > 0.0).then_some(t)
-}
-
-/// Visits the leaves of `nodes` the ray may reach; `leaf(primitive, t_max)` returns a
-/// nearer hit distance when it finds one.
-fn traverse(
-    nodes: &[BvhNode],
-    order: &[u32],
-    origin: Vec3,
-    dir: Vec3,
-    mut t_max: f32,
-    mut leaf: impl FnMut(usize, f32) -> Option<f32>,
-) -> f32 {
-    let inv_dir = dir.recip();
-    let mut stack = vec![0usize];
-    while let Some(i) = stack.pop() {
-        let node = &nodes[i];
-        if !hit_box(node, origin, inv_dir, t_max) {
-            continue;
-        }
-        if node.count > 0 {
-            let first = node.first as usize;
-            for &primitive in &order[first..first + node.count as usize] {
-                if let Some(t) = leaf(primitive as usize, t_max) {
-                    t_max = t_max.min(t);
-                }
-            }
-        } else {
-            stack.push(node.first as usize);
-            stack.push(node.first as usize + 1);
-        }
-    }
-    t_max
-}
-
 impl Picker {
     /// Builds the BVHs of `scene` (as the renderer would).
     pub fn new(scene: &Scene) -> Result<Self, AccelError> {
@@ -105,30 +40,23 @@ impl Picker {
     pub fn pick(&self, scene: &Scene, origin: Vec3, dir: Vec3) -> Option<(usize, f32)> {
         let tlas = self.accel.tlas.as_ref()?;
         let mut best: Option<(usize, f32)> = None;
-        traverse(
-            &tlas.nodes,
-            &tlas.primitive_order,
-            origin,
-            dir,
-            f32::INFINITY,
-            |index, t_max| {
-                let instance = &scene.instances[index];
-                let blas = self.accel.blas[instance.mesh].as_ref()?;
-                let mesh = &scene.meshes[instance.mesh];
-                // In object space the ray's parameter t is the world one, since the
-                // direction is transformed without normalising.
-                let to_object = instance.transform.inverse();
-                let o = to_object.transform_point3(origin);
-                let d = to_object.transform_vector3(dir);
-                let t = traverse(&blas.nodes, &blas.primitive_order, o, d, t_max, |tri, _| {
-                    hit_triangle(o, d, mesh.triangle(tri))
-                });
-                (t < t_max).then(|| {
-                    best = Some((index, t));
-                    t
-                })
-            },
-        );
+        traverse(tlas, origin, dir, f32::INFINITY, |index, t_max| {
+            let instance = &scene.instances[index];
+            let blas = self.accel.blas[instance.mesh].as_ref()?;
+            let mesh = &scene.meshes[instance.mesh];
+            // In object space the ray's parameter t is the world one, since the
+            // direction is transformed without normalising.
+            let to_object = instance.transform.inverse();
+            let o = to_object.transform_point3(origin);
+            let d = to_object.transform_vector3(dir);
+            let t = traverse(blas, o, d, t_max, |tri, _| {
+                hit_triangle(o, d, mesh.triangle(tri))
+            });
+            (t < t_max).then(|| {
+                best = Some((index, t));
+                t
+            })
+        });
         best
     }
 }

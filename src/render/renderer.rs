@@ -31,6 +31,7 @@ use super::film_pieces::{
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
 use super::readback::map_and_read;
+use crate::accel::query::Enclosures;
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
 use crate::scene::Scene;
@@ -253,6 +254,8 @@ pub struct Renderer {
     pub(super) gpu_scene: GpuScene,
     /// The meshes' BVHs, kept so a transform edit rebuilds only the top level.
     pub(super) blas: Vec<Option<crate::accel::Bvh>>,
+    /// The objects holding media, to find those around the camera.
+    pub(super) enclosures: Enclosures,
     /// What the kernel was built with: an edit that needs other features or other
     /// material code needs a new renderer.
     pub(super) features: KernelFeatures,
@@ -437,6 +440,8 @@ impl Renderer {
             },
         )?;
         let base_params = base_params(scene, &gpu_scene, &settings);
+        let gpu_order = accel.tlas.as_ref().map_or(&[][..], |t| &t.primitive_order);
+        let enclosures = Enclosures::new(scene, &accel.blas, gpu_order);
         let mut renderer = Self {
             build_info: BuildInfo {
                 triangles: scene.triangle_count(),
@@ -453,6 +458,7 @@ impl Renderer {
             params_buffer,
             gpu_scene,
             blas: accel.blas,
+            enclosures,
             features,
             materials_wgsl: materials.wgsl,
             pacing: Pacing::Final,
@@ -465,6 +471,7 @@ impl Renderer {
             settings,
             samples_per_dispatch: 1,
         };
+        renderer.set_camera(&scene.camera);
         renderer.clear_film();
         // An empty dispatch makes drivers that compile lazily (lavapipe) do it now, so the
         // compile is counted here and not in the first samples.
@@ -778,6 +785,20 @@ impl Renderer {
             camera.aperture_radius,
             camera.focus_distance,
         ];
+        self.set_camera_media();
+    }
+
+    /// Finds the media around the camera for paths to start in (objects nested deeper
+    /// than the kernel's media stack are left out, as it leaves them out).
+    pub(super) fn set_camera_media(&mut self) {
+        let [x, y, z, _] = self.base_params.cam_position;
+        let around = self.enclosures.around(&self.blas, glam::Vec3::new(x, y, z));
+        let p = &mut self.base_params;
+        p.camera_media = [0; 4];
+        for (slot, &i) in p.camera_media.iter_mut().zip(&around) {
+            *slot = i;
+        }
+        p.camera_media_count = around.len().min(4) as u32;
     }
 
     /// Copies the film back from the device.

@@ -20,6 +20,7 @@ use thiserror::Error;
 use super::gpu_scene::{LightArrays, instance_arrays, instanced_lobes, light_arrays};
 use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
+use crate::accel::query::Enclosures;
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
@@ -138,7 +139,11 @@ impl Renderer {
         }
         if let Some((tlas, packed)) = placed {
             self.write_instances(tlas.as_ref(), &packed)?;
+            self.enclosures = Enclosures::new(new, &self.blas, &gpu_order(tlas.as_ref()));
             updated.instances = true;
+        } else if materials {
+            let order = self.enclosures.gpu_order().to_vec();
+            self.enclosures = Enclosures::new(new, &self.blas, &order);
         }
         // Emission is a material parameter and emissive triangles follow their instances,
         // so any of the three moves light.
@@ -149,6 +154,8 @@ impl Renderer {
         if old.camera != new.camera {
             self.set_camera(&new.camera);
             updated.camera = true;
+        } else if instances || materials {
+            self.set_camera_media();
         }
         if old.settings.max_bounces != new.settings.max_bounces {
             self.set_max_bounces(new.settings.max_bounces);
@@ -171,6 +178,8 @@ impl Renderer {
         let lights = light_arrays(scene, tlas.as_ref().map(|t| &t.nodes[0]));
         self.check_lights(&lights)?;
         self.write_instances(tlas.as_ref(), &packed)?;
+        self.enclosures = Enclosures::new(scene, &self.blas, &gpu_order(tlas.as_ref()));
+        self.set_camera_media();
         self.write_lights(scene, &lights)
     }
 
@@ -229,6 +238,9 @@ impl Renderer {
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let compiled = self.check_materials(scene)?;
         self.write_materials(scene, &compiled)?;
+        let order = self.enclosures.gpu_order().to_vec();
+        self.enclosures = Enclosures::new(scene, &self.blas, &order);
+        self.set_camera_media();
         self.update_lights(scene)
     }
 
@@ -367,4 +379,9 @@ impl Renderer {
         }
         Ok(())
     }
+}
+
+/// The scene index of each instance in the kernel's array: the TLAS's leaf order.
+fn gpu_order(tlas: Option<&Bvh>) -> Vec<u32> {
+    tlas.map_or_else(Vec::new, |t| t.primitive_order.clone())
 }

@@ -59,6 +59,14 @@ pub struct GpuParams {
     pub analytic_light_count: u32,
     /// Index of the first pixel of the film piece bound to this dispatch.
     pub film_piece_start: u32,
+    /// The kernel's indices of the instances around the camera whose insides hold media,
+    /// outermost first ([`crate::accel::query::Enclosures::around`]); the first
+    /// `camera_media_count` count.
+    pub camera_media: [u32; 4],
+    pub camera_media_count: u32,
+    pub _pad0: u32,
+    pub _pad1: u32,
+    pub _pad2: u32,
 }
 
 #[repr(C)]
@@ -251,6 +259,11 @@ mod tests {
                 triangle_pick,
                 analytic_light_count,
                 film_piece_start,
+                camera_media,
+                camera_media_count,
+                _pad0,
+                _pad1,
+                _pad2,
             ]
         );
         assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);
