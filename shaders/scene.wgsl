@@ -50,7 +50,9 @@ struct Params {
     // outermost first: the media paths start in (src/accel/query.rs finds them).
     camera_media: vec4<u32>,
     camera_media_count: u32,
-    _pad0: u32,
+    // Volume scattering events per path; past them media only absorb (their whole
+    // extinction), as Cycles' Light Paths ▸ Volume.
+    max_volume_bounces: u32,
     _pad1: u32,
     _pad2: u32,
 };

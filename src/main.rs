@@ -123,6 +123,10 @@ struct RenderArgs {
     /// Maximum number of bounces (default: the scene's).
     #[arg(long)]
     max_bounces: Option<u32>,
+    /// Scattering events in volumes per path, past which media only absorb (default: the
+    /// scene's, or as many as the bounces allow).
+    #[arg(long, value_name = "N")]
+    max_volume_bounces: Option<u32>,
     /// Image size as WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
@@ -460,6 +464,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     }
     if let Some(b) = args.max_bounces {
         settings.max_bounces = b;
+    }
+    if let Some(b) = args.max_volume_bounces {
+        settings.max_volume_bounces = b;
     }
     if let Some(seed) = args.seed {
         settings.seed = seed;

@@ -123,6 +123,7 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
         height: 180,
         samples_per_pixel: 17,
         max_bounces: 3,
+        max_volume_bounces: 2,
         seed: 42,
         view: ViewSettings {
             exposure_ev: -1.25,
@@ -658,6 +659,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 any::<u32>(),
                 -64f32..=64.0,
                 prop::sample::select(Tonemap::ALL.to_vec()),
+                prop_oneof![Just(kiln::scene::UNLIMITED_VOLUME_BOUNCES), 0u32..64],
             ),
         ),
     )
@@ -688,13 +690,16 @@ fn scene() -> impl Strategy<Value = Scene> {
                         visible,
                     })
                     .collect();
-                let ((width, height, samples_per_pixel, max_bounces), (seed, ev, tonemap)) =
-                    settings;
+                let (
+                    (width, height, samples_per_pixel, max_bounces),
+                    (seed, ev, tonemap, max_volume_bounces),
+                ) = settings;
                 scene.settings = SceneSettings {
                     width,
                     height,
                     samples_per_pixel,
                     max_bounces,
+                    max_volume_bounces,
                     seed,
                     view: ViewSettings {
                         exposure_ev: ev,

@@ -303,6 +303,48 @@ fn a_camera_inside_nested_volumes_starts_in_their_media() {
     );
 }
 
+#[test]
+fn past_the_volume_bounce_limit_a_medium_only_absorbs() {
+    // A white scattering cube of side 1 (σs = 1, albedo 1) in front of a uniform
+    // environment. With no volume bounces nothing scatters: every ray keeps exp(-σt / cos θ)
+    // of the environment, as through an absorber of the same extinction (Cycles'
+    // absorption-only volumes). One bounce brings single scattering back, and without a
+    // limit nothing is lost: the white furnace reads 1.
+    let ctx = gpu();
+    let mut scene = Scene::empty(slab_camera());
+    scene.environment = Vec3::ONE;
+    let white = scene.add_material(bare_volume("white", &scatter([1.0; 3], 1.0, 0.0)));
+    let cube = scene.add_mesh(shapes::cube());
+    scene.add_instance(cube, white, Affine3A::IDENTITY);
+    let widest = pixel_cosines(16, 16).into_iter().fold(1.0f32, f32::min) * 0.995;
+    let centre_mean = |max_volume_bounces: u32| {
+        let mut s = settings(16, 16, 64);
+        s.max_volume_bounces = max_volume_bounces;
+        let px = render(&ctx, &scene, s).radiance();
+        (px.clone(), mean(&px[5 * 16 + 5..5 * 16 + 11]))
+    };
+    let (none, _) = centre_mean(0);
+    for (i, p) in none.iter().enumerate() {
+        let (longest, shortest) = ((-1.0 / widest).exp(), (-1.0f32).exp());
+        assert!(
+            p.cmpge(Vec3::splat(longest - 1e-4)).all()
+                && p.cmple(Vec3::splat(shortest + 1e-4)).all(),
+            "pixel {i} with no volume bounces: {p} outside [{longest}, {shortest}]"
+        );
+    }
+    let (_, single) = centre_mean(1);
+    assert!(
+        single.min_element() > (-1.0f32).exp() + 0.1,
+        "one volume bounce adds single scattering: {single}"
+    );
+    let (_, unlimited) = centre_mean(kiln::scene::UNLIMITED_VOLUME_BOUNCES);
+    assert!(
+        (unlimited - Vec3::ONE).abs().max_element() < 0.03
+            && unlimited.max_element() > single.max_element(),
+        "without a limit the white furnace reads 1: {unlimited} (one bounce: {single})"
+    );
+}
+
 fn shortest_of(sigma: Vec3) -> Vec3 {
     (-sigma).exp()
 }

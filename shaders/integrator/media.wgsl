@@ -173,8 +173,10 @@ struct Tracked {
 // proportion to throughput × σs and throughput × σn (σn = σ̄ - σt), and is weighted by
 // the coefficient over σ̄ times that probability, so that absorption lowers its weight
 // instead of ending it. Emission adds throughput × Le / σ̄ at every tentative collision,
-// whose expectation is the segment's integral of transmittance × Le.
-fn heterogeneous_flight(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, throughput: vec3<f32>) -> Tracked {
+// whose expectation is the segment's integral of transmittance × Le. A path past its volume
+// bounces (`scatters` false) never scatters: every collision is null, weighted σn / σ̄, so
+// the flight is ratio tracking and the medium absorbs its whole extinction.
+fn heterogeneous_flight(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32, throughput: vec3<f32>, scatters: bool) -> Tracked {
     let top = media.count - 1u;
     let majorant = media.majorant[top];
     var r: Tracked;
@@ -191,7 +193,7 @@ fn heterogeneous_flight(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: 
         let c = medium_at(media, top, origin + dir * t, dir);
         r.emitted += r.throughput * c.emission / majorant;
         let sigma_n = max(vec3<f32>(majorant) - c.sigma_a - c.sigma_s, vec3<f32>(0.0));
-        let ws = r.throughput * c.sigma_s;
+        let ws = select(vec3<f32>(0.0), r.throughput * c.sigma_s, scatters);
         let wn = r.throughput * sigma_n;
         let ps = ws.x + ws.y + ws.z;
         let pn = wn.x + wn.y + wn.z;

@@ -289,6 +289,8 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     media = camera_media();
     let nee = light_sampling_enabled();
     var depth = 0u;
+    // Scattering events in media, against params.max_volume_bounces.
+    var volume_depth = 0u;
     var passes = 0u;
     // Inside an object, in a random walk its subsurface lobe started.
     var walking = false;
@@ -345,8 +347,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 let top = media.count - 1u;
                 let m = media.medium[top];
                 let t_segment = min(t_scene, light_hit.t);
+                // Past its volume bounces a path sees media as absorbers of their whole
+                // extinction (Cycles' absorption-only volumes).
+                let scatters = volume_depth < params.max_volume_bounces;
                 if (FEATURE_HETEROGENEOUS && media.majorant[top] > 0.0) {
-                    let tracked = heterogeneous_flight(media, ray.origin, ray.dir, t_segment, throughput);
+                    let tracked = heterogeneous_flight(media, ray.origin, ray.dir, t_segment, throughput, scatters);
                     radiance += tracked.emitted;
                     throughput = tracked.throughput;
                     if (!tracked.valid) {
@@ -364,7 +369,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
                         radiance += throughput * medium_emission(m, media.emission[top], t_segment);
                     }
-                    if (FEATURE_VOLUME && any(m.albedo > vec3<f32>(0.0))) {
+                    if (FEATURE_VOLUME && scatters && any(m.albedo > vec3<f32>(0.0))) {
                         let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
                         if (!flight.valid) {
                             break;
@@ -498,6 +503,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             }
             ray = Ray(vertex, wi);
             depth++;
+            volume_depth++;
             continue;
         }
         if (event == EVENT_WALK_EXIT) {

@@ -106,6 +106,11 @@ pub fn render_tab_ui(
         changed = count_row(ui, "Samples", samples, "").or(changed);
         let bounces = DragValue::new(&mut settings.max_bounces).range(0..=1024);
         changed = count_row(ui, "Max Bounces", bounces, "").or(changed);
+        let volume = DragValue::new(&mut settings.max_volume_bounces).range(0..=1024);
+        let tooltip = "Scattering events in volumes per path; past them volumes only absorb \
+                       (0: no light scattered in volumes). Volume scattering counts against \
+                       Max Bounces too.";
+        changed = count_row(ui, "Volume Bounces", volume, tooltip).or(changed);
         let seed = DragValue::new(&mut settings.seed);
         let tooltip = "The same seed renders the same image; another gives other noise.";
         changed = count_row(ui, "Seed", seed, tooltip).or(changed);

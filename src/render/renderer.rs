@@ -122,6 +122,9 @@ pub struct RenderSettings {
     pub samples_per_pixel: u32,
     /// Scattering events per path; 0 shows only what the camera sees directly.
     pub max_bounces: u32,
+    /// Scattering events in volumes per path; past them media only absorb
+    /// ([`crate::scene::SceneSettings::max_volume_bounces`]).
+    pub max_volume_bounces: u32,
     pub seed: u32,
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
@@ -163,6 +166,7 @@ impl RenderSettings {
             height: scene.settings.height,
             samples_per_pixel: scene.settings.samples_per_pixel,
             max_bounces: scene.settings.max_bounces,
+            max_volume_bounces: scene.settings.max_volume_bounces,
             seed: scene.settings.seed,
             light_sampling: true,
             page_bytes: None,
@@ -318,6 +322,7 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         film_size: [settings.width, settings.height],
         seed: settings.seed,
         max_bounces: settings.max_bounces,
+        max_volume_bounces: settings.max_volume_bounces,
         flags: if settings.light_sampling {
             FLAG_LIGHT_SAMPLING
         } else {

@@ -63,6 +63,7 @@ pub struct Updated {
     /// The light distribution: analytic lights, emissive triangles, the environment's
     /// colour and share.
     pub lights: bool,
+    /// The path-length limits: bounces, volume bounces.
     pub max_bounces: bool,
     /// The seed of the random sequence (the scene's render settings).
     pub seed: bool,
@@ -161,6 +162,10 @@ impl Renderer {
             self.set_max_bounces(new.settings.max_bounces);
             updated.max_bounces = true;
         }
+        if old.settings.max_volume_bounces != new.settings.max_volume_bounces {
+            self.set_max_volume_bounces(new.settings.max_volume_bounces);
+            updated.max_bounces = true;
+        }
         if old.settings.seed != new.settings.seed {
             self.settings.seed = new.settings.seed;
             self.base_params.seed = new.settings.seed;
@@ -242,6 +247,12 @@ impl Renderer {
         self.enclosures = Enclosures::new(scene, &self.blas, &order);
         self.set_camera_media();
         self.update_lights(scene)
+    }
+
+    /// Changes the volume bounce limit; a parameter, not a kernel change.
+    pub fn set_max_volume_bounces(&mut self, max_volume_bounces: u32) {
+        self.settings.max_volume_bounces = max_volume_bounces;
+        self.base_params.max_volume_bounces = max_volume_bounces;
     }
 
     /// Changes the path length; a parameter, not a kernel change.

@@ -228,6 +228,7 @@ fn build_scene(
         height: render.height,
         samples_per_pixel: render.samples_per_pixel,
         max_bounces: render.max_bounces,
+        max_volume_bounces: render.max_volume_bounces,
         seed: render.seed,
         view: ViewSettings {
             exposure_ev: render.exposure,

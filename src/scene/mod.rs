@@ -57,6 +57,10 @@ pub struct Instance {
     pub visible: bool,
 }
 
+/// The default volume bounce limit: as many as the path's bounces allow (the most the
+/// editor offers for either).
+pub const UNLIMITED_VOLUME_BOUNCES: u32 = 1024;
+
 /// Render settings a scene file carries as defaults; the command line overrides them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneSettings {
@@ -64,6 +68,10 @@ pub struct SceneSettings {
     pub height: u32,
     pub samples_per_pixel: u32,
     pub max_bounces: u32,
+    /// Scattering events in volumes per path (they count against `max_bounces` too);
+    /// past them media only absorb, as Cycles' Light Paths ▸ Volume. The default,
+    /// [`UNLIMITED_VOLUME_BOUNCES`], leaves `max_bounces` the only limit.
+    pub max_volume_bounces: u32,
     /// Seed of the random sequence: the same seed renders the same image.
     pub seed: u32,
     /// Exposure and view transform (Blender's colour management).
@@ -77,6 +85,7 @@ impl Default for SceneSettings {
             height: 512,
             samples_per_pixel: 64,
             max_bounces: 8,
+            max_volume_bounces: UNLIMITED_VOLUME_BOUNCES,
             seed: 0,
             view: ViewSettings::default(),
         }

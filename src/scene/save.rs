@@ -229,6 +229,7 @@ pub fn save_scene(
             height: scene.settings.height,
             samples_per_pixel: scene.settings.samples_per_pixel,
             max_bounces: scene.settings.max_bounces,
+            max_volume_bounces: scene.settings.max_volume_bounces,
             seed: scene.settings.seed,
             exposure: scene.settings.view.exposure_ev,
             view_transform: scene.settings.view.tonemap.key().to_owned(),

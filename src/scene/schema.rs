@@ -143,6 +143,8 @@ pub(super) struct RenderDesc {
     pub(super) height: u32,
     pub(super) samples_per_pixel: u32,
     pub(super) max_bounces: u32,
+    #[serde(skip_serializing_if = "is_unlimited_volume_bounces")]
+    pub(super) max_volume_bounces: u32,
     #[serde(skip_serializing_if = "is_zero_seed")]
     pub(super) seed: u32,
     /// Stops (EV) before the view transform.
@@ -152,6 +154,10 @@ pub(super) struct RenderDesc {
     /// "pbr-neutral".
     #[serde(skip_serializing_if = "is_default_view_transform")]
     pub(super) view_transform: String,
+}
+
+fn is_unlimited_volume_bounces(bounces: &u32) -> bool {
+    *bounces == super::UNLIMITED_VOLUME_BOUNCES
 }
 
 fn is_zero_seed(seed: &u32) -> bool {
@@ -175,6 +181,7 @@ impl Default for RenderDesc {
             height: s.height,
             samples_per_pixel: s.samples_per_pixel,
             max_bounces: s.max_bounces,
+            max_volume_bounces: s.max_volume_bounces,
             seed: s.seed,
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),

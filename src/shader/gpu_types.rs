@@ -64,7 +64,8 @@ pub struct GpuParams {
     /// `camera_media_count` count.
     pub camera_media: [u32; 4],
     pub camera_media_count: u32,
-    pub _pad0: u32,
+    /// Volume scattering events per path; past them media only absorb.
+    pub max_volume_bounces: u32,
     pub _pad1: u32,
     pub _pad2: u32,
 }
@@ -261,7 +262,7 @@ mod tests {
                 film_piece_start,
                 camera_media,
                 camera_media_count,
-                _pad0,
+                max_volume_bounces,
                 _pad1,
                 _pad2,
             ]

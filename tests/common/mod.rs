@@ -23,6 +23,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         height,
         samples_per_pixel: spp,
         max_bounces: 64,
+        max_volume_bounces: kiln::scene::UNLIMITED_VOLUME_BOUNCES,
         seed: 1,
         light_sampling: true,
         page_bytes: None,
