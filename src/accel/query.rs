@@ -128,7 +128,17 @@ impl Enclosures {
     /// The enclosures of `scene`, whose instances the kernel holds in `gpu_order` (the
     /// scene index of each of its instances: the TLAS's primitive order).
     pub fn new(scene: &Scene, blas: &[Option<Bvh>], gpu_order: &[u32]) -> Self {
-        let mut list = Vec::new();
+        let mut enclosures = Self::default();
+        enclosures.place(scene, blas, gpu_order);
+        enclosures
+    }
+
+    /// Places them again after an edit of `scene`'s instances or materials (its meshes
+    /// unchanged); `gpu_order` as for [`Enclosures::new`], `None` when it is unchanged.
+    /// Only meshes not held already are copied.
+    pub fn place(&mut self, scene: &Scene, blas: &[Option<Bvh>], gpu_order: &[u32]) {
+        self.gpu_order = gpu_order.to_vec();
+        self.list.clear();
         for (gpu_index, &i) in gpu_order.iter().enumerate() {
             let instance = &scene.instances[i as usize];
             let material = &scene.materials[instance.material];
@@ -154,26 +164,17 @@ impl Enclosures {
             let (lo, hi) = corners.fold((Vec3::INFINITY, Vec3::NEG_INFINITY), |(lo, hi), p| {
                 (lo.min(p), hi.max(p))
             });
-            list.push(Enclosure {
+            self.list.push(Enclosure {
                 gpu_index: gpu_index as u32,
                 mesh: instance.mesh,
                 to_object: instance.transform.inverse(),
                 lo,
                 hi,
             });
-        }
-        let triangles = list
-            .iter()
-            .map(|e| {
-                let mesh = &scene.meshes[e.mesh];
-                let triangles = (0..mesh.indices.len()).map(|t| mesh.triangle(t)).collect();
-                (e.mesh, triangles)
-            })
-            .collect();
-        Self {
-            list,
-            triangles,
-            gpu_order: gpu_order.to_vec(),
+            self.triangles.entry(instance.mesh).or_insert_with(|| {
+                let mesh = &scene.meshes[instance.mesh];
+                (0..mesh.indices.len()).map(|t| mesh.triangle(t)).collect()
+            });
         }
     }
 

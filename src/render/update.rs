@@ -20,7 +20,6 @@ use thiserror::Error;
 use super::gpu_scene::{LightArrays, instance_arrays, instanced_lobes, light_arrays};
 use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
-use crate::accel::query::Enclosures;
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
@@ -140,11 +139,10 @@ impl Renderer {
         }
         if let Some((tlas, packed)) = placed {
             self.write_instances(tlas.as_ref(), &packed)?;
-            self.enclosures = Enclosures::new(new, &self.blas, &gpu_order(tlas.as_ref()));
+            self.place_enclosures(new, Some(gpu_order(tlas.as_ref())));
             updated.instances = true;
         } else if materials {
-            let order = self.enclosures.gpu_order().to_vec();
-            self.enclosures = Enclosures::new(new, &self.blas, &order);
+            self.place_enclosures(new, None);
         }
         // Emission is a material parameter and emissive triangles follow their instances,
         // so any of the three moves light.
@@ -183,7 +181,7 @@ impl Renderer {
         let lights = light_arrays(scene, tlas.as_ref().map(|t| &t.nodes[0]));
         self.check_lights(&lights)?;
         self.write_instances(tlas.as_ref(), &packed)?;
-        self.enclosures = Enclosures::new(scene, &self.blas, &gpu_order(tlas.as_ref()));
+        self.place_enclosures(scene, Some(gpu_order(tlas.as_ref())));
         self.set_camera_media();
         self.write_lights(scene, &lights)
     }
@@ -243,10 +241,16 @@ impl Renderer {
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let compiled = self.check_materials(scene)?;
         self.write_materials(scene, &compiled)?;
-        let order = self.enclosures.gpu_order().to_vec();
-        self.enclosures = Enclosures::new(scene, &self.blas, &order);
+        self.place_enclosures(scene, None);
         self.set_camera_media();
         self.update_lights(scene)
+    }
+
+    /// The objects holding media placed as in `scene`; `gpu_order` is the kernel's new
+    /// instance order, `None` when it is unchanged.
+    fn place_enclosures(&mut self, scene: &Scene, gpu_order: Option<Vec<u32>>) {
+        let order = gpu_order.unwrap_or_else(|| self.enclosures.gpu_order().to_vec());
+        self.enclosures.place(scene, &self.blas, &order);
     }
 
     /// Changes the volume bounce limit; a parameter, not a kernel change.
