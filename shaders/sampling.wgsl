@@ -51,12 +51,22 @@ fn sample_uniform_triangle(u: vec2<f32>) -> vec2<f32> {
     return vec2<f32>(b1, 1.0 - b0 - b1);
 }
 
-// Offset in pixels drawn from a tent filter of radius 1 (filter importance sampling).
-fn sample_tent(u: f32) -> f32 {
-    if (u < 0.5) {
-        return sqrt(2.0 * u) - 1.0;
-    }
-    return 1.0 - sqrt(2.0 - 2.0 * u);
+// Offset in pixels from a pixel's centre drawn from the pixel filter (filter importance
+// sampling, so every sample weighs 1): x and y each from the filter's quantile function,
+// tabulated in Params.filter_quantiles at the probabilities (1 - cos(π t)) / 2 of
+// FILTER_TABLE_SIZE evenly spaced t (dense in the tails) and interpolated linearly in t
+// (src/shader/sampling.rs).
+fn filter_offset(u: vec2<f32>) -> vec2<f32> {
+    return vec2<f32>(filter_quantile(u.x), filter_quantile(u.y));
+}
+
+fn filter_quantile(u: f32) -> f32 {
+    let t = acos(clamp(1.0 - 2.0 * u, -1.0, 1.0)) * INV_PI;
+    let x = t * f32(FILTER_TABLE_SIZE - 1u);
+    let i = min(u32(x), FILTER_TABLE_SIZE - 2u);
+    let a = params.filter_quantiles[i / 4u][i % 4u];
+    let b = params.filter_quantiles[(i + 1u) / 4u][(i + 1u) % 4u];
+    return mix(a, b, x - f32(i));
 }
 
 fn power_heuristic(pdf_f: f32, pdf_g: f32) -> f32 {

@@ -11,6 +11,10 @@ const INV_4PI: f32 = 0.07957747154594766788;
 const FLAG_LIGHT_SAMPLING: u32 = 1u;
 const FLAG_ENVIRONMENT_MAP: u32 = 2u;
 
+// Params.sampler (shaders/rng.wgsl)
+const SAMPLER_INDEPENDENT: u32 = 0u;
+const SAMPLER_SOBOL: u32 = 1u;
+
 struct Params {
     film_size: vec2<u32>,
     tile_origin: vec2<u32>,
@@ -53,9 +57,15 @@ struct Params {
     // Volume scattering events per path; past them media only absorb (their whole
     // extinction), as Cycles' Light Paths ▸ Volume.
     max_volume_bounces: u32,
-    _pad1: u32,
+    // SAMPLER_INDEPENDENT or SAMPLER_SOBOL (shaders/rng.wgsl).
+    sampler: u32,
     _pad2: u32,
+    // The pixel filter's quantile function at FILTER_TABLE_SIZE evenly spaced
+    // probabilities, in pixels, four to a vector (shaders/sampling.wgsl).
+    filter_quantiles: array<vec4<f32>, 32>,
 };
+
+const FILTER_TABLE_SIZE: u32 = 128u;
 
 // A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;
 // leaves hold `count` primitives starting at `first`.

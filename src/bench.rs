@@ -11,6 +11,7 @@ use glam::{Affine3A, Vec3};
 use crate::accel::build_scene_accel;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Material, Scene, shapes};
+use crate::shader::sampling::Sampler;
 
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
@@ -218,20 +219,25 @@ fn convergence(
         2 * half
     )?;
     writeln!(out)?;
-    writeln!(out, "| scene | spp | seconds | RMSE | RMSE × √seconds |")?;
-    writeln!(out, "|---|---:|---:|---:|---:|")?;
+    writeln!(
+        out,
+        "| scene | sampler | spp | seconds | RMSE | RMSE × √seconds |"
+    )?;
+    writeln!(out, "|---|---|---:|---:|---:|---:|")?;
     let mut slopes = Vec::new();
+    let mut ratios_by_scene = Vec::new();
     for (name, scene) in scenes {
-        let renderer = |seed: u32| {
-            let settings = RenderSettings {
+        let renderer = |seed: u32, sampler: Sampler| {
+            let mut settings = RenderSettings {
                 seed,
                 ..args.settings(scene, KernelKind::Specialized)
             };
+            settings.sampling.sampler = sampler;
             Renderer::new(Arc::clone(ctx), scene, settings)
         };
         let mut halves = Vec::new();
         for seed in [0x5eed_0001, 0x5eed_0002] {
-            let mut r = renderer(seed)?;
+            let mut r = renderer(seed, scene.settings.sampling.sampler)?;
             r.render(0..half, RenderControl::default())?;
             halves.push(r.read_film()?.radiance());
         }
@@ -243,36 +249,59 @@ fn convergence(
         // Each half's variance is twice the reference's: the halves differ by four times it.
         let reference_noise = mean_square_difference(&halves[0], &halves[1]) / 4.0;
         // The kernel is the references' (the driver has compiled it): the timed renders
-        // start warm.
-        let mut measured = renderer(1)?;
-        let (mut done, mut seconds, mut fit) = (0, 0.0, Vec::new());
-        let mut spp = 1;
-        while spp <= max_spp {
-            seconds += measured
-                .render(done..spp, RenderControl::default())?
-                .elapsed
-                .as_secs_f64();
-            done = spp;
-            let image = measured.read_film()?.radiance();
-            let mse = (mean_square_difference(&image, &reference) - reference_noise).max(0.0);
-            let rmse = mse.sqrt();
-            if rmse > 0.0 {
-                fit.push(((spp as f64).ln(), rmse.ln()));
+        // start warm. Each sampler against the same reference.
+        let mut errors = Vec::new();
+        for sampler in Sampler::ALL {
+            let mut measured = renderer(1, sampler)?;
+            let (mut done, mut seconds, mut fit) = (0, 0.0, Vec::new());
+            let mut spp = 1;
+            while spp <= max_spp {
+                seconds += measured
+                    .render(done..spp, RenderControl::default())?
+                    .elapsed
+                    .as_secs_f64();
+                done = spp;
+                let image = measured.read_film()?.radiance();
+                let mse = (mean_square_difference(&image, &reference) - reference_noise).max(0.0);
+                let rmse = mse.sqrt();
+                if rmse > 0.0 {
+                    fit.push(((spp as f64).ln(), rmse.ln()));
+                }
+                errors.push((sampler, spp, rmse));
+                writeln!(
+                    out,
+                    "| {name} | {} | {spp} | {seconds:.3} | {rmse:.5} | {:.5} |",
+                    sampler.key(),
+                    rmse * seconds.sqrt()
+                )?;
+                spp *= 2;
             }
-            writeln!(
-                out,
-                "| {name} | {spp} | {seconds:.3} | {rmse:.5} | {:.5} |",
-                rmse * seconds.sqrt()
-            )?;
-            spp *= 2;
+            slopes.push((name, sampler, slope(&fit)));
         }
-        slopes.push((name, slope(&fit)));
+        let ratios: Vec<String> = errors
+            .iter()
+            .filter(|(s, _, _)| *s == Sampler::Sobol)
+            .filter_map(|&(_, spp, sobol)| {
+                let (_, _, independent) = errors
+                    .iter()
+                    .find(|&&(s, n, _)| s == Sampler::Independent && n == spp)?;
+                Some(format!("{spp}: {:.2}", sobol / independent))
+            })
+            .collect();
+        ratios_by_scene.push((name, ratios.join(", ")));
     }
     writeln!(out)?;
-    for (name, slope) in slopes {
+    for (name, sampler, slope) in slopes {
         writeln!(
             out,
-            "{name}: RMSE ∝ spp^{slope:.2} (the Monte Carlo rate is -0.5)"
+            "{name}, {}: RMSE ∝ spp^{slope:.2} (the Monte Carlo rate is -0.5)",
+            sampler.key()
+        )?;
+    }
+    for (name, ratios) in ratios_by_scene {
+        writeln!(
+            out,
+            "{name}: RMSE of sobol / independent at equal spp: {ratios}"
         )?;
     }
     Ok(())

@@ -19,6 +19,7 @@ use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
 use kiln::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer, context};
 use kiln::scene::{self, Scene};
+use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler};
 
 #[derive(Parser)]
 #[command(name = "kiln", version, about = "A physically based GPU path tracer")]
@@ -57,6 +58,32 @@ impl From<BackendArg> for Backend {
 fn tonemap_parser() -> impl clap::builder::TypedValueParser<Value = Tonemap> {
     clap::builder::PossibleValuesParser::new(Tonemap::ALL.map(Tonemap::key))
         .map(|key| Tonemap::from_key(&key).expect("clap accepts only the listed keys"))
+}
+
+/// `--sampler`'s values, as scene files spell them.
+fn sampler_parser() -> impl clap::builder::TypedValueParser<Value = Sampler> {
+    clap::builder::PossibleValuesParser::new(Sampler::ALL.map(Sampler::key))
+        .map(|key| Sampler::from_key(&key).expect("clap accepts only the listed keys"))
+}
+
+/// `--filter`'s values, as scene files spell them.
+fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterKind> {
+    clap::builder::PossibleValuesParser::new(FilterKind::ALL.map(FilterKind::key))
+        .map(|key| FilterKind::from_key(&key).expect("clap accepts only the listed keys"))
+}
+
+/// `--filter-width`: pixels in (0, MAX_FILTER_WIDTH].
+fn parse_filter_width(s: &str) -> Result<f32, String> {
+    let width: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number of pixels"))?;
+    PixelFilter {
+        kind: FilterKind::Box,
+        width,
+    }
+    .validate()?;
+    Ok(width)
 }
 
 #[derive(Subcommand)]
@@ -134,6 +161,16 @@ struct RenderArgs {
     /// scene's, or 0).
     #[arg(long)]
     seed: Option<u32>,
+    /// Where each path's random numbers come from: Owen-scrambled Sobol' points, stratified
+    /// over a pixel's samples, or independent ones (default: the scene's, or sobol).
+    #[arg(long, value_parser = sampler_parser())]
+    sampler: Option<Sampler>,
+    /// The pixel filter samples are drawn from (default: the scene's, or blackman-harris).
+    #[arg(long, value_parser = filter_parser())]
+    filter: Option<FilterKind>,
+    /// The pixel filter's width in pixels (default: the scene's, or 1.5).
+    #[arg(long, value_name = "PIXELS", value_parser = parse_filter_width)]
+    filter_width: Option<f32>,
     /// Exposure in stops (EV) applied before tonemapping (default: the scene's, or 0).
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
@@ -470,6 +507,15 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     }
     if let Some(seed) = args.seed {
         settings.seed = seed;
+    }
+    if let Some(sampler) = args.sampler {
+        settings.sampling.sampler = sampler;
+    }
+    if let Some(kind) = args.filter {
+        settings.sampling.filter.kind = kind;
+    }
+    if let Some(width) = args.filter_width {
+        settings.sampling.filter.width = width;
     }
     settings.light_sampling = !args.no_light_sampling;
     // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,

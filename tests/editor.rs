@@ -15,6 +15,7 @@ use kiln::editor::session::SessionStore;
 use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
 use kiln::film::tonemap::Tonemap;
 use kiln::plugin::PluginHost;
+use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 
 #[path = "common/editor_harness.rs"]
 mod editor_harness;
@@ -409,6 +410,27 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
     assert_eq!(
         (settings.width, settings.height, settings.samples_per_pixel),
         (48, 32, 3)
+    );
+    // The pixel filter and the sampling pattern, as Cycles' Film and Sampling panels.
+    set_value(&mut harness, "Filter Width", 2.5);
+    for (combo, choice) in [("Pixel Filter", "Gaussian"), ("Pattern", "Independent")] {
+        harness.get_by_role_and_label(Role::ComboBox, combo).click();
+        harness.step();
+        harness.step();
+        harness.get_by_label(choice).click();
+        harness.step();
+        harness.step();
+    }
+    let sampling = harness.state().document().scene().settings.sampling;
+    assert_eq!(
+        sampling,
+        Sampling {
+            sampler: Sampler::Independent,
+            filter: PixelFilter {
+                kind: FilterKind::Gaussian,
+                width: 2.5
+            },
+        }
     );
     assert!(harness.query_by_label("Render Image").is_some());
 

@@ -14,6 +14,7 @@ use kiln::scene::{
     save_scene,
 };
 use kiln::shader::principled::Principled;
+use kiln::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, PixelFilter, Sampler, Sampling};
 use kiln::shader::view::{Tonemap, ViewSettings};
 use proptest::prelude::*;
 
@@ -125,6 +126,13 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
         max_bounces: 3,
         max_volume_bounces: 2,
         seed: 42,
+        sampling: Sampling {
+            sampler: Sampler::Independent,
+            filter: PixelFilter {
+                kind: FilterKind::Gaussian,
+                width: 2.25,
+            },
+        },
         view: ViewSettings {
             exposure_ev: -1.25,
             tonemap: Tonemap::PbrNeutral,
@@ -661,6 +669,14 @@ fn scene() -> impl Strategy<Value = Scene> {
                 prop::sample::select(Tonemap::ALL.to_vec()),
                 prop_oneof![Just(kiln::scene::UNLIMITED_VOLUME_BOUNCES), 0u32..64],
             ),
+            (
+                prop::sample::select(Sampler::ALL.to_vec()),
+                prop::sample::select(FilterKind::ALL.to_vec()),
+                prop_oneof![
+                    Just(PixelFilter::default().width),
+                    0.01f32..=MAX_FILTER_WIDTH
+                ],
+            ),
         ),
     )
         .prop_flat_map(|(materials, meshes, camera, lights, sky, settings)| {
@@ -693,6 +709,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let (
                     (width, height, samples_per_pixel, max_bounces),
                     (seed, ev, tonemap, max_volume_bounces),
+                    (sampler, filter, filter_width),
                 ) = settings;
                 scene.settings = SceneSettings {
                     width,
@@ -701,6 +718,13 @@ fn scene() -> impl Strategy<Value = Scene> {
                     max_bounces,
                     max_volume_bounces,
                     seed,
+                    sampling: Sampling {
+                        sampler,
+                        filter: PixelFilter {
+                            kind: filter,
+                            width: filter_width,
+                        },
+                    },
                     view: ViewSettings {
                         exposure_ev: ev,
                         tonemap,

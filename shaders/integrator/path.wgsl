@@ -297,6 +297,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     var walk_medium: Medium;
     var walk_steps = 0u;
     loop {
+        rng_align(depth);
         rays_traced++;
         let hit = intersect_scene(ray);
         // Each pass of the loop finds one vertex to scatter at (a surface, where a walk
@@ -586,11 +587,11 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         aov_n = film_aov[2u * index + 1u];
     }
     for (var i = 0u; i < params.sample_count; i++) {
-        rng_seed(pixel, params.sample_start + i, params.seed);
+        rng_begin(pixel, params.sample_start + i, params.seed, params.sampler);
         aov_albedo = vec3<f32>(0.0);
         aov_normal = vec3<f32>(0.0);
         aov_depth = 0.0;
-        let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + vec2<f32>(sample_tent(rand()), sample_tent(rand()));
+        let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
         var l = trace_path(camera_ray(film_pos, rand2()));
         if (!is_finite3(l)) {
             non_finite++;

@@ -8,6 +8,7 @@ use egui::{DragValue, RichText, Ui};
 use glam::Vec3;
 
 use crate::film::tonemap::Tonemap;
+use crate::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, Sampler};
 
 use super::document::{Command, Document, GestureId};
 use super::final_render::RenderState;
@@ -114,10 +115,55 @@ pub fn render_tab_ui(
         let seed = DragValue::new(&mut settings.seed);
         let tooltip = "The same seed renders the same image; another gives other noise.";
         changed = count_row(ui, "Seed", seed, tooltip).or(changed);
+        let label = ui.label("Pattern").on_hover_text(
+            "Where each path's random numbers come from. Sobol: stratified over a pixel's \
+             samples, less noise at the same samples. Independent: white noise, for \
+             comparison.",
+        );
+        let sampler = &mut settings.sampling.sampler;
+        egui::ComboBox::from_id_salt("sampling pattern")
+            .selected_text(sampler.label())
+            .show_ui(ui, |ui| {
+                for s in Sampler::ALL {
+                    if ui.selectable_value(sampler, s, s.label()).clicked() {
+                        changed = Some(None);
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
         // The editor's own setting, not the document's: no command.
         let viewport = DragValue::new(&mut options.viewport_samples).range(1..=65536);
         let tooltip = "The viewport stops refining after this many samples per pixel.";
         count_row(ui, "Viewport Samples", viewport, tooltip);
+    });
+    section(ui, "Film", |ui| {
+        let label = ui.label("Pixel Filter").on_hover_text(
+            "The filter each pixel's samples are drawn from: wider is smoother, narrower \
+             sharper and more aliased.",
+        );
+        let filter = &mut settings.sampling.filter;
+        egui::ComboBox::from_id_salt("pixel filter")
+            .selected_text(filter.kind.label())
+            .show_ui(ui, |ui| {
+                for kind in FilterKind::ALL {
+                    if ui
+                        .selectable_value(&mut filter.kind, kind, kind.label())
+                        .clicked()
+                    {
+                        changed = Some(None);
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
+        let width = DragValue::new(&mut filter.width)
+            .range(0.01..=MAX_FILTER_WIDTH)
+            .speed(0.01)
+            .suffix(" px");
+        changed = count_row(ui, "Filter Width", width, "").or(changed);
     });
     if let Some(gesture) = changed.filter(|_| settings != before) {
         actions.push(RenderAction::Edit(Edit {

@@ -37,6 +37,7 @@ use crate::film::Film;
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
 use crate::shader::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
+use crate::shader::sampling::Sampling;
 
 const TILE_SIZE: u32 = 256;
 const GIB: f64 = (1u64 << 30) as f64;
@@ -126,6 +127,8 @@ pub struct RenderSettings {
     /// ([`crate::scene::SceneSettings::max_volume_bounces`]).
     pub max_volume_bounces: u32,
     pub seed: u32,
+    /// The sampler and the pixel filter: parameters, not kernel changes.
+    pub sampling: Sampling,
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
     pub light_sampling: bool,
@@ -168,6 +171,7 @@ impl RenderSettings {
             max_bounces: scene.settings.max_bounces,
             max_volume_bounces: scene.settings.max_volume_bounces,
             seed: scene.settings.seed,
+            sampling: scene.settings.sampling,
             light_sampling: true,
             page_bytes: None,
             kernel: KernelKind::Specialized,
@@ -323,6 +327,8 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         seed: settings.seed,
         max_bounces: settings.max_bounces,
         max_volume_bounces: settings.max_volume_bounces,
+        sampler: settings.sampling.sampler.gpu_id(),
+        filter_quantiles: settings.sampling.filter.quantiles(),
         flags: if settings.light_sampling {
             FLAG_LIGHT_SAMPLING
         } else {

@@ -24,6 +24,7 @@ use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
 use crate::shader::gpu_types::{BvhNode, GpuInstance};
+use crate::shader::sampling::Sampling;
 
 /// Why an edit was not applied in place.
 #[derive(Debug, Error)]
@@ -64,8 +65,9 @@ pub struct Updated {
     pub lights: bool,
     /// The path-length limits: bounces, volume bounces.
     pub max_bounces: bool,
-    /// The seed of the random sequence (the scene's render settings).
-    pub seed: bool,
+    /// How samples are drawn: the seed of the random sequence, the sampler, the pixel
+    /// filter (the scene's render settings).
+    pub sampling: bool,
 }
 
 impl Updated {
@@ -76,7 +78,7 @@ impl Updated {
             || self.materials
             || self.lights
             || self.max_bounces
-            || self.seed
+            || self.sampling
     }
 }
 
@@ -167,7 +169,11 @@ impl Renderer {
         if old.settings.seed != new.settings.seed {
             self.settings.seed = new.settings.seed;
             self.base_params.seed = new.settings.seed;
-            updated.seed = true;
+            updated.sampling = true;
+        }
+        if old.settings.sampling != new.settings.sampling {
+            self.set_sampling(new.settings.sampling);
+            updated.sampling = true;
         }
         Ok(updated)
     }
@@ -257,6 +263,13 @@ impl Renderer {
     pub fn set_max_volume_bounces(&mut self, max_volume_bounces: u32) {
         self.settings.max_volume_bounces = max_volume_bounces;
         self.base_params.max_volume_bounces = max_volume_bounces;
+    }
+
+    /// Changes the sampler or the pixel filter; parameters, not a kernel change.
+    pub fn set_sampling(&mut self, sampling: Sampling) {
+        self.settings.sampling = sampling;
+        self.base_params.sampler = sampling.sampler.gpu_id();
+        self.base_params.filter_quantiles = sampling.filter.quantiles();
     }
 
     /// Changes the path length; a parameter, not a kernel change.

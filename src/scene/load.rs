@@ -17,6 +17,7 @@ use super::schema::*;
 use super::{
     Camera, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, shapes,
 };
+use crate::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 use crate::shader::view::{Tonemap, ViewSettings};
 
 impl LightDesc {
@@ -223,6 +224,20 @@ fn build_scene(
             names(Tonemap::ALL.iter().map(|t| t.key()))
         ))
     })?;
+    let sampler = Sampler::from_key(&render.sampler).ok_or_else(|| {
+        invalid(format!(
+            "render: unknown sampler \"{}\" (known: {})",
+            render.sampler,
+            names(Sampler::ALL.iter().map(|s| s.key()))
+        ))
+    })?;
+    let filter = FilterKind::from_key(&render.filter).ok_or_else(|| {
+        invalid(format!(
+            "render: unknown filter \"{}\" (known: {})",
+            render.filter,
+            names(FilterKind::ALL.iter().map(|f| f.key()))
+        ))
+    })?;
     scene.settings = SceneSettings {
         width: render.width,
         height: render.height,
@@ -230,6 +245,13 @@ fn build_scene(
         max_bounces: render.max_bounces,
         max_volume_bounces: render.max_volume_bounces,
         seed: render.seed,
+        sampling: Sampling {
+            sampler,
+            filter: PixelFilter {
+                kind: filter,
+                width: render.filter_width,
+            },
+        },
         view: ViewSettings {
             exposure_ev: render.exposure,
             tonemap,

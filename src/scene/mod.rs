@@ -29,6 +29,7 @@ use std::path::Path;
 
 use glam::{Affine3A, Vec3};
 
+use crate::shader::sampling::Sampling;
 use crate::shader::view::ViewSettings;
 
 /// Where the bundled default scene lives in the source tree.
@@ -74,6 +75,8 @@ pub struct SceneSettings {
     pub max_volume_bounces: u32,
     /// Seed of the random sequence: the same seed renders the same image.
     pub seed: u32,
+    /// The sampler and the pixel filter.
+    pub sampling: Sampling,
     /// Exposure and view transform (Blender's colour management).
     pub view: ViewSettings,
 }
@@ -87,6 +90,7 @@ impl Default for SceneSettings {
             max_bounces: 8,
             max_volume_bounces: UNLIMITED_VOLUME_BOUNCES,
             seed: 0,
+            sampling: Sampling::default(),
             view: ViewSettings::default(),
         }
     }
@@ -98,6 +102,7 @@ impl SceneSettings {
         if self.samples_per_pixel == 0 {
             return Err("samples per pixel must be at least 1".into());
         }
+        self.sampling.filter.validate()?;
         self.view.validate()
     }
 }

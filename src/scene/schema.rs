@@ -14,6 +14,7 @@ use serde::{Deserialize, Deserializer, Serialize, Serializer};
 
 use super::{Material, SceneSettings};
 use crate::shader::principled::{self, Kind, ParamValue, Principled};
+use crate::shader::sampling::{PixelFilter, Sampler};
 
 #[derive(Debug, Serialize, Deserialize)]
 #[serde(deny_unknown_fields)]
@@ -147,6 +148,15 @@ pub(super) struct RenderDesc {
     pub(super) max_volume_bounces: u32,
     #[serde(skip_serializing_if = "is_zero_seed")]
     pub(super) seed: u32,
+    /// A [`Sampler::key`]: "sobol", "independent".
+    #[serde(skip_serializing_if = "is_default_sampler")]
+    pub(super) sampler: String,
+    /// A [`FilterKind::key`]: "blackman-harris", "box", "tent", "gaussian".
+    #[serde(skip_serializing_if = "is_default_filter")]
+    pub(super) filter: String,
+    /// The pixel filter's width in pixels.
+    #[serde(skip_serializing_if = "is_default_filter_width")]
+    pub(super) filter_width: f32,
     /// Stops (EV) before the view transform.
     #[serde(skip_serializing_if = "is_zero_ev")]
     pub(super) exposure: f32,
@@ -158,6 +168,18 @@ pub(super) struct RenderDesc {
 
 fn is_unlimited_volume_bounces(bounces: &u32) -> bool {
     *bounces == super::UNLIMITED_VOLUME_BOUNCES
+}
+
+fn is_default_sampler(key: &String) -> bool {
+    *key == Sampler::default().key()
+}
+
+fn is_default_filter(key: &String) -> bool {
+    *key == PixelFilter::default().kind.key()
+}
+
+fn is_default_filter_width(width: &f32) -> bool {
+    width.to_bits() == PixelFilter::default().width.to_bits()
 }
 
 fn is_zero_seed(seed: &u32) -> bool {
@@ -183,6 +205,9 @@ impl Default for RenderDesc {
             max_bounces: s.max_bounces,
             max_volume_bounces: s.max_volume_bounces,
             seed: s.seed,
+            sampler: s.sampling.sampler.key().to_owned(),
+            filter: s.sampling.filter.kind.key().to_owned(),
+            filter_width: s.sampling.filter.width,
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),
         }

@@ -6,6 +6,12 @@ use bytemuck::{Pod, Zeroable};
 pub const FLAG_LIGHT_SAMPLING: u32 = 1;
 /// `Params.flags`: the environment is a map in `env_data`.
 pub const FLAG_ENVIRONMENT_MAP: u32 = 2;
+/// `Params.sampler`: independent random numbers, or Owen-scrambled Sobol' points
+/// (`shaders/rng.wgsl`).
+pub const SAMPLER_INDEPENDENT: u32 = 0;
+pub const SAMPLER_SOBOL: u32 = 1;
+/// Entries of `Params.filter_quantiles`.
+pub const FILTER_TABLE_SIZE: u32 = 128;
 /// `Instance.flags`
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
@@ -17,9 +23,12 @@ pub const LIGHT_DISTANT: u32 = 2;
 
 /// Every constant above with its WGSL name, for the test that compares them with
 /// `shaders/scene.wgsl`.
-pub const MIRRORED_CONSTANTS: [(&str, u32); 9] = [
+pub const MIRRORED_CONSTANTS: [(&str, u32); 12] = [
     ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
     ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
+    ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
+    ("SAMPLER_SOBOL", SAMPLER_SOBOL),
+    ("FILTER_TABLE_SIZE", FILTER_TABLE_SIZE),
     ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
     ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
     ("INSTANCE_HAS_UV1", INSTANCE_HAS_UV1),
@@ -66,8 +75,12 @@ pub struct GpuParams {
     pub camera_media_count: u32,
     /// Volume scattering events per path; past them media only absorb.
     pub max_volume_bounces: u32,
-    pub _pad1: u32,
+    /// [`SAMPLER_INDEPENDENT`] or [`SAMPLER_SOBOL`].
+    pub sampler: u32,
     pub _pad2: u32,
+    /// The pixel filter's quantile function at [`FILTER_TABLE_SIZE`] evenly spaced
+    /// probabilities, in pixels ([`crate::shader::filter::PixelFilter::quantiles`]).
+    pub filter_quantiles: [[f32; 4]; FILTER_TABLE_SIZE as usize / 4],
 }
 
 #[repr(C)]
@@ -263,8 +276,9 @@ mod tests {
                 camera_media,
                 camera_media_count,
                 max_volume_bounces,
-                _pad1,
+                sampler,
                 _pad2,
+                filter_quantiles,
             ]
         );
         assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);

@@ -10,6 +10,7 @@ pub mod bindings;
 pub mod features;
 pub mod gpu_types;
 pub mod principled;
+pub mod sampling;
 pub mod view;
 
 pub use features::KernelFeatures;

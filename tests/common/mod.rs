@@ -25,6 +25,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         max_bounces: 64,
         max_volume_bounces: kiln::scene::UNLIMITED_VOLUME_BOUNCES,
         seed: 1,
+        sampling: kiln::shader::sampling::Sampling::default(),
         light_sampling: true,
         page_bytes: None,
         kernel: KernelKind::Specialized,

@@ -536,13 +536,7 @@ fn base_colour_at_vertex_colour(kmat: &str, color: [f32; 4]) -> [f32; 3] {
         height: 4,
         samples_per_pixel: 2,
         max_bounces: 4,
-        max_volume_bounces: kiln::scene::UNLIMITED_VOLUME_BOUNCES,
-        seed: 1,
-        light_sampling: true,
-        page_bytes: None,
-        kernel: kiln::render::KernelKind::Specialized,
-        aovs: false,
-        film_piece_bytes: None,
+        ..RenderSettings::from_scene(&scene)
     };
     let ctx = GpuContext::new(None).expect("an adapter");
     let mut renderer = Renderer::new(ctx, &scene, settings).expect("renderer");
