@@ -66,19 +66,19 @@ fn owen_scramble(x: u32, seed: u32) -> u32 {
     return reverseBits(v);
 }
 
-// The second dimension of Sobol' (generator matrix: Pascal's triangle mod 2).
+// The second dimension of Sobol' (generator matrix: Pascal's triangle mod 2), without a
+// loop over the index's bits. Index bit j contributes the column with bit 31 - k set for
+// every k whose binary digits are a subset of j's (C(j, k) is odd: Lucas), so bit 31 - k
+// of the result is the parity of the index's set bits j that contain k: a superset sum
+// over the 5-bit positions, one step per position bit, then reversed.
 fn sobol_second(index: u32) -> u32 {
-    var i = index;
-    var v = 0x80000000u;
-    var r = 0u;
-    while (i != 0u) {
-        if ((i & 1u) != 0u) {
-            r ^= v;
-        }
-        i >>= 1u;
-        v ^= v >> 1u;
-    }
-    return r;
+    var x = index;
+    x ^= (x >> 1u) & 0x55555555u;
+    x ^= (x >> 2u) & 0x33333333u;
+    x ^= (x >> 4u) & 0x0f0f0f0fu;
+    x ^= (x >> 8u) & 0x00ff00ffu;
+    x ^= (x >> 16u) & 0x0000ffffu;
+    return reverseBits(x);
 }
 
 // A 32-bit fraction to [0, 1): its top 24 bits, so 1.0 is never returned.

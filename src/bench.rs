@@ -10,7 +10,7 @@ use glam::{Affine3A, Vec3};
 
 use crate::accel::build_scene_accel;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
-use crate::scene::{self, Camera, Material, Scene, shapes};
+use crate::scene::{self, Camera, Material, Scene, UNLIMITED_BOUNCES, shapes};
 use crate::shader::sampling::Sampler;
 
 #[derive(clap::Args, Debug)]
@@ -36,6 +36,14 @@ pub struct BenchArgs {
     /// the measured renders go up to an eighth of it.
     #[arg(long, default_value_t = 1024, value_name = "SPP")]
     pub reference_spp: u32,
+    /// Instead of samples/s: each scene's energy lost to a bounce limit, against unbounded
+    /// depth (Russian roulette alone ending paths), and the time each limit takes, at
+    /// --depth-spp. Use a small --size.
+    #[arg(long)]
+    pub depth: bool,
+    /// Samples per pixel of each --depth render.
+    #[arg(long, default_value_t = 256, value_name = "SPP")]
+    pub depth_spp: u32,
 }
 
 impl BenchArgs {
@@ -146,6 +154,10 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     if args.convergence {
         let ctx = GpuContext::new(backend)?;
         return convergence(&ctx, &bench_scenes(args)?, args, out);
+    }
+    if args.depth {
+        let ctx = GpuContext::new(backend)?;
+        return depth(&ctx, &bench_scenes(args)?, args, out);
     }
     // The import first, so the memory it measures is not hidden under the renders' peak.
     let import = measure_import(args.triangles);
@@ -303,6 +315,75 @@ fn convergence(
             out,
             "{name}: RMSE of sobol / independent at equal spp: {ratios}"
         )?;
+    }
+    Ok(())
+}
+
+/// The bounce limits `kiln bench --depth` measures; the last is unbounded.
+const DEPTHS: [u32; 11] = [1, 2, 3, 4, 6, 8, 12, 16, 32, 64, UNLIMITED_BOUNCES];
+
+/// Each scene's energy lost to each bounce limit, against unbounded depth, and the time.
+/// All renders share the seed, so up to a limit their paths are the same ones: the
+/// difference from the unbounded image is the light of the longer paths alone, with
+/// little noise of its own.
+fn depth(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    writeln!(
+        out,
+        "Adapter: {}; {}x{} px, {} spp, specialised kernels, NEE + MIS, Russian roulette; \
+         energy: the image's mean per channel against unbounded depth.",
+        ctx.describe(),
+        args.size,
+        args.size,
+        args.depth_spp
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "| scene | max bounces | seconds | time ÷ unbounded's | energy lost R | G | B |"
+    )?;
+    writeln!(out, "|---|---:|---:|---:|---:|---:|---:|")?;
+    for (name, scene) in scenes {
+        let mut renderer = Renderer::new(
+            Arc::clone(ctx),
+            scene,
+            args.settings(scene, KernelKind::Specialized),
+        )?;
+        // A warm-up: the driver compiles the kernel at its first dispatch.
+        renderer.render(0..1, RenderControl::default())?;
+        let mut rows = Vec::new();
+        for max_bounces in DEPTHS {
+            renderer.set_max_bounces(max_bounces);
+            renderer.clear_film();
+            let seconds = renderer
+                .render(0..args.depth_spp, RenderControl::default())?
+                .elapsed
+                .as_secs_f64();
+            let image = renderer.read_film()?.radiance();
+            let mean = image.iter().map(|c| c.as_dvec3()).sum::<glam::DVec3>() / image.len() as f64;
+            rows.push((max_bounces, seconds, mean));
+        }
+        let &(_, unbounded_seconds, unbounded) = rows.last().expect("DEPTHS is not empty");
+        for (max_bounces, seconds, mean) in rows {
+            let lost = (unbounded - mean) / unbounded * 100.0;
+            let limit = if max_bounces == UNLIMITED_BOUNCES {
+                "unbounded".to_owned()
+            } else {
+                max_bounces.to_string()
+            };
+            writeln!(
+                out,
+                "| {name} | {limit} | {seconds:.2} | {:.2} | {:.2}% | {:.2}% | {:.2}% |",
+                seconds / unbounded_seconds,
+                lost.x,
+                lost.y,
+                lost.z
+            )?;
+        }
     }
     Ok(())
 }

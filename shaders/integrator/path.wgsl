@@ -111,7 +111,7 @@ fn sample_light(p: vec3<f32>) -> LightSample {
         ls = sample_environment(u);
         ls.pdf *= p_env;
     } else if (FEATURE_EMISSIVE_TRIANGLES && u_pick < p_env + p_tri) {
-        ls = sample_light_triangle(p, (u_pick - p_env) / p_tri, u);
+        ls = sample_light_triangle(p, u);
         ls.pdf *= p_tri;
     } else {
         if (!FEATURE_ANALYTIC_LIGHTS || params.analytic_light_count == 0u) {

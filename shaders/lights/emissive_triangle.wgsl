@@ -27,9 +27,23 @@ fn pick_light_triangle(u: f32) -> u32 {
     return lo;
 }
 
-fn sample_light_triangle(p: vec3<f32>, u_pick: f32, u: vec2<f32>) -> LightSample {
-    let light = light_triangles[pick_light_triangle(u_pick)];
-    let b = sample_uniform_triangle(u);
+// A point on an emissive triangle picked by power. u.x picks the triangle and, rescaled
+// to the triangle's share of the CDF, is reused with u.y for the point: a stratified 2D
+// sample stays stratified over the whole light (a quad's two triangles, a mesh's many)
+// rather than split between triangles at random.
+fn sample_light_triangle(p: vec3<f32>, u: vec2<f32>) -> LightSample {
+    let index = pick_light_triangle(u.x);
+    let light = light_triangles[index];
+    var lo = 0.0;
+    if (index > 0u) {
+        lo = light_cdf[index - 1u];
+    }
+    let hi = light_cdf[index];
+    var x = 0.0;
+    if (hi > lo) {
+        x = clamp((u.x - lo) / (hi - lo), 0.0, 0.99999994);
+    }
+    let b = sample_uniform_triangle(vec2<f32>(x, u.y));
     let a = light.p0.xyz;
     let e1 = light.p1.xyz - a;
     let e2 = light.p2.xyz - a;
