@@ -8,10 +8,8 @@ mod common;
 use std::f64::consts::PI;
 
 use common::chi2::{SphereBins, chi2_test, histogram, sidak_alpha};
-use common::{gpu, settings};
+use common::run_test_kernel;
 use glam::{DVec3, Vec3};
-use kiln::render::probe::{Probe, run_probe};
-use kiln::scene::{Camera, Scene};
 
 const SAMPLES: u32 = 1 << 18;
 /// The whole suite's false-alarm rate.
@@ -40,25 +38,16 @@ fn sample(configs: &[(f32, Vec3)], seed: u32) -> Vec<Vec<(Vec3, f32)>> {
         input.push([g.to_bits(), d.x.to_bits(), d.y.to_bits(), d.z.to_bits()]);
     }
     let total = SAMPLES * configs.len() as u32;
-    let scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
-    let out = run_probe(
-        &gpu(),
-        &scene,
-        &settings(1, 1, 1),
-        &Probe {
-            name: "phase sample",
-            parts: &[(
-                "shaders/tests/phase_sample.wgsl",
-                include_str!("../shaders/tests/phase_sample.wgsl"),
-            )],
-            entry: "phase_sample",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 16 * total as u64,
-            invocations: total,
-            material_params: &[],
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_test_kernel(
+        (
+            "shaders/tests/phase_sample.wgsl",
+            include_str!("../shaders/tests/phase_sample.wgsl"),
+        ),
+        "phase_sample",
+        bytemuck::cast_slice(&input),
+        16 * total as u64,
+        total,
+    );
     let v: &[[f32; 4]] = bytemuck::cast_slice(&out);
     v.chunks(SAMPLES as usize)
         .map(|c| {

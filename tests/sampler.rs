@@ -6,10 +6,7 @@
 
 mod common;
 
-use common::{gpu, settings};
-use glam::Vec3;
-use kiln::render::probe::{Probe, run_probe};
-use kiln::scene::{Camera, Scene};
+use common::run_test_kernel;
 use kiln::shader::sampling::Sampler;
 
 /// One sample's draws: the camera's rand2(), the rand() after it, bounce 3's first rand2(),
@@ -26,25 +23,16 @@ struct Draws {
 fn draws(pixels: u32, spp: u32, sampler: Sampler, seed: u32) -> Vec<Draws> {
     let input = [[pixels, spp, sampler.gpu_id(), seed]];
     let total = pixels * spp;
-    let scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
-    let out = run_probe(
-        &gpu(),
-        &scene,
-        &settings(1, 1, 1),
-        &Probe {
-            name: "sampler probe",
-            parts: &[(
-                "shaders/tests/sampler_probe.wgsl",
-                include_str!("../shaders/tests/sampler_probe.wgsl"),
-            )],
-            entry: "sampler_probe",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 32 * total as u64,
-            invocations: total,
-            material_params: &[],
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+    let out = run_test_kernel(
+        (
+            "shaders/tests/sampler_probe.wgsl",
+            include_str!("../shaders/tests/sampler_probe.wgsl"),
+        ),
+        "sampler_probe",
+        bytemuck::cast_slice(&input),
+        32 * total as u64,
+        total,
+    );
     let v: &[[f32; 8]] = bytemuck::cast_slice(&out);
     v.iter()
         .map(|d| Draws {

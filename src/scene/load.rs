@@ -217,27 +217,17 @@ fn build_scene(
         scene.environment_map = Some(map);
     }
     let render = &file.render;
-    let tonemap = Tonemap::from_key(&render.view_transform).ok_or_else(|| {
-        invalid(format!(
-            "render: unknown view_transform \"{}\" (known: {})",
-            render.view_transform,
-            names(Tonemap::ALL.iter().map(|t| t.key()))
-        ))
-    })?;
-    let sampler = Sampler::from_key(&render.sampler).ok_or_else(|| {
-        invalid(format!(
-            "render: unknown sampler \"{}\" (known: {})",
-            render.sampler,
-            names(Sampler::ALL.iter().map(|s| s.key()))
-        ))
-    })?;
-    let filter = FilterKind::from_key(&render.filter).ok_or_else(|| {
-        invalid(format!(
-            "render: unknown filter \"{}\" (known: {})",
-            render.filter,
-            names(FilterKind::ALL.iter().map(|f| f.key()))
-        ))
-    })?;
+    let tonemap = render_key(
+        "view_transform",
+        &render.view_transform,
+        &Tonemap::ALL,
+        |t| t.key(),
+    )
+    .map_err(invalid)?;
+    let sampler =
+        render_key("sampler", &render.sampler, &Sampler::ALL, |s| s.key()).map_err(invalid)?;
+    let filter =
+        render_key("filter", &render.filter, &FilterKind::ALL, |f| f.key()).map_err(invalid)?;
     scene.settings = SceneSettings {
         width: render.width,
         height: render.height,
@@ -341,6 +331,25 @@ fn build_scene(
     }
     scene.lights = file.lights.iter().map(LightDesc::object).collect();
     Ok(scene)
+}
+
+/// The one of `all` whose key is `key`, the value of the render setting `field`; an error
+/// naming the known keys otherwise.
+fn render_key<T: Copy>(
+    field: &str,
+    key: &str,
+    all: &[T],
+    key_of: fn(T) -> &'static str,
+) -> Result<T, String> {
+    all.iter()
+        .copied()
+        .find(|t| key_of(*t) == key)
+        .ok_or_else(|| {
+            format!(
+                "render: unknown {field} \"{key}\" (known: {})",
+                names(all.iter().map(|t| key_of(*t)))
+            )
+        })
 }
 
 fn names<'a>(names: impl Iterator<Item = &'a str>) -> String {

@@ -133,3 +133,31 @@ pub fn assert_lit_image(path: &std::path::Path, width: u32, height: u32) {
         "a flat image: luminance from {lo} to {hi}"
     );
 }
+
+/// Runs the test kernel `entry` of the WGSL file `path` (its text `source`) over an empty
+/// scene, one invocation each of `invocations`, with `input` bound as `probe_in`; returns
+/// the `output_bytes` it wrote to `probe_out`.
+pub fn run_test_kernel(
+    (path, source): (&str, &str),
+    entry: &str,
+    input: &[u8],
+    output_bytes: u64,
+    invocations: u32,
+) -> Vec<u8> {
+    let scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+    kiln::render::probe::run_probe(
+        &gpu(),
+        &scene,
+        &settings(1, 1, 1),
+        &kiln::render::probe::Probe {
+            name: entry,
+            parts: &[(path, source)],
+            entry,
+            input,
+            output_bytes,
+            invocations,
+            material_params: &[],
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"))
+}
