@@ -54,22 +54,17 @@ impl From<BackendArg> for Backend {
     }
 }
 
-/// `--tonemap`'s values: the view transforms' keys, as scene files spell them.
-fn tonemap_parser() -> impl clap::builder::TypedValueParser<Value = Tonemap> {
-    clap::builder::PossibleValuesParser::new(Tonemap::ALL.map(Tonemap::key))
-        .map(|key| Tonemap::from_key(&key).expect("clap accepts only the listed keys"))
-}
-
-/// `--sampler`'s values, as scene files spell them.
-fn sampler_parser() -> impl clap::builder::TypedValueParser<Value = Sampler> {
-    clap::builder::PossibleValuesParser::new(Sampler::ALL.map(Sampler::key))
-        .map(|key| Sampler::from_key(&key).expect("clap accepts only the listed keys"))
-}
-
-/// `--filter`'s values, as scene files spell them.
-fn filter_parser() -> impl clap::builder::TypedValueParser<Value = FilterKind> {
-    clap::builder::PossibleValuesParser::new(FilterKind::ALL.map(FilterKind::key))
-        .map(|key| FilterKind::from_key(&key).expect("clap accepts only the listed keys"))
+/// The values of a flag choosing one of `all` by its key (as scene files spell it):
+/// `--tonemap`, `--sampler`, `--filter`.
+fn key_parser<T: Copy + Send + Sync + 'static>(
+    all: &'static [T],
+    key: fn(T) -> &'static str,
+) -> impl clap::builder::TypedValueParser<Value = T> {
+    clap::builder::PossibleValuesParser::new(all.iter().map(|&t| key(t))).map(move |k| {
+        *all.iter()
+            .find(|&&t| key(t) == k)
+            .expect("clap accepts only the listed keys")
+    })
 }
 
 /// `--filter-width`: pixels in (0, MAX_FILTER_WIDTH].
@@ -163,10 +158,10 @@ struct RenderArgs {
     seed: Option<u32>,
     /// Where each path's random numbers come from: Owen-scrambled Sobol' points, stratified
     /// over a pixel's samples, or independent ones (default: the scene's, or sobol).
-    #[arg(long, value_parser = sampler_parser())]
+    #[arg(long, value_parser = key_parser(&Sampler::ALL, Sampler::key))]
     sampler: Option<Sampler>,
     /// The pixel filter samples are drawn from (default: the scene's, or blackman-harris).
-    #[arg(long, value_parser = filter_parser())]
+    #[arg(long, value_parser = key_parser(&FilterKind::ALL, FilterKind::key))]
     filter: Option<FilterKind>,
     /// The pixel filter's width in pixels (default: the scene's, or 1.5).
     #[arg(long, value_name = "PIXELS", value_parser = parse_filter_width)]
@@ -175,7 +170,7 @@ struct RenderArgs {
     #[arg(long, allow_hyphen_values = true)]
     exposure: Option<f32>,
     /// View transform from scene radiance to display (default: the scene's, or agx).
-    #[arg(long, value_parser = tonemap_parser())]
+    #[arg(long, value_parser = key_parser(&Tonemap::ALL, Tonemap::key))]
     tonemap: Option<Tonemap>,
     /// Stop after this many seconds and write what has accumulated.
     #[arg(long)]

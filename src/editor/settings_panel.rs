@@ -60,6 +60,38 @@ fn count_row(
     r.changed().then(|| gesture(&r))
 }
 
+/// A row choosing one of `all` for `value` by its label (`label_of`), Blender's enum
+/// menu; returns whether a choice was clicked.
+fn choice_row<T: Copy + PartialEq>(
+    ui: &mut Ui,
+    label: &str,
+    tooltip: &str,
+    value: &mut T,
+    all: &[T],
+    label_of: fn(T) -> &'static str,
+) -> bool {
+    let label = ui.label(label);
+    let label = if tooltip.is_empty() {
+        label
+    } else {
+        label.on_hover_text(tooltip)
+    };
+    let mut clicked = false;
+    egui::ComboBox::from_id_salt(label.id)
+        .selected_text(label_of(*value))
+        .show_ui(ui, |ui| {
+            for &choice in all {
+                clicked |= ui
+                    .selectable_value(value, choice, label_of(choice))
+                    .clicked();
+            }
+        })
+        .response
+        .labelled_by(label.id);
+    ui.end_row();
+    clicked
+}
+
 /// The Render tab. `render` is the state of the last final render, if any.
 pub fn render_tab_ui(
     ui: &mut Ui,
@@ -115,50 +147,35 @@ pub fn render_tab_ui(
         let seed = DragValue::new(&mut settings.seed);
         let tooltip = "The same seed renders the same image; another gives other noise.";
         changed = count_row(ui, "Seed", seed, tooltip).or(changed);
-        let label = ui.label("Pattern").on_hover_text(
-            "Where each path's random numbers come from. Sobol: stratified over a pixel's \
-             samples, less noise at the same samples. Independent: white noise, for \
-             comparison.",
-        );
+        let tooltip = "Where each path's random numbers come from. Sobol: stratified over a \
+                       pixel's samples, less noise at the same samples. Independent: white \
+                       noise, for comparison.";
         let sampler = &mut settings.sampling.sampler;
-        egui::ComboBox::from_id_salt("sampling pattern")
-            .selected_text(sampler.label())
-            .show_ui(ui, |ui| {
-                for s in Sampler::ALL {
-                    if ui.selectable_value(sampler, s, s.label()).clicked() {
-                        changed = Some(None);
-                    }
-                }
-            })
-            .response
-            .labelled_by(label.id);
-        ui.end_row();
-        // The editor's own setting, not the document's: no command.
-        let viewport = DragValue::new(&mut options.viewport_samples).range(1..=65536);
-        let tooltip = "The viewport stops refining after this many samples per pixel.";
-        count_row(ui, "Viewport Samples", viewport, tooltip);
+        if choice_row(
+            ui,
+            "Pattern",
+            tooltip,
+            sampler,
+            &Sampler::ALL,
+            Sampler::label,
+        ) {
+            changed = Some(None);
+        }
     });
     section(ui, "Film", |ui| {
-        let label = ui.label("Pixel Filter").on_hover_text(
-            "The filter each pixel's samples are drawn from: wider is smoother, narrower \
-             sharper and more aliased.",
-        );
+        let tooltip = "The filter each pixel's samples are drawn from: wider is smoother, \
+                       narrower sharper and more aliased.";
         let filter = &mut settings.sampling.filter;
-        egui::ComboBox::from_id_salt("pixel filter")
-            .selected_text(filter.kind.label())
-            .show_ui(ui, |ui| {
-                for kind in FilterKind::ALL {
-                    if ui
-                        .selectable_value(&mut filter.kind, kind, kind.label())
-                        .clicked()
-                    {
-                        changed = Some(None);
-                    }
-                }
-            })
-            .response
-            .labelled_by(label.id);
-        ui.end_row();
+        if choice_row(
+            ui,
+            "Pixel Filter",
+            tooltip,
+            &mut filter.kind,
+            &FilterKind::ALL,
+            FilterKind::label,
+        ) {
+            changed = Some(None);
+        }
         let width = DragValue::new(&mut filter.width)
             .range(0.01..=MAX_FILTER_WIDTH)
             .speed(0.01)
@@ -174,22 +191,17 @@ pub fn render_tab_ui(
     let mut view = document.scene().settings.view;
     let mut view_changed: Option<Option<GestureId>> = None;
     section(ui, "Color Management", |ui| {
-        let label = ui.label("View Transform");
-        egui::ComboBox::from_id_salt("view transform")
-            .selected_text(view.tonemap.label())
-            .show_ui(ui, |ui| {
-                for tonemap in Tonemap::ALL {
-                    if ui
-                        .selectable_value(&mut view.tonemap, tonemap, tonemap.label())
-                        .clicked()
-                    {
-                        view_changed = Some(None);
-                    }
-                }
-            })
-            .response
-            .labelled_by(label.id);
-        ui.end_row();
+        let tonemap = &mut view.tonemap;
+        if choice_row(
+            ui,
+            "View Transform",
+            "",
+            tonemap,
+            &Tonemap::ALL,
+            Tonemap::label,
+        ) {
+            view_changed = Some(None);
+        }
         if let Some(gesture) = float_row(
             ui,
             "Exposure",
