@@ -59,7 +59,13 @@ struct Params {
     max_volume_bounces: u32,
     // SAMPLER_INDEPENDENT or SAMPLER_SOBOL (shaders/rng.wgsl).
     sampler: u32,
+    // A bake dispatch's grid (the word its header starts at) and first voxel
+    // (shaders/integrator/volume_bake.wgsl); unused by the path tracer.
+    bake_grid: u32,
+    bake_first: u32,
     _pad2: u32,
+    _pad3: u32,
+    _pad4: u32,
     // The pixel filter's quantile function at FILTER_TABLE_SIZE evenly spaced
     // probabilities, in pixels, four to a vector (shaders/sampling.wgsl).
     filter_quantiles: array<vec4<f32>, 32>,
@@ -90,8 +96,12 @@ struct Instance {
     blas_root: u32,
     material: u32,
     flags: u32,
-    _pad: u32,
+    // The word of `volume_grid` its heterogeneous volume's grid starts at, or NO_GRID
+    // (src/render/volume_grid.rs).
+    volume_grid: u32,
 };
+
+const NO_GRID: u32 = 0xffffffffu;
 
 // Instance.flags
 const INSTANCE_HAS_NORMALS: u32 = 1u;

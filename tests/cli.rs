@@ -40,6 +40,14 @@ fn wrong_flag_is_a_usage_error() {
 }
 
 #[test]
+fn a_volume_resolution_out_of_range_is_a_usage_error() {
+    for value in ["4", "2000"] {
+        let (code, err) = run(&["render", "--volume-resolution", value]);
+        assert_clean_error(code, &err, 2, "8..=1024");
+    }
+}
+
+#[test]
 fn malformed_size_is_a_usage_error() {
     let (code, err) = run(&["render", "--size", "64by64"]);
     assert_clean_error(code, &err, 2, "WIDTHxHEIGHT");

@@ -62,7 +62,10 @@ fn fresh(ctx: &Arc<GpuContext>, scene: &Scene, s: RenderSettings) -> Film {
 /// compiled for the update. Returns what the update wrote.
 fn check_update(old: &Scene, new: &Scene, specialize: bool) -> Updated {
     let ctx = gpu();
-    let s = render_settings(specialize);
+    let s = RenderSettings {
+        volume_resolution: old.settings.volume_resolution,
+        ..render_settings(specialize)
+    };
     let mut renderer = Renderer::new(Arc::clone(&ctx), old, s).expect("renderer");
     let before = film(&mut renderer);
     let compiled = ctx.pipelines_compiled();
@@ -275,4 +278,64 @@ fn interactive_pacing_renders_the_same_bits() {
     }
     assert!(renderer.tile_size() < SIZE, "{}", renderer.tile_size());
     assert!(renderer.read_film().expect("film") == final_film);
+}
+
+/// The Cornell box with a cloud in it: a sphere holding a volume whose density is noise on
+/// the world position, `density` per unit at most (a heterogeneous volume, baked into a
+/// grid at `resolution` points).
+fn cloud_scene(density: f32, resolution: u32) -> Scene {
+    let mut s = scene();
+    let text = format!(
+        "(version: 1, name: \"cloud\", nodes: {{
+            \"geometry\": (type: \"geometry\"),
+            \"noise\": (type: \"noise_texture\", inputs: {{ \"vector\": \"geometry.position\", \"scale\": 0.02 }}),
+            \"density\": (type: \"math\", params: {{ \"operation\": \"multiply\" }}, inputs: {{ \"a\": \"noise.fac\", \"b\": {density:?} }}),
+            \"v\": (type: \"volume_scatter\", inputs: {{ \"color\": (0.9, 0.7, 0.5), \"density\": \"density.value\" }}),
+            \"out\": (type: \"material_output\", inputs: {{ \"volume\": \"v.volume\" }}),
+        }})"
+    );
+    let (_, graph) = parse_material(&text, "cloud").expect("the cloud parses");
+    let cloud = s.add_material(Material::from_graph("cloud", graph).expect("the cloud compiles"));
+    let sphere = s.add_mesh(kiln::scene::shapes::uv_sphere(24, 12, false));
+    s.add_instance(
+        sphere,
+        cloud,
+        Affine3A::from_scale_rotation_translation(
+            Vec3::splat(120.0),
+            Quat::IDENTITY,
+            Vec3::new(278.0, 200.0, 280.0),
+        ),
+    );
+    s.settings.volume_resolution = resolution;
+    s
+}
+
+#[test]
+fn edits_of_a_baked_volume_bake_it_again_and_render_as_a_fresh_renderer() {
+    // The editor's kernel (live constants): a value edit of the volume's graph is a
+    // parameter write and a bake, and so is a move (the density reads the world
+    // position). Either way the film is a fresh renderer's, bit for bit, and no kernel
+    // is compiled.
+    let old = cloud_scene(0.02, 32);
+    let denser = cloud_scene(0.05, 32);
+    let updated = check_update(&old, &denser, false);
+    assert!(updated.materials, "{updated:?}");
+    let mut moved = old.clone();
+    let cloud = moved.instances.len() - 1;
+    moved.instances[cloud].transform =
+        Affine3A::from_translation(Vec3::new(-60.0, 40.0, 0.0)) * moved.instances[cloud].transform;
+    let updated = check_update(&old, &moved, false);
+    assert!(updated.instances && !updated.materials, "{updated:?}");
+    // Another resolution lays the grid out anew: a new renderer, the same kernel.
+    let ctx = gpu();
+    let s = RenderSettings {
+        volume_resolution: 32,
+        ..render_settings(false)
+    };
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &old, s).expect("renderer");
+    let finer = cloud_scene(0.02, 48);
+    match renderer.update(&old, &finer) {
+        Err(UpdateError::NeedsRebuild { kernel: false, .. }) => {}
+        other => panic!("a resolution edit: {other:?}"),
+    }
 }

@@ -133,6 +133,7 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
                 width: 2.25,
             },
         },
+        volume_resolution: 96,
         view: ViewSettings {
             exposure_ev: -1.25,
             tonemap: Tonemap::PbrNeutral,
@@ -676,6 +677,10 @@ fn scene() -> impl Strategy<Value = Scene> {
                     Just(PixelFilter::default().width),
                     0.01f32..=MAX_FILTER_WIDTH
                 ],
+                prop_oneof![
+                    Just(kiln::scene::DEFAULT_VOLUME_RESOLUTION),
+                    kiln::scene::VOLUME_RESOLUTIONS
+                ],
             ),
         ),
     )
@@ -709,7 +714,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let (
                     (width, height, samples_per_pixel, max_bounces),
                     (seed, ev, tonemap, max_volume_bounces),
-                    (sampler, filter, filter_width),
+                    (sampler, filter, filter_width, volume_resolution),
                 ) = settings;
                 scene.settings = SceneSettings {
                     width,
@@ -725,6 +730,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                             width: filter_width,
                         },
                     },
+                    volume_resolution,
                     view: ViewSettings {
                         exposure_ev: ev,
                         tonemap,

@@ -14,9 +14,15 @@ use kiln::shader::{KernelFeatures, lobes};
 
 fn features(scene: &Scene) -> KernelFeatures {
     let accel = build_scene_accel(scene).unwrap();
-    GpuScene::upload(&gpu(), scene, &accel, None)
-        .unwrap()
-        .features()
+    GpuScene::upload(
+        &gpu(),
+        scene,
+        &accel,
+        None,
+        scene.settings.volume_resolution,
+    )
+    .unwrap()
+    .features()
 }
 
 #[test]

@@ -12,9 +12,11 @@
 //
 // A homogeneous volume's coefficients are the material buffer's, which the compiler
 // computes from the volume node's constant inputs. A heterogeneous one (its inputs vary)
-// is evaluated at points inside by `evaluate_volume`, the material graph's volume alone;
+// is baked into a grid over its object's bounds by the material graph's volume
+// (shaders/integrator/volume_bake.wgsl) and read here trilinearly (`volume_grid_at`);
 // paths track through it against its majorant, an extinction the compiler proved no
-// point exceeds: delta tracking for free flights, ratio tracking for transmittance.
+// point exceeds (nor, then, any blend of grid points): delta tracking for free flights,
+// ratio tracking for transmittance.
 
 const MEDIA_DEPTH: u32 = 4u;
 
@@ -142,9 +144,9 @@ struct MediumPoint {
     g: f32,
 };
 
-// Entry `i` of `media` at `p`, for a path travelling along `dir`.
-fn medium_at(media: Media, i: u32, p: vec3<f32>, dir: vec3<f32>) -> MediumPoint {
-    let v = evaluate_volume(media.material[i], volume_point(media.instance[i], p, dir));
+// Entry `i` of `media` at `p`.
+fn medium_at(media: Media, i: u32, p: vec3<f32>) -> MediumPoint {
+    let v = volume_grid_at(media.instance[i], p);
     return MediumPoint(
         max(v.absorption, vec3<f32>(0.0)) + media.medium[i].sigma_t,
         max(v.scattering, vec3<f32>(0.0)),
@@ -190,7 +192,7 @@ fn heterogeneous_flight(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: 
             r.t = t_max;
             return r;
         }
-        let c = medium_at(media, top, origin + dir * t, dir);
+        let c = medium_at(media, top, origin + dir * t);
         r.emitted += r.throughput * c.emission / majorant;
         let sigma_n = max(vec3<f32>(majorant) - c.sigma_a - c.sigma_s, vec3<f32>(0.0));
         let ws = select(vec3<f32>(0.0), r.throughput * c.sigma_s, scatters);
@@ -227,7 +229,7 @@ fn ratio_tracking(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -
         if (t >= t_max) {
             return tr;
         }
-        let c = medium_at(media, top, origin + dir * t, dir);
+        let c = medium_at(media, top, origin + dir * t);
         tr *= max(vec3<f32>(1.0) - (c.sigma_a + c.sigma_s) / majorant, vec3<f32>(0.0));
         let m = max(tr.x, max(tr.y, tr.z));
         if (!(m > 0.0)) {
@@ -241,4 +243,76 @@ fn ratio_tracking(media: Media, origin: vec3<f32>, dir: vec3<f32>, t_max: f32) -
         }
     }
     return vec3<f32>(0.0);
+}
+
+// ---- Baked grids (src/render/volume_grid.rs) ----
+
+// Words of a grid's header and of one voxel in `volume_grid`.
+const GRID_HEADER_WORDS: u32 = 16u;
+const GRID_VOXEL_WORDS: u32 = 5u;
+
+// A grid's header: its object-space origin and points per unit, its points per axis, and
+// the scale its σ values were divided by (the material's majorant).
+struct GridHeader {
+    lo: vec3<f32>,
+    to_grid: vec3<f32>,
+    dims: vec3<u32>,
+    scale: f32,
+};
+
+fn grid_header(g: u32) -> GridHeader {
+    let f = vec3<f32>(
+        bitcast<f32>(volume_grid[g]),
+        bitcast<f32>(volume_grid[g + 1u]),
+        bitcast<f32>(volume_grid[g + 2u]),
+    );
+    let t = vec3<f32>(
+        bitcast<f32>(volume_grid[g + 3u]),
+        bitcast<f32>(volume_grid[g + 4u]),
+        bitcast<f32>(volume_grid[g + 5u]),
+    );
+    let d = vec3<u32>(volume_grid[g + 6u], volume_grid[g + 7u], volume_grid[g + 8u]);
+    return GridHeader(f, t, d, bitcast<f32>(volume_grid[g + 9u]));
+}
+
+// Voxel `index` of the grid whose voxels start at word `data`, its σ values as stored
+// (divided by the grid's scale).
+fn grid_voxel(data: u32, index: u32) -> VolumeEval {
+    let w = data + index * GRID_VOXEL_WORDS;
+    let a = unpack2x16float(volume_grid[w]);
+    let b = unpack2x16float(volume_grid[w + 1u]);
+    let c = unpack2x16float(volume_grid[w + 2u]);
+    let d = unpack2x16float(volume_grid[w + 3u]);
+    let e = unpack2x16float(volume_grid[w + 4u]);
+    return VolumeEval(vec3<f32>(a.x, a.y, b.x), vec3<f32>(b.y, c.x, c.y), vec3<f32>(d.y, e.x, e.y), d.x);
+}
+
+// The baked volume of instance `instance` at world point `p`: the trilinear blend of the
+// eight grid points around it (points outside the grid take its nearest face's).
+fn volume_grid_at(instance: u32, p: vec3<f32>) -> VolumeEval {
+    let inst = instances[instance];
+    let g = inst.volume_grid;
+    let h = grid_header(g);
+    let top = vec3<f32>(h.dims - vec3<u32>(1u));
+    let x = clamp((transform_point(inst.to_object, p) - h.lo) * h.to_grid, vec3<f32>(0.0), top);
+    let i0 = min(vec3<u32>(floor(x)), h.dims - vec3<u32>(2u));
+    let f = x - vec3<f32>(i0);
+    let data = g + GRID_HEADER_WORDS;
+    let row = h.dims.x;
+    let slice = h.dims.x * h.dims.y;
+    var sum = nd_no_volume();
+    for (var corner = 0u; corner < 8u; corner++) {
+        let o = vec3<u32>(corner & 1u, (corner >> 1u) & 1u, corner >> 2u);
+        let wv = select(vec3<f32>(1.0) - f, f, o == vec3<u32>(1u));
+        let w = wv.x * wv.y * wv.z;
+        let i = i0 + o;
+        let v = grid_voxel(data, i.x + i.y * row + i.z * slice);
+        sum.absorption += w * v.absorption;
+        sum.scattering += w * v.scattering;
+        sum.emission += w * v.emission;
+        sum.g += w * v.g;
+    }
+    sum.absorption *= h.scale;
+    sum.scattering *= h.scale;
+    return sum;
 }

@@ -162,6 +162,16 @@ pub fn render_tab_ui(
             changed = Some(None);
         }
     });
+    section(ui, "Volumes", |ui| {
+        let resolution = DragValue::new(&mut settings.volume_resolution)
+            .range(crate::scene::VOLUME_RESOLUTIONS)
+            .suffix(" px");
+        let tooltip = "A volume whose density or colour varies (a graph-driven volume, a \
+                       cloud) is baked into a grid with this many points along its object's \
+                       longest side: finer keeps more detail, at the cost of memory and of \
+                       the bake after every edit of it.";
+        changed = count_row(ui, "Grid Resolution", resolution, tooltip).or(changed);
+    });
     section(ui, "Film", |ui| {
         let tooltip = "The filter each pixel's samples are drawn from: wider is smoother, \
                        narrower sharper and more aliased.";

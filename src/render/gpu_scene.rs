@@ -12,6 +12,7 @@ use wgpu::util::DeviceExt;
 use super::context::GpuContext;
 use super::environment_cdf::environment_data;
 use super::light_distribution::{emissive_triangles, light_selection};
+use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
 use crate::shader::KernelFeatures;
@@ -81,6 +82,10 @@ pub struct GpuScene {
     /// Per mesh, as [`SceneArrays::blas_root`] and [`SceneArrays::mesh_flags`].
     pub blas_root: Vec<u32>,
     pub mesh_flags: Vec<u32>,
+    /// The heterogeneous volumes' grids: headers written, voxels zero until baked
+    /// (`Renderer::bake_volume_grids`).
+    pub volume_grid: wgpu::Buffer,
+    pub volume_grids: VolumeGrids,
 }
 
 /// CPU-side arrays in upload order; separate from the upload so tests can inspect them.
@@ -110,6 +115,9 @@ pub struct SceneArrays {
     /// without the meshes.
     pub blas_root: Vec<u32>,
     pub mesh_flags: Vec<u32>,
+    /// Where the heterogeneous volumes' grids lie, and their headers.
+    pub volume_grids: VolumeGrids,
+    pub volume_grid_headers: Vec<(u32, [u32; 16])>,
 }
 
 /// What next-event estimation needs of a scene's lights, recomputed whenever a light, an
@@ -140,12 +148,14 @@ pub fn light_arrays(scene: &Scene, scene_root: Option<&BvhNode>) -> LightArrays 
 }
 
 /// The instances of `scene` in the leaf order of `tlas`, given each mesh's BLAS root and
-/// flags (`SceneArrays::blas_root`, `SceneArrays::mesh_flags`).
+/// flags (`SceneArrays::blas_root`, `SceneArrays::mesh_flags`) and each instance's volume
+/// grid (`VolumeGrids::offsets`).
 pub fn instance_arrays(
     scene: &Scene,
     tlas: Option<&crate::accel::Bvh>,
     blas_root: &[u32],
     mesh_flags: &[u32],
+    grids: &[u32],
 ) -> Vec<GpuInstance> {
     let Some(tlas) = tlas else {
         return Vec::new();
@@ -160,7 +170,7 @@ pub fn instance_arrays(
                 blas_root: blas_root[inst.mesh],
                 material: inst.material as u32,
                 flags: mesh_flags[inst.mesh],
-                _pad: 0,
+                volume_grid: grids[i as usize],
             }
         })
         .collect()
@@ -205,7 +215,9 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
 }
 
 impl SceneArrays {
-    pub fn build(scene: &Scene, accel: &SceneAccel) -> Self {
+    /// The arrays of `scene`, with its heterogeneous volumes' grids at `volume_resolution`
+    /// points along their longest sides.
+    pub fn build(scene: &Scene, accel: &SceneAccel, volume_resolution: u32) -> Self {
         let mut a = SceneArrays::default();
         // Meshes: BLAS nodes, triangles in leaf order, vertex attributes.
         let mut blas_root = vec![0u32; scene.meshes.len()];
@@ -276,7 +288,18 @@ impl SceneArrays {
         if let Some(tlas) = &accel.tlas {
             a.tlas_nodes = tlas.nodes.clone();
         }
-        a.instances = instance_arrays(scene, accel.tlas.as_ref(), &blas_root, &mesh_flags);
+        a.volume_grids = VolumeGrids::plan(scene, &accel.blas, volume_resolution);
+        a.instances = instance_arrays(
+            scene,
+            accel.tlas.as_ref(),
+            &blas_root,
+            &mesh_flags,
+            &a.volume_grids.offsets,
+        );
+        let order = accel.tlas.as_ref().map_or(&[][..], |t| &t.primitive_order);
+        a.volume_grid_headers = a
+            .volume_grids
+            .headers(scene, &kernel_indices(order, scene.instances.len()));
         a.blas_root = blas_root;
         a.mesh_flags = mesh_flags;
 
@@ -380,14 +403,17 @@ fn paged_buffers<T: bytemuck::Pod + Default>(
 
 impl GpuScene {
     /// Uploads the scene. `page_bytes` sets the page size of the paged arrays below the
-    /// adapter's binding limit (tests use it to exercise paging with small scenes).
+    /// adapter's binding limit (tests use it to exercise paging with small scenes);
+    /// `volume_resolution` the heterogeneous volumes' grids
+    /// ([`crate::scene::SceneSettings::volume_resolution`]).
     pub fn upload(
         ctx: &GpuContext,
         scene: &Scene,
         accel: &SceneAccel,
         page_bytes: Option<u64>,
+        volume_resolution: u32,
     ) -> Result<Self, UploadError> {
-        let a = SceneArrays::build(scene, accel);
+        let a = SceneArrays::build(scene, accel, volume_resolution);
         let texture_table = super::materials::scene_textures(scene);
         let limit = binding_limit(ctx);
         let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
@@ -396,6 +422,7 @@ impl GpuScene {
             paged_buffers(ctx, "BLAS nodes", &a.blas_nodes, page_limit, &mut bytes)?;
         let (triangles, triangle_page_shift, triangle_pages) =
             paged_buffers(ctx, "triangles", &a.triangles, page_limit, &mut bytes)?;
+        let volume_grid = volume_grid_buffer(ctx, &a, limit, &mut bytes)?;
         Ok(Self {
             tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, limit, &mut bytes)?,
             instances: storage_buffer(ctx, "instances", &a.instances, limit, &mut bytes)?,
@@ -459,7 +486,47 @@ impl GpuScene {
             tlas_root: a.tlas_nodes.first().copied(),
             blas_root: a.blas_root,
             mesh_flags: a.mesh_flags,
+            volume_grid,
+            volume_grids: a.volume_grids,
         })
+    }
+}
+
+/// The `volume_grid` buffer: the grids' headers, their voxels zero (baked by the
+/// renderer); one word without grids.
+fn volume_grid_buffer(
+    ctx: &GpuContext,
+    a: &SceneArrays,
+    limit: u64,
+    bytes_total: &mut u64,
+) -> Result<wgpu::Buffer, UploadError> {
+    let bytes = a.volume_grids.words.max(1) * 4;
+    if bytes > limit {
+        return Err(UploadError::TooLarge {
+            buffer: "heterogeneous volumes' grids (lower the volume resolution)",
+            bytes,
+            limit,
+        });
+    }
+    *bytes_total += bytes;
+    let buffer = ctx.device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("volume grids"),
+        size: bytes,
+        usage: wgpu::BufferUsages::STORAGE | wgpu::BufferUsages::COPY_DST,
+        mapped_at_creation: false,
+    });
+    write_grid_headers(&ctx.queue, &buffer, &a.volume_grid_headers);
+    Ok(buffer)
+}
+
+/// Writes the grids' headers (`VolumeGrids::headers`) into `buffer`.
+pub fn write_grid_headers(
+    queue: &wgpu::Queue,
+    buffer: &wgpu::Buffer,
+    headers: &[(u32, [u32; 16])],
+) {
+    for (offset, header) in headers {
+        queue.write_buffer(buffer, *offset as u64 * 4, bytemuck::cast_slice(header));
     }
 }
 
@@ -546,6 +613,7 @@ impl GpuScene {
                     Resource::MaterialParams => &self.material_params,
                     Resource::Textures => &self.textures,
                     Resource::Uv1 => &self.uv1,
+                    Resource::VolumeGrid => &self.volume_grid,
                     // Bound only when `features.aovs`, which is `film_aov.is_some()`.
                     Resource::FilmAov => frame.film_aov.expect("AOVs are bound with a film"),
                 };

@@ -10,7 +10,7 @@ use thiserror::Error;
 use super::context::GpuContext;
 use crate::shader::bindings::bindings_wgsl;
 use crate::shader::features::{features_wgsl, paging_wgsl};
-use crate::shader::{KernelFeatures, LIBRARY, PATH_INTEGRATOR};
+use crate::shader::{KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
 
 #[derive(Debug, Error)]
 pub enum KernelError {
@@ -112,9 +112,12 @@ impl KernelSource {
                 e.emit_to_string(&self.text),
             )
         })?;
+        // Half floats packed in 32-bit words (`pack2x16float`, the baked volume grids):
+        // every backend wgpu runs on has them (its downlevel flag `SHADER_F16_IN_F32`).
         let mut validator = naga::valid::Validator::new(
             naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default(),
+            naga::valid::Capabilities::default()
+                | naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
         );
         validator.validate(&module).map_err(|e| {
             self.wgsl_error(
@@ -190,7 +193,9 @@ impl KernelSource {
 }
 
 /// The path-tracing kernel's source, with a scene's materials
-/// ([`super::materials::scene_materials_wgsl`]) spliced in before the integrator.
+/// ([`super::materials::scene_materials_wgsl`]) spliced in before the integrator, and
+/// for a scene with heterogeneous volumes the entry point that bakes them
+/// ([`super::volume_grid`]).
 pub fn path_tracing_kernel(
     features: &KernelFeatures,
     materials: &[(String, String)],
@@ -201,6 +206,9 @@ pub fn path_tracing_kernel(
     }
     for file in PATH_INTEGRATOR {
         source.push(file.path, file.source);
+    }
+    if features.lobes & lobes::HETEROGENEOUS != 0 {
+        source.push(VOLUME_BAKE.path, VOLUME_BAKE.source);
     }
     source
 }

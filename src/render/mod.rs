@@ -20,6 +20,7 @@ mod readback;
 mod renderer;
 pub mod tables;
 mod update;
+pub mod volume_grid;
 
 pub use context::{Backend, GpuContext, GpuError};
 pub use export::export_film;

@@ -61,7 +61,13 @@ pub fn run_probe(
         )));
     }
     let accel = build_scene_accel(scene)?;
-    let gpu_scene = GpuScene::upload(ctx, scene, &accel, settings.page_bytes)?;
+    let gpu_scene = GpuScene::upload(
+        ctx,
+        scene,
+        &accel,
+        settings.page_bytes,
+        settings.volume_resolution,
+    )?;
     if !material_params.is_empty() {
         let bytes: &[u8] = bytemuck::cast_slice(material_params);
         if bytes.len() as u64 > gpu_scene.material_params.size() {

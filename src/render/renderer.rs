@@ -48,6 +48,10 @@ const TARGET_DISPATCH: Duration = Duration::from_millis(60);
 /// pixel of long paths (tests/determinism.rs checks every pixel's count); 64 is safe and
 /// already amortises the per-dispatch overhead.
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
+/// `bake_volume_grid`'s workgroup size, and the grid points one bake dispatch evaluates:
+/// short dispatches, as the render's.
+const BAKE_WORKGROUP_SIZE: u32 = 64;
+const BAKE_VOXELS_PER_DISPATCH: u32 = 1 << 16;
 
 /// The first tile side of [`Pacing::Interactive`], and the range it adapts in: 16² pixels
 /// keep a dispatch's fixed cost small next to its work, 256² is the final render's tile.
@@ -129,6 +133,9 @@ pub struct RenderSettings {
     pub seed: u32,
     /// The sampler and the pixel filter: parameters, not kernel changes.
     pub sampling: Sampling,
+    /// Grid points along the longest side of a heterogeneous volume's bounds
+    /// ([`crate::scene::SceneSettings::volume_resolution`]).
+    pub volume_resolution: u32,
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
     pub light_sampling: bool,
@@ -172,6 +179,7 @@ impl RenderSettings {
             max_volume_bounces: scene.settings.max_volume_bounces,
             seed: scene.settings.seed,
             sampling: scene.settings.sampling,
+            volume_resolution: scene.settings.volume_resolution,
             light_sampling: true,
             page_bytes: None,
             kernel: KernelKind::Specialized,
@@ -252,11 +260,18 @@ pub struct BuildInfo {
     /// Whether the kernel was compiled for this renderer (false: the device's pipeline
     /// cache had it).
     pub kernel_compiled: bool,
+    /// Evaluating the heterogeneous volumes into their grids (part of `kernel_build`,
+    /// after the bake kernel's compile).
+    pub volume_bake: Duration,
+    /// Grid points baked.
+    pub volume_voxels: u64,
 }
 
 pub struct Renderer {
     pub(super) ctx: Arc<GpuContext>,
     pipeline: wgpu::ComputePipeline,
+    /// `bake_volume_grid`, for a scene with heterogeneous volumes.
+    bake_pipeline: Option<wgpu::ComputePipeline>,
     params_buffer: wgpu::Buffer,
     /// The scene's buffers, which edits write into (`update.rs`).
     pub(super) gpu_scene: GpuScene,
@@ -380,10 +395,18 @@ impl Renderer {
         };
         crate::scene::validate_image_size(settings.width, settings.height)
             .map_err(RenderError::Scene)?;
+        crate::scene::validate_volume_resolution(settings.volume_resolution)
+            .map_err(RenderError::Scene)?;
 
         let accel = build_scene_accel(scene)?;
         let upload_start = Instant::now();
-        let gpu_scene = GpuScene::upload(&ctx, scene, &accel, settings.page_bytes)?;
+        let gpu_scene = GpuScene::upload(
+            &ctx,
+            scene,
+            &accel,
+            settings.page_bytes,
+            settings.volume_resolution,
+        )?;
         let upload = upload_start.elapsed();
 
         let kernel_start = Instant::now();
@@ -403,6 +426,11 @@ impl Renderer {
         let kernel = path_tracing_kernel(&features, &materials.wgsl);
         let kernel_compiled = !kernel.is_cached(&ctx, 1, "render");
         let pipeline = kernel.create_pipeline(&ctx, &[&layout], "render")?;
+        let bake_pipeline = if gpu_scene.volume_grids.grids.is_empty() {
+            None
+        } else {
+            Some(kernel.create_pipeline(&ctx, &[&layout], "bake_volume_grid")?)
+        };
 
         let (width, height) = (settings.width, settings.height);
         let film_bytes = width as u64 * height as u64 * SUM_BYTES;
@@ -463,9 +491,12 @@ impl Renderer {
                 upload_bytes: gpu_scene.bytes + 2 * film_bytes,
                 kernel_build: Duration::ZERO,
                 kernel_compiled,
+                volume_bake: Duration::ZERO,
+                volume_voxels: 0,
             },
             ctx,
             pipeline,
+            bake_pipeline,
             params_buffer,
             gpu_scene,
             blas: accel.blas,
@@ -487,8 +518,58 @@ impl Renderer {
         // An empty dispatch makes drivers that compile lazily (lavapipe) do it now, so the
         // compile is counted here and not in the first samples.
         renderer.dispatch(0, [0, 0], [0, 0], 0, 0, true)?;
+        renderer.bake_volume_grids()?;
         renderer.build_info.kernel_build = kernel_start.elapsed();
         Ok(renderer)
+    }
+
+    /// Evaluates the heterogeneous volumes into their grids (`bake_volume_grid`), in
+    /// dispatches of [`BAKE_VOXELS_PER_DISPATCH`] points, each waited for.
+    pub(super) fn bake_volume_grids(&mut self) -> Result<(), RenderError> {
+        let Some(pipeline) = &self.bake_pipeline else {
+            return Ok(());
+        };
+        let start = Instant::now();
+        let mut voxels = 0u64;
+        let queue = &self.ctx.queue;
+        for grid in &self.gpu_scene.volume_grids.grids {
+            let count = grid.voxels();
+            for first in (0..count).step_by(BAKE_VOXELS_PER_DISPATCH as usize) {
+                let params = GpuParams {
+                    bake_grid: grid.offset,
+                    bake_first: first,
+                    ..self.base_params
+                };
+                queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
+                let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(pipeline);
+                    pass.set_bind_group(
+                        crate::shader::bindings::SCENE_GROUP,
+                        &self.pieces[0].bind_group,
+                        &[],
+                    );
+                    let n = (count - first).min(BAKE_VOXELS_PER_DISPATCH);
+                    pass.dispatch_workgroups(n.div_ceil(BAKE_WORKGROUP_SIZE), 1, 1);
+                }
+                let index = queue.submit([encoder.finish()]);
+                self.ctx
+                    .device
+                    .poll(wgpu::PollType::Wait {
+                        submission_index: Some(index),
+                        timeout: None,
+                    })
+                    .map_err(|e| GpuError::Runtime {
+                        during: "baking a volume grid".into(),
+                        message: e.to_string(),
+                    })?;
+            }
+            voxels += count as u64;
+        }
+        self.build_info.volume_bake = start.elapsed();
+        self.build_info.volume_voxels = voxels;
+        Ok(())
     }
 
     pub fn settings(&self) -> &RenderSettings {

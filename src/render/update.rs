@@ -17,9 +17,12 @@
 
 use thiserror::Error;
 
-use super::gpu_scene::{LightArrays, instance_arrays, instanced_lobes, light_arrays};
+use super::gpu_scene::{
+    LightArrays, instance_arrays, instanced_lobes, light_arrays, write_grid_headers,
+};
 use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
+use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
@@ -133,6 +136,12 @@ impl Renderer {
         };
         let light_data = light_arrays(new, root.as_ref());
         self.check_lights(&light_data)?;
+        let resolution = if old.settings.volume_resolution != new.settings.volume_resolution {
+            new.settings.volume_resolution
+        } else {
+            self.settings.volume_resolution
+        };
+        self.check_volume_grids(new, resolution)?;
 
         let mut updated = Updated::default();
         if let Some(compiled) = &compiled {
@@ -151,6 +160,12 @@ impl Renderer {
         if instances || lights || materials {
             self.write_lights(new, &light_data)?;
             updated.lights = true;
+        }
+        self.settings.volume_resolution = resolution;
+        // A graph's volume may read its object's placement (world position, the
+        // instance's random number) as well as its constants: both bake again.
+        if materials || instances {
+            self.rebake_volume_grids(new)?;
         }
         if old.camera != new.camera {
             self.set_camera(&new.camera);
@@ -186,10 +201,37 @@ impl Renderer {
         let (tlas, packed) = self.place_instances(scene)?;
         let lights = light_arrays(scene, tlas.as_ref().map(|t| &t.nodes[0]));
         self.check_lights(&lights)?;
+        self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_instances(tlas.as_ref(), &packed)?;
         self.place_enclosures(scene, Some(gpu_order(tlas.as_ref())));
         self.set_camera_media();
-        self.write_lights(scene, &lights)
+        self.write_lights(scene, &lights)?;
+        self.rebake_volume_grids(scene)
+    }
+
+    /// Refuses an edit after which the heterogeneous volumes' grids would lie otherwise
+    /// in their buffer (another instance holds one, a resolution changed).
+    fn check_volume_grids(&self, scene: &Scene, resolution: u32) -> Result<(), UpdateError> {
+        let planned = VolumeGrids::plan(scene, &self.blas, resolution);
+        if planned != self.gpu_scene.volume_grids {
+            return Err(UpdateError::rebuild(
+                "the heterogeneous volumes' grids change size or place",
+            ));
+        }
+        Ok(())
+    }
+
+    /// Writes the grids' headers (majorants, the kernel's instance order) and bakes the
+    /// grids again.
+    fn rebake_volume_grids(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        let grids = &self.gpu_scene.volume_grids;
+        if grids.grids.is_empty() {
+            return Ok(());
+        }
+        let order = kernel_indices(self.enclosures.gpu_order(), scene.instances.len());
+        let headers = grids.headers(scene, &order);
+        write_grid_headers(&self.ctx.queue, &self.gpu_scene.volume_grid, &headers);
+        Ok(self.bake_volume_grids()?)
     }
 
     /// The top-level BVH over the kept mesh BVHs and the instances packed in its order.
@@ -216,6 +258,7 @@ impl Renderer {
             tlas.as_ref(),
             &self.gpu_scene.blas_root,
             &self.gpu_scene.mesh_flags,
+            &self.gpu_scene.volume_grids.offsets,
         );
         Ok((tlas, packed))
     }
@@ -246,10 +289,12 @@ impl Renderer {
     /// kernel contains.
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let compiled = self.check_materials(scene)?;
+        self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_materials(scene, &compiled)?;
         self.place_enclosures(scene, None);
         self.set_camera_media();
-        self.update_lights(scene)
+        self.update_lights(scene)?;
+        self.rebake_volume_grids(scene)
     }
 
     /// The objects holding media placed as in `scene`; `gpu_order` is the kernel's new

@@ -242,6 +242,7 @@ fn build_scene(
                 width: render.filter_width,
             },
         },
+        volume_resolution: render.volume_resolution,
         view: ViewSettings {
             exposure_ev: render.exposure,
             tonemap,

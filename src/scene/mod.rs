@@ -67,6 +67,10 @@ pub const UNLIMITED_BOUNCES: u32 = 1024;
 /// The default volume bounce limit: as many as the path's bounces allow.
 pub const UNLIMITED_VOLUME_BOUNCES: u32 = UNLIMITED_BOUNCES;
 
+/// The default resolution of a heterogeneous volume's grid, and the range offered.
+pub const DEFAULT_VOLUME_RESOLUTION: u32 = 128;
+pub const VOLUME_RESOLUTIONS: std::ops::RangeInclusive<u32> = 8..=1024;
+
 /// Render settings a scene file carries as defaults; the command line overrides them.
 #[derive(Clone, Copy, Debug, PartialEq)]
 pub struct SceneSettings {
@@ -82,6 +86,9 @@ pub struct SceneSettings {
     pub seed: u32,
     /// The sampler and the pixel filter.
     pub sampling: Sampling,
+    /// Grid points along the longest side of a heterogeneous volume's bounds: such a
+    /// volume's graph is baked into a grid of this resolution (`render::volume_grid`).
+    pub volume_resolution: u32,
     /// Exposure and view transform (Blender's colour management).
     pub view: ViewSettings,
 }
@@ -96,6 +103,7 @@ impl Default for SceneSettings {
             max_volume_bounces: UNLIMITED_VOLUME_BOUNCES,
             seed: 0,
             sampling: Sampling::default(),
+            volume_resolution: DEFAULT_VOLUME_RESOLUTION,
             view: ViewSettings::default(),
         }
     }
@@ -108,8 +116,21 @@ impl SceneSettings {
             return Err("samples per pixel must be at least 1".into());
         }
         self.sampling.filter.validate()?;
+        validate_volume_resolution(self.volume_resolution)?;
         self.view.validate()
     }
+}
+
+/// A heterogeneous volume's grid resolution within [`VOLUME_RESOLUTIONS`].
+pub fn validate_volume_resolution(resolution: u32) -> Result<(), String> {
+    if !VOLUME_RESOLUTIONS.contains(&resolution) {
+        return Err(format!(
+            "the volume resolution must be from {} to {} grid points, got {resolution}",
+            VOLUME_RESOLUTIONS.start(),
+            VOLUME_RESOLUTIONS.end()
+        ));
+    }
+    Ok(())
 }
 
 #[derive(Clone, Debug, PartialEq)]

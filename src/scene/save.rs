@@ -234,6 +234,7 @@ pub fn save_scene(
             sampler: scene.settings.sampling.sampler.key().to_owned(),
             filter: scene.settings.sampling.filter.kind.key().to_owned(),
             filter_width: scene.settings.sampling.filter.width,
+            volume_resolution: scene.settings.volume_resolution,
             exposure: scene.settings.view.exposure_ev,
             view_transform: scene.settings.view.tonemap.key().to_owned(),
         },

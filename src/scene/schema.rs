@@ -157,6 +157,9 @@ pub(super) struct RenderDesc {
     /// The pixel filter's width in pixels.
     #[serde(skip_serializing_if = "is_default_filter_width")]
     pub(super) filter_width: f32,
+    /// Grid points along the longest side of a heterogeneous volume.
+    #[serde(skip_serializing_if = "is_default_volume_resolution")]
+    pub(super) volume_resolution: u32,
     /// Stops (EV) before the view transform.
     #[serde(skip_serializing_if = "is_zero_ev")]
     pub(super) exposure: f32,
@@ -168,6 +171,10 @@ pub(super) struct RenderDesc {
 
 fn is_unlimited_volume_bounces(bounces: &u32) -> bool {
     *bounces == super::UNLIMITED_VOLUME_BOUNCES
+}
+
+fn is_default_volume_resolution(resolution: &u32) -> bool {
+    *resolution == super::DEFAULT_VOLUME_RESOLUTION
 }
 
 fn is_default_sampler(key: &String) -> bool {
@@ -208,6 +215,7 @@ impl Default for RenderDesc {
             sampler: s.sampling.sampler.key().to_owned(),
             filter: s.sampling.filter.kind.key().to_owned(),
             filter_width: s.sampling.filter.width,
+            volume_resolution: s.volume_resolution,
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),
         }

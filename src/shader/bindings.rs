@@ -74,6 +74,7 @@ pub enum Resource {
     FilmAov,
     Uv1,
     MaterialParams,
+    VolumeGrid,
 }
 
 /// One buffer binding of group 0.
@@ -105,6 +106,7 @@ impl Binding {
             Resource::Textures => features.textures,
             Resource::FilmAov => features.aovs,
             Resource::Uv1 => features.uv1,
+            Resource::VolumeGrid => features.lobes & super::lobes::HETEROGENEOUS != 0,
             _ => true,
         }
     }
@@ -349,6 +351,17 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         stand_in: None,
         doc: "The graph materials' constant inputs in the editor (src/material/compile.rs,\n\
               `Constants::Live`); uniform, so it takes none of GL's storage-buffer slots.",
+    },
+    Binding {
+        resource: Resource::VolumeGrid,
+        name: "volume_grid",
+        binding: 26,
+        space: Space::ReadWrite,
+        wgsl_type: "array<u32>",
+        element_bytes: bytes::<u32>(),
+        stand_in: Some("array<u32, 1>"),
+        doc: "The heterogeneous volumes baked into grids (src/render/volume_grid.rs), when a scene\n\
+              has any: written by bake_volume_grid, read by the path tracer.",
     },
 ];
 

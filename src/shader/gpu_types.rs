@@ -16,6 +16,8 @@ pub const FILTER_TABLE_SIZE: u32 = 128;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const INSTANCE_HAS_UV1: u32 = 4;
+/// `Instance.volume_grid` of an instance without a grid ([`crate::render::volume_grid`]).
+pub const NO_GRID: u32 = u32::MAX;
 /// `AnalyticLight.kind`
 pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_SPOT: u32 = 1;
@@ -23,7 +25,7 @@ pub const LIGHT_DISTANT: u32 = 2;
 
 /// Every constant above with its WGSL name, for the test that compares them with
 /// `shaders/scene.wgsl`.
-pub const MIRRORED_CONSTANTS: [(&str, u32); 12] = [
+pub const MIRRORED_CONSTANTS: [(&str, u32); 13] = [
     ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
     ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
     ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
@@ -32,6 +34,7 @@ pub const MIRRORED_CONSTANTS: [(&str, u32); 12] = [
     ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
     ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
     ("INSTANCE_HAS_UV1", INSTANCE_HAS_UV1),
+    ("NO_GRID", NO_GRID),
     ("LIGHT_POINT", LIGHT_POINT),
     ("LIGHT_SPOT", LIGHT_SPOT),
     ("LIGHT_DISTANT", LIGHT_DISTANT),
@@ -77,7 +80,13 @@ pub struct GpuParams {
     pub max_volume_bounces: u32,
     /// [`SAMPLER_INDEPENDENT`] or [`SAMPLER_SOBOL`].
     pub sampler: u32,
+    /// A bake dispatch's grid (the word its header starts at) and first voxel
+    /// (`bake_volume_grid`); unused by the path tracer.
+    pub bake_grid: u32,
+    pub bake_first: u32,
     pub _pad2: u32,
+    pub _pad3: u32,
+    pub _pad4: u32,
     /// The pixel filter's quantile function at [`FILTER_TABLE_SIZE`] evenly spaced
     /// probabilities, in pixels ([`crate::shader::filter::PixelFilter::quantiles`]).
     pub filter_quantiles: [[f32; 4]; FILTER_TABLE_SIZE as usize / 4],
@@ -91,7 +100,9 @@ pub struct GpuInstance {
     pub blas_root: u32,
     pub material: u32,
     pub flags: u32,
-    pub _pad: u32,
+    /// The word of `volume_grid` its heterogeneous volume's grid starts at
+    /// ([`crate::render::volume_grid`]), or `NO_GRID`.
+    pub volume_grid: u32,
 }
 
 #[repr(C)]
@@ -277,7 +288,11 @@ mod tests {
                 camera_media_count,
                 max_volume_bounces,
                 sampler,
+                bake_grid,
+                bake_first,
                 _pad2,
+                _pad3,
+                _pad4,
                 filter_quantiles,
             ]
         );
@@ -287,7 +302,7 @@ mod tests {
             &module,
             GpuInstance,
             "Instance",
-            [to_world, to_object, blas_root, material, flags, _pad]
+            [to_world, to_object, blas_root, material, flags, volume_grid]
         );
         assert_same_layout!(
             &module,

@@ -66,6 +66,10 @@ pub const PATH_INTEGRATOR: &[ShaderFile] = &[
     shader_file!("integrator/path.wgsl"),
 ];
 
+/// The entry point `bake_volume_grid`, which bakes heterogeneous volumes into grids
+/// (`src/render/volume_grid.rs`): after the integrator, in kernels for scenes with one.
+pub const VOLUME_BAKE: ShaderFile = shader_file!("integrator/volume_bake.wgsl");
+
 /// The principled surface's lobes, one bit each, as [`KernelFeatures::lobes`] counts them.
 pub mod lobes {
     pub const COAT: u32 = 1;

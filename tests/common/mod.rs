@@ -26,6 +26,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         max_volume_bounces: kiln::scene::UNLIMITED_VOLUME_BOUNCES,
         seed: 1,
         sampling: kiln::shader::sampling::Sampling::default(),
+        volume_resolution: kiln::scene::DEFAULT_VOLUME_RESOLUTION,
         light_sampling: true,
         page_bytes: None,
         kernel: KernelKind::Specialized,
