@@ -406,11 +406,13 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
     set_value(&mut harness, "Resolution X", 48.0);
     set_value(&mut harness, "Resolution Y", 32.0);
     set_value(&mut harness, "Samples", 3.0);
+    set_value(&mut harness, "Grid Resolution", 64.0);
     let settings = harness.state().document().scene().settings;
     assert_eq!(
         (settings.width, settings.height, settings.samples_per_pixel),
         (48, 32, 3)
     );
+    assert_eq!(settings.volume_resolution, 64, "Volumes > Grid Resolution");
     // The pixel filter and the sampling pattern, as Cycles' Film and Sampling panels.
     set_value(&mut harness, "Filter Width", 2.5);
     for (combo, choice) in [("Pixel Filter", "Gaussian"), ("Pattern", "Independent")] {

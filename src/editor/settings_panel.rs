@@ -163,9 +163,8 @@ pub fn render_tab_ui(
         }
     });
     section(ui, "Volumes", |ui| {
-        let resolution = DragValue::new(&mut settings.volume_resolution)
-            .range(crate::scene::VOLUME_RESOLUTIONS)
-            .suffix(" px");
+        let resolution =
+            DragValue::new(&mut settings.volume_resolution).range(crate::scene::VOLUME_RESOLUTIONS);
         let tooltip = "A volume whose density or colour varies (a graph-driven volume, a \
                        cloud) is baked into a grid with this many points along its object's \
                        longest side: finer keeps more detail, at the cost of memory and of \

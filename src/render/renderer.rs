@@ -553,17 +553,7 @@ impl Renderer {
                     let n = (count - first).min(BAKE_VOXELS_PER_DISPATCH);
                     pass.dispatch_workgroups(n.div_ceil(BAKE_WORKGROUP_SIZE), 1, 1);
                 }
-                let index = queue.submit([encoder.finish()]);
-                self.ctx
-                    .device
-                    .poll(wgpu::PollType::Wait {
-                        submission_index: Some(index),
-                        timeout: None,
-                    })
-                    .map_err(|e| GpuError::Runtime {
-                        during: "baking a volume grid".into(),
-                        message: e.to_string(),
-                    })?;
+                self.submit_and_wait(encoder, "baking a volume grid")?;
             }
             voxels += count as u64;
         }
@@ -680,21 +670,31 @@ impl Renderer {
             );
         }
         if !read_stats {
-            let index = queue.submit([encoder.finish()]);
-            self.ctx
-                .device
-                .poll(wgpu::PollType::Wait {
-                    submission_index: Some(index),
-                    timeout: None,
-                })
-                .map_err(|e| GpuError::Runtime {
-                    during: "a render dispatch".into(),
-                    message: e.to_string(),
-                })?;
+            self.submit_and_wait(encoder, "a render dispatch")?;
             return Ok(None);
         }
         queue.submit([encoder.finish()]);
         self.take_stats().map(Some)
+    }
+
+    /// Submits `encoder` and waits for it to finish; `during` names the work in an error.
+    fn submit_and_wait(
+        &self,
+        encoder: wgpu::CommandEncoder,
+        during: &str,
+    ) -> Result<(), RenderError> {
+        let index = self.ctx.queue.submit([encoder.finish()]);
+        self.ctx
+            .device
+            .poll(wgpu::PollType::Wait {
+                submission_index: Some(index),
+                timeout: None,
+            })
+            .map_err(|e| GpuError::Runtime {
+                during: during.into(),
+                message: e.to_string(),
+            })?;
+        Ok(())
     }
 
     fn zero_stats(&self) {
