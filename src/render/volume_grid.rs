@@ -188,3 +188,56 @@ mod tests {
         assert_eq!(grid_dims(Vec3::ONE, 0), [2, 2, 2]);
     }
 }
+
+#[cfg(test)]
+mod plan_tests {
+    use glam::{Affine3A, Vec3};
+
+    use super::*;
+    use crate::accel::build_scene_accel;
+    use crate::material::parse_material;
+    use crate::scene::{Camera, Material, Scene, shapes};
+
+    fn noise_volume() -> Material {
+        let text = "(version: 1, name: \"v\", nodes: {
+            \"noise\": (type: \"noise_texture\"),
+            \"v\": (type: \"volume_scatter\", inputs: { \"density\": \"noise.fac\" }),
+            \"out\": (type: \"material_output\", inputs: { \"volume\": \"v.volume\" }),
+        })";
+        let (_, graph) = parse_material(text, "v").expect("parses");
+        Material::from_graph("v", graph).expect("compiles")
+    }
+
+    #[test]
+    fn grids_follow_one_another_proportioned_as_placed_in_the_world() {
+        let mut scene = Scene::empty(Camera::look_at(Vec3::Z * 5.0, Vec3::ZERO, 40.0));
+        let cloud = scene.add_material(noise_volume());
+        let plain = scene.add_material(Material::default());
+        let cube = scene.add_mesh(shapes::cube());
+        // A squashed cloud, a plain cube (no grid), and an unscaled cloud.
+        scene.add_instance(cube, cloud, Affine3A::from_scale(Vec3::new(4.0, 1.0, 2.0)));
+        scene.add_instance(cube, plain, Affine3A::IDENTITY);
+        scene.add_instance(cube, cloud, Affine3A::from_translation(Vec3::X * 3.0));
+        let accel = build_scene_accel(&scene).expect("builds");
+        let grids = VolumeGrids::plan(&scene, &accel.blas, 33);
+        assert_eq!(grids.grids.len(), 2);
+        assert_eq!(grids.grids[0].dims, [33, 9, 17], "cubic cells in the world");
+        assert_eq!(grids.grids[1].dims, [33; 3]);
+        let first = HEADER_WORDS as u64 + 33 * 9 * 17 * VOXEL_WORDS as u64;
+        assert_eq!(grids.offsets, [0, NO_GRID, first as u32]);
+        assert_eq!(
+            grids.words,
+            first * 2 + (33u64.pow(3) - 33 * 9 * 17) * VOXEL_WORDS as u64
+        );
+        // The headers carry the majorant and the kernel's index of each instance.
+        let headers = grids.headers(&scene, &[2, 0, 1]);
+        assert_eq!(headers[0].0, 0);
+        // Noise within [0, 1] times the default colour, 0.8.
+        assert_eq!(
+            f32::from_bits(headers[0].1[9]),
+            0.8,
+            "the volume's majorant"
+        );
+        assert_eq!((headers[0].1[11], headers[1].1[11]), (2, 1));
+    }
+}
