@@ -136,12 +136,17 @@ impl Renderer {
         };
         let light_data = light_arrays(new, root.as_ref());
         self.check_lights(&light_data)?;
-        let resolution = if old.settings.volume_resolution != new.settings.volume_resolution {
+        let resolution_edited = old.settings.volume_resolution != new.settings.volume_resolution;
+        let resolution = if resolution_edited {
             new.settings.volume_resolution
         } else {
             self.settings.volume_resolution
         };
-        self.check_volume_grids(new, resolution)?;
+        // Only these move the grids; a camera or light edit (each frame of navigation in
+        // the viewport) plans nothing.
+        if materials || instances || resolution_edited {
+            self.check_volume_grids(new, resolution)?;
+        }
 
         let mut updated = Updated::default();
         if let Some(compiled) = &compiled {
