@@ -11,6 +11,7 @@ use glam::{Affine3A, Vec3};
 use crate::accel::build_scene_accel;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Material, Scene, UNLIMITED_BOUNCES, shapes};
+use crate::shader::Ablation;
 use crate::shader::sampling::Sampler;
 
 #[derive(clap::Args, Debug)]
@@ -44,6 +45,17 @@ pub struct BenchArgs {
     /// Samples per pixel of each --depth render.
     #[arg(long, default_value_t = 256, value_name = "SPP")]
     pub depth_spp: u32,
+    /// Instead of samples/s of each kernel kind: where the specialised kernel's time goes.
+    /// Each scene is timed with the kernel cut down to camera rays, to primary hits, and to
+    /// a walk of closest-hit and shadow rays with no shading, then whole; the table gives
+    /// each part's time per sample and per ray.
+    #[arg(long)]
+    pub ablation: bool,
+    /// Instead of samples/s: what a dependent load costs on this adapter, from a storage
+    /// buffer and as a texel fetch, with a working set that stays in the cache and one that
+    /// does not (the loads of BVH traversal).
+    #[arg(long)]
+    pub fetch: bool,
 }
 
 impl BenchArgs {
@@ -117,13 +129,13 @@ fn measure(
     name: &str,
     scene: &Scene,
     args: &BenchArgs,
-    kernel: KernelKind,
+    settings: RenderSettings,
 ) -> Result<Row> {
     // The BVH on its own, so its time is not mixed with upload.
     let t = Instant::now();
     build_scene_accel(scene)?;
     let bvh = t.elapsed();
-    let mut renderer = Renderer::new(Arc::clone(ctx), scene, args.settings(scene, kernel))?;
+    let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)?;
     let t = Instant::now();
     renderer.render(0..1, RenderControl::default())?;
     let first_dispatch = t.elapsed();
@@ -162,6 +174,13 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     if args.depth {
         let ctx = GpuContext::new(backend)?;
         return depth(&ctx, &bench_scenes(args)?, args, out);
+    }
+    if args.ablation {
+        let ctx = GpuContext::new(backend)?;
+        return ablation(&ctx, &bench_scenes(args)?, args, out);
+    }
+    if args.fetch {
+        return fetch(&*GpuContext::new(backend)?, out);
     }
     // The import first, so the memory it measures is not hidden under the renders' peak.
     let import = measure_import(args.triangles);
@@ -392,6 +411,239 @@ fn depth(
     Ok(())
 }
 
+/// Where the specialised kernel's time goes: each scene timed with the kernel cut down to
+/// each [`Ablation`] in turn. The walk of the traversal part gives the cost of an
+/// incoherent ray without shading; the whole path's rays at that cost are its traversal
+/// share, and the rest is shading (materials, BSDFs, lights, media).
+fn ablation(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    writeln!(
+        out,
+        "Adapter: {}; {}x{} px, specialised kernels, {} s per part after a warm-up; \
+         ns/sample is per pixel sample, ns/ray per ray traced.",
+        ctx.describe(),
+        args.size,
+        args.size,
+        args.seconds
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "| scene | part | Msamples/s | Mrays/s | rays/sample | ns/sample | ns/ray | share of the full path's time |"
+    )?;
+    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---|")?;
+    for (name, scene) in scenes {
+        let mut rows = Vec::new();
+        for part in Ablation::ALL {
+            let settings = RenderSettings {
+                ablation: part,
+                ..args.settings(scene, KernelKind::Specialized)
+            };
+            rows.push((part, measure(ctx, name, scene, args, settings)?));
+        }
+        let ns_per_sample = |row: &Row| 1e9 / row.samples_per_sec;
+        let rays_per_sample = |row: &Row| row.rays_per_sec / row.samples_per_sec;
+        let camera = ns_per_sample(&rows[0].1);
+        let (_, traversal) = &rows[2];
+        // An incoherent ray's cost: the walk's time above the camera's, per ray.
+        let per_ray = (ns_per_sample(traversal) - camera) / rays_per_sample(traversal);
+        let (_, full) = &rows[3];
+        let full_ns = ns_per_sample(full);
+        for (part, row) in &rows {
+            let share = match part {
+                Ablation::Camera => format!("{:.0}% (camera, film)", camera / full_ns * 100.0),
+                Ablation::Full => {
+                    let tracing = per_ray * rays_per_sample(full);
+                    format!(
+                        "{:.0}% traversal ({:.2} rays at {per_ray:.0} ns), {:.0}% the rest",
+                        tracing / full_ns * 100.0,
+                        rays_per_sample(full),
+                        (full_ns - camera - tracing) / full_ns * 100.0
+                    )
+                }
+                _ => String::new(),
+            };
+            let rays = rays_per_sample(row);
+            writeln!(
+                out,
+                "| {name} | {} | {:.3} | {:.2} | {rays:.2} | {:.0} | {} | {share} |",
+                part.name(),
+                row.samples_per_sec / 1e6,
+                row.rays_per_sec / 1e6,
+                ns_per_sample(row),
+                if rays > 0.0 {
+                    format!("{:.0}", (ns_per_sample(row) - camera) / rays)
+                } else {
+                    "–".to_owned()
+                },
+            )?;
+        }
+    }
+    Ok(())
+}
+
+/// `kiln bench --fetch`: nanoseconds per dependent vec4 load, from a storage buffer and
+/// as a texel fetch (shaders/bench/fetch.wgsl), at a 16 KiB and a 16 MiB working set.
+fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
+    use wgpu::util::DeviceExt;
+
+    const SOURCE: &str = include_str!("../shaders/bench/fetch.wgsl");
+    const ENTRIES: u32 = 1 << 20;
+    const ROW: u32 = 1024;
+    const STEPS: u32 = 64;
+    const WIDTH: u32 = 512;
+    let device = &ctx.device;
+    let words: Vec<u32> = (0..ENTRIES * 4)
+        .map(|i| i.wrapping_mul(2_654_435_761))
+        .collect();
+    let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+        label: Some("fetch entries"),
+        contents: bytemuck::cast_slice(&words),
+        usage: wgpu::BufferUsages::STORAGE,
+    });
+    let texels = device.create_texture_with_data(
+        &ctx.queue,
+        &wgpu::TextureDescriptor {
+            label: Some("fetch texels"),
+            size: wgpu::Extent3d {
+                width: ROW,
+                height: ENTRIES / ROW,
+                depth_or_array_layers: 1,
+            },
+            mip_level_count: 1,
+            sample_count: 1,
+            dimension: wgpu::TextureDimension::D2,
+            format: wgpu::TextureFormat::Rgba32Uint,
+            usage: wgpu::TextureUsages::TEXTURE_BINDING,
+            view_formats: &[],
+        },
+        wgpu::util::TextureDataOrder::LayerMajor,
+        bytemuck::cast_slice(&words),
+    );
+    let view = texels.create_view(&Default::default());
+    let sink = device.create_buffer(&wgpu::BufferDescriptor {
+        label: Some("fetch sink"),
+        size: u64::from(WIDTH * WIDTH) * 4,
+        usage: wgpu::BufferUsages::STORAGE,
+        mapped_at_creation: false,
+    });
+    let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
+        binding,
+        visibility: wgpu::ShaderStages::COMPUTE,
+        ty: wgpu::BindingType::Buffer {
+            ty: wgpu::BufferBindingType::Storage { read_only },
+            has_dynamic_offset: false,
+            min_binding_size: None,
+        },
+        count: None,
+    };
+    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+        label: Some("fetch"),
+        entries: &[
+            storage(0, true),
+            wgpu::BindGroupLayoutEntry {
+                binding: 1,
+                visibility: wgpu::ShaderStages::COMPUTE,
+                ty: wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                },
+                count: None,
+            },
+            storage(2, false),
+        ],
+    });
+    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+        label: Some("fetch"),
+        layout: &layout,
+        entries: &[
+            wgpu::BindGroupEntry {
+                binding: 0,
+                resource: entries.as_entire_binding(),
+            },
+            wgpu::BindGroupEntry {
+                binding: 1,
+                resource: wgpu::BindingResource::TextureView(&view),
+            },
+            wgpu::BindGroupEntry {
+                binding: 2,
+                resource: sink.as_entire_binding(),
+            },
+        ],
+    });
+    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+        label: Some("fetch"),
+        bind_group_layouts: &[Some(&layout)],
+        immediate_size: 0,
+    });
+
+    writeln!(
+        out,
+        "Adapter: {}; {WIDTH}x{WIDTH} invocations, each a chain of {STEPS} dependent vec4 loads; \
+         the best of 4 dispatches (the first compiles).",
+        ctx.describe()
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "| working set | storage buffer | texel fetch | ratio |"
+    )?;
+    writeln!(out, "|---|---:|---:|---:|")?;
+    for entries in [1u32 << 10, ENTRIES] {
+        let mut ns = [0.0; 2];
+        for (storage, ns) in [true, false].into_iter().zip(&mut ns) {
+            let source = format!(
+                "const FETCH_STORAGE: bool = {storage};\nconst FETCH_MASK: u32 = {}u;\n\
+                 const FETCH_STEPS: u32 = {STEPS}u;\nconst FETCH_WIDTH: u32 = {WIDTH}u;\n{SOURCE}",
+                entries - 1
+            );
+            let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
+                label: Some("fetch"),
+                source: wgpu::ShaderSource::Wgsl(source.into()),
+            });
+            let pipeline = device.create_compute_pipeline(&wgpu::ComputePipelineDescriptor {
+                label: Some("fetch"),
+                layout: Some(&pipeline_layout),
+                module: &module,
+                entry_point: Some("fetch_chain"),
+                compilation_options: Default::default(),
+                cache: None,
+            });
+            let mut best = f64::INFINITY;
+            for _ in 0..4 {
+                let t = Instant::now();
+                let mut encoder = device.create_command_encoder(&Default::default());
+                {
+                    let mut pass = encoder.begin_compute_pass(&Default::default());
+                    pass.set_pipeline(&pipeline);
+                    pass.set_bind_group(0, &bind_group, &[]);
+                    pass.dispatch_workgroups(WIDTH / 8, WIDTH / 8, 1);
+                }
+                ctx.queue.submit([encoder.finish()]);
+                device
+                    .poll(wgpu::PollType::wait_indefinitely())
+                    .map_err(|e| anyhow::anyhow!("waiting for the fetch benchmark: {e}"))?;
+                best = best.min(t.elapsed().as_secs_f64());
+            }
+            *ns = best * 1e9 / f64::from(WIDTH * WIDTH * STEPS);
+        }
+        writeln!(
+            out,
+            "| {} KiB | {:.1} ns | {:.1} ns | {:.1}× |",
+            u64::from(entries) * 16 / 1024,
+            ns[0],
+            ns[1],
+            ns[0] / ns[1]
+        )?;
+    }
+    Ok(())
+}
+
 /// The least-squares slope of y against x.
 fn slope(points: &[(f64, f64)]) -> f64 {
     let n = points.len() as f64;
@@ -431,7 +683,7 @@ fn throughput(
             KernelKind::General,
             KernelKind::Interpreted,
         ] {
-            let row = measure(ctx, name, scene, args, kernel)?;
+            let row = measure(ctx, name, scene, args, args.settings(scene, kernel))?;
             writeln!(
                 out,
                 "| {} | {} | {} | {:.1} ms | {:.0} ms | {} | {:.0} ms | {:.3} | {:.2} |",

@@ -560,6 +560,50 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     return radiance;
 }
 
+// `kiln bench --ablation`: the kernel cut down to a part of its work, to measure where
+// the time goes. Each mode returns a value that depends on all the work it did, so the
+// driver cannot drop any of it. ABLATION_FULL is the path tracer above.
+//   camera     the camera ray alone: dispatch, sampler, filter and film
+//   primary    + the closest hit of the camera ray (coherent rays)
+//   traversal  + closest-hit and shadow rays along a cosine-weighted walk about the
+//              geometric normal, `params.max_bounces` deep at most (at most 8): traversal of
+//              incoherent rays, and the hit points' geometry, with no material, light or
+//              BSDF code.
+fn ablated_path(primary: Ray) -> vec3<f32> {
+    if (ABLATION == ABLATION_CAMERA) {
+        return primary.dir * 0.5 + vec3<f32>(0.5);
+    }
+    var ray = primary;
+    var value = vec3<f32>(0.0);
+    let depth = select(min(params.max_bounces, 8u), 1u, ABLATION == ABLATION_PRIMARY);
+    for (var bounce = 0u; bounce < depth; bounce++) {
+        rng_align(bounce);
+        rays_traced++;
+        let hit = intersect_scene(ray);
+        if (!hit.hit) {
+            value += vec3<f32>(1.0);
+            break;
+        }
+        if (ABLATION == ABLATION_PRIMARY) {
+            value += vec3<f32>(hit.t, f32(hit.instance), hit.b1);
+            break;
+        }
+        let s = surface_at(hit);
+        value += s.ng * 0.5 + vec3<f32>(0.5 / hit.t);
+        // Facing the ray, a cosine-weighted direction, and a shadow ray along another.
+        let n = select(-s.ng, s.ng, dot(ray.dir, s.ng) < 0.0);
+        let frame = frame_from_normal(n);
+        let to_light = frame_to_world(frame, sample_cosine_hemisphere(rand2()));
+        rays_traced++;
+        if (!occluded(Ray(offset_ray_origin(s.pe, n, to_light), to_light), 3.0e38)) {
+            value += vec3<f32>(0.25);
+        }
+        let wi = frame_to_world(frame, sample_cosine_hemisphere(rand2()));
+        ray = Ray(offset_ray_origin(s.pe, n, wi), wi);
+    }
+    return value;
+}
+
 @compute @workgroup_size(8, 8)
 fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     if (gid.x >= params.tile_size.x || gid.y >= params.tile_size.y) {
@@ -592,7 +636,13 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         aov_normal = vec3<f32>(0.0);
         aov_depth = 0.0;
         let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
-        var l = trace_path(camera_ray(film_pos, rand2()));
+        let primary = camera_ray(film_pos, rand2());
+        var l: vec3<f32>;
+        if (ABLATION == ABLATION_FULL) {
+            l = trace_path(primary);
+        } else {
+            l = ablated_path(primary);
+        }
         if (!is_finite3(l)) {
             non_finite++;
             l = vec3<f32>(0.0);

@@ -15,12 +15,12 @@ use super::light_distribution::{emissive_triangles, light_selection};
 use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
-use crate::shader::KernelFeatures;
 use crate::shader::bindings::{MATERIAL_PARAMS, PAGES, Resource, bound, scene_layout_entries};
 use crate::shader::gpu_types::{
     BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
     INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
 };
+use crate::shader::{Ablation, KernelFeatures};
 
 #[derive(Debug, Error)]
 pub enum UploadError {
@@ -576,6 +576,7 @@ impl GpuScene {
             textures: self.texture_count > 0,
             aovs: false,
             uv1: self.has_uv1,
+            ablation: Ablation::Full,
         }
     }
 

@@ -220,6 +220,7 @@ mod tests {
     use naga::proc::Layouter;
 
     use super::*;
+    use crate::shader::Ablation;
     use crate::shader::bindings::{
         PAGES, SCENE_BINDINGS, SCENE_GROUP, Space, bound, scene_layout_entries,
     };
@@ -240,6 +241,7 @@ mod tests {
             textures: false,
             aovs: false,
             uv1: false,
+            ablation: Ablation::Full,
         };
         let mixed = KernelFeatures {
             node_pages: 2,
@@ -367,6 +369,20 @@ mod tests {
             let materials = crate::material::materials_wgsl(&[]);
             if let Err(e) = path_tracing_kernel(&features, &materials).validate() {
                 panic!("{e}");
+            }
+        }
+    }
+
+    #[test]
+    fn every_ablated_kernel_passes_naga_validation() {
+        for ablation in Ablation::ALL {
+            let features = KernelFeatures {
+                ablation,
+                ..KernelFeatures::default()
+            };
+            let materials = crate::material::materials_wgsl(&[]);
+            if let Err(e) = path_tracing_kernel(&features, &materials).validate() {
+                panic!("{}: {e}", ablation.name());
             }
         }
     }

@@ -35,9 +35,9 @@ use crate::accel::query::Enclosures;
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
 use crate::scene::Scene;
-use crate::shader::KernelFeatures;
 use crate::shader::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
 use crate::shader::sampling::Sampling;
+use crate::shader::{Ablation, KernelFeatures};
 
 const TILE_SIZE: u32 = 256;
 const GIB: f64 = (1u64 << 30) as f64;
@@ -151,6 +151,9 @@ pub struct RenderSettings {
     /// film beyond it is split into pieces of whole rows; tests lower it to split small
     /// films.
     pub film_piece_bytes: Option<u64>,
+    /// The kernel cut down to a part of its work, for `kiln bench --ablation`; renders
+    /// use [`Ablation::Full`].
+    pub ablation: Ablation,
 }
 
 /// What a kernel is specialised to, from the fastest to build on to the fastest to edit.
@@ -185,6 +188,7 @@ impl RenderSettings {
             kernel: KernelKind::Specialized,
             aovs: false,
             film_piece_bytes: None,
+            ablation: Ablation::Full,
         }
     }
 }
@@ -308,6 +312,7 @@ pub(super) fn kernel_features(
 ) -> KernelFeatures {
     let features = KernelFeatures {
         aovs: settings.aovs,
+        ablation: settings.ablation,
         ..scene_features
     };
     // `everything` keeps the bindings, so one layout serves both kernels.

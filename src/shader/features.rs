@@ -23,6 +23,47 @@ pub struct KernelFeatures {
     pub aovs: bool,
     /// A second UV set: binds `uv1_data`.
     pub uv1: bool,
+    /// The part of the path tracer's work the kernel does (`kiln bench --ablation`).
+    pub ablation: Ablation,
+}
+
+/// The path tracer cut down to a part of its work, to measure where its time goes
+/// (`ablated_path` in shaders/integrator/path.wgsl says what each part traces).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum Ablation {
+    /// Camera rays alone: dispatch, sampler, pixel filter and film.
+    Camera,
+    /// And the closest hit of each camera ray: coherent traversal.
+    Primary,
+    /// And a cosine-weighted walk of closest-hit and shadow rays about the geometric
+    /// normal: incoherent traversal without materials, lights or BSDFs.
+    Traversal,
+    /// The whole path tracer.
+    #[default]
+    Full,
+}
+
+impl Ablation {
+    pub const ALL: [Ablation; 4] = [Self::Camera, Self::Primary, Self::Traversal, Self::Full];
+
+    /// The `ABLATION_*` constant's value in the shaders.
+    fn gpu_id(self) -> u32 {
+        match self {
+            Self::Full => 0,
+            Self::Camera => 1,
+            Self::Primary => 2,
+            Self::Traversal => 3,
+        }
+    }
+
+    pub fn name(self) -> &'static str {
+        match self {
+            Self::Camera => "camera",
+            Self::Primary => "primary",
+            Self::Traversal => "traversal",
+            Self::Full => "full",
+        }
+    }
 }
 
 impl Default for KernelFeatures {
@@ -38,6 +79,7 @@ impl Default for KernelFeatures {
             textures: true,
             aovs: true,
             uv1: true,
+            ablation: Ablation::Full,
         }
     }
 }
@@ -78,6 +120,17 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     for (name, on) in [("AOVS", features.aovs), ("UV1", features.uv1)] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }
+    for ablation in Ablation::ALL {
+        text.push_str(&format!(
+            "const ABLATION_{}: u32 = {}u;\n",
+            ablation.name().to_uppercase(),
+            ablation.gpu_id()
+        ));
+    }
+    text.push_str(&format!(
+        "const ABLATION: u32 = {}u;\n",
+        features.ablation.gpu_id()
+    ));
     text
 }
 

@@ -13,7 +13,7 @@ pub mod principled;
 pub mod sampling;
 pub mod view;
 
-pub use features::KernelFeatures;
+pub use features::{Ablation, KernelFeatures};
 
 /// One WGSL file of `shaders/`, embedded in the binary.
 #[derive(Clone, Copy, Debug)]
