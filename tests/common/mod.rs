@@ -32,6 +32,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         kernel: KernelKind::Specialized,
         aovs: false,
         film_piece_bytes: None,
+        ablation: kiln::shader::Ablation::Full,
     }
 }
 
