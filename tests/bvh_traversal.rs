@@ -136,6 +136,32 @@ fn paged_scene_buffers_give_the_same_hits() {
     check_against_brute_force(Some(100_000));
 }
 
+/// A scene is read as texel tables unless a page size asks for pages; the two give the
+/// same film, bit for bit (the same values reach the same traversal).
+#[test]
+fn texel_tables_and_storage_pages_render_the_same_film() {
+    let ctx = gpu();
+    let scene = kiln::scene::default_scene().expect("bundled scene");
+    let texels = settings(24, 24, 4);
+    let pages = kiln::render::RenderSettings {
+        page_bytes: Some(1 << 26),
+        ..texels
+    };
+    let a = common::render(&ctx, &scene, texels);
+    let b = common::render(&ctx, &scene, pages);
+    let bits = |film: &kiln::film::Film| -> Vec<u32> {
+        film.radiance()
+            .iter()
+            .flat_map(|c| c.to_array().map(f32::to_bits))
+            .collect()
+    };
+    assert!(
+        a.radiance().iter().any(|c| c.max_element() > 0.0),
+        "a lit film"
+    );
+    assert_eq!(bits(&a), bits(&b), "texel tables against storage pages");
+}
+
 #[test]
 fn scene_too_large_for_the_pages_is_a_clear_error() {
     let ctx = gpu();

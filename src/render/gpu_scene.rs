@@ -15,10 +15,13 @@ use super::light_distribution::{emissive_triangles, light_selection};
 use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
-use crate::shader::bindings::{MATERIAL_PARAMS, PAGES, Resource, bound, scene_layout_entries};
+use crate::shader::bindings::{
+    MATERIAL_PARAMS, NODE_TEXELS, PAGES, PLACEMENT_TEXELS, Resource, Space, TRIANGLE_TEXELS,
+    TexelLayout, bound, scene_layout_entries,
+};
 use crate::shader::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuPlacement,
+    GpuTriangle, INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
 };
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -36,15 +39,23 @@ pub enum UploadError {
 
 /// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
 pub struct GpuScene {
-    pub tlas_nodes: wgpu::Buffer,
+    /// The BVH over instances and the instances' placements in its leaf order, as texels
+    /// ([`NODE_TEXELS`], [`PLACEMENT_TEXELS`]); edits write them in place.
+    pub tlas_texels: wgpu::Texture,
+    pub placement_texels: wgpu::Texture,
     pub instances: wgpu::Buffer,
     /// `PAGES` buffers; unused pages hold one element.
     pub blas_nodes: Vec<wgpu::Buffer>,
     pub triangles: Vec<wgpu::Buffer>,
+    /// All BLAS nodes and triangles as texels when `node_pages` and `triangle_pages` are
+    /// 0, else one-texel placeholders.
+    pub blas_nodes_texels: wgpu::Texture,
+    pub triangles_texels: wgpu::Texture,
     /// log2 of the elements per page.
     pub node_page_shift: u32,
     pub triangle_page_shift: u32,
-    /// Pages holding data (the rest are one-element placeholders).
+    /// Pages holding data (the rest are one-element placeholders); 0 when the array is
+    /// read as texels.
     pub node_pages: u32,
     pub triangle_pages: u32,
     pub triangle_vertices: wgpu::Buffer,
@@ -401,6 +412,76 @@ fn paged_buffers<T: bytemuck::Pod + Default>(
     Ok((pages, shift, used))
 }
 
+/// A texel table holding `data` laid out as `layout` says, with as many rows as it needs
+/// (one for no data).
+fn texel_table<T: bytemuck::Pod>(
+    ctx: &GpuContext,
+    name: &'static str,
+    layout: TexelLayout,
+    data: &[T],
+    bytes_total: &mut u64,
+) -> Result<wgpu::Texture, UploadError> {
+    let rows = layout.rows(data.len());
+    let max_rows = ctx.device.limits().max_texture_dimension_2d;
+    if rows > max_rows {
+        return Err(UploadError::TooLarge {
+            buffer: name,
+            bytes: std::mem::size_of_val(data) as u64,
+            limit: u64::from(max_rows)
+                * u64::from(layout.per_row)
+                * std::mem::size_of::<T>() as u64,
+        });
+    }
+    let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
+        label: Some(name),
+        size: wgpu::Extent3d {
+            width: layout.width(),
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+        mip_level_count: 1,
+        sample_count: 1,
+        dimension: wgpu::TextureDimension::D2,
+        format: wgpu::TextureFormat::Rgba32Uint,
+        // COPY_DST: edits write the instances' tables in place (`Renderer::update`).
+        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        view_formats: &[],
+    });
+    *bytes_total += u64::from(rows) * u64::from(layout.width()) * 16;
+    write_texels(&ctx.queue, &texture, layout, data);
+    Ok(texture)
+}
+
+/// Writes `data` into the first rows of a texel table laid out as `layout` says.
+pub(super) fn write_texels<T: bytemuck::Pod>(
+    queue: &wgpu::Queue,
+    texture: &wgpu::Texture,
+    layout: TexelLayout,
+    data: &[T],
+) {
+    if data.is_empty() {
+        return;
+    }
+    let rows = layout.rows(data.len());
+    let row_bytes = layout.width() as usize * 16;
+    let mut bytes = bytemuck::cast_slice::<T, u8>(data).to_vec();
+    bytes.resize(rows as usize * row_bytes, 0);
+    queue.write_texture(
+        texture.as_image_copy(),
+        &bytes,
+        wgpu::TexelCopyBufferLayout {
+            offset: 0,
+            bytes_per_row: Some(row_bytes as u32),
+            rows_per_image: Some(rows),
+        },
+        wgpu::Extent3d {
+            width: layout.width(),
+            height: rows,
+            depth_or_array_layers: 1,
+        },
+    );
+}
+
 impl GpuScene {
     /// Uploads the scene. `page_bytes` sets the page size of the paged arrays below the
     /// adapter's binding limit (tests use it to exercise paging with small scenes);
@@ -418,16 +499,54 @@ impl GpuScene {
         let limit = binding_limit(ctx);
         let page_limit = page_bytes.map_or(limit, |p| p.min(limit));
         let mut bytes = 0;
-        let (blas_nodes, node_page_shift, node_pages) =
-            paged_buffers(ctx, "BLAS nodes", &a.blas_nodes, page_limit, &mut bytes)?;
-        let (triangles, triangle_page_shift, triangle_pages) =
-            paged_buffers(ctx, "triangles", &a.triangles, page_limit, &mut bytes)?;
+        // The meshes' BVHs and triangles as texels when both fit in a texture, unless a
+        // page size asks for pages (tests of paging).
+        let max_rows = ctx.device.limits().max_texture_dimension_2d;
+        let in_texels = page_bytes.is_none()
+            && NODE_TEXELS.rows(a.blas_nodes.len()) <= max_rows
+            && TRIANGLE_TEXELS.rows(a.triangles.len()) <= max_rows;
+        let (blas_nodes, node_page_shift, mut node_pages) = paged_buffers(
+            ctx,
+            "BLAS nodes",
+            if in_texels { &[] } else { &a.blas_nodes },
+            page_limit,
+            &mut bytes,
+        )?;
+        let (triangles, triangle_page_shift, mut triangle_pages) = paged_buffers(
+            ctx,
+            "triangles",
+            if in_texels { &[] } else { &a.triangles },
+            page_limit,
+            &mut bytes,
+        )?;
+        let (blas_nodes_texels, triangles_texels) = if in_texels {
+            (node_pages, triangle_pages) = (0, 0);
+            (
+                texel_table(ctx, "BLAS nodes", NODE_TEXELS, &a.blas_nodes, &mut bytes)?,
+                texel_table(ctx, "triangles", TRIANGLE_TEXELS, &a.triangles, &mut bytes)?,
+            )
+        } else {
+            (
+                texel_table::<BvhNode>(ctx, "BLAS nodes", NODE_TEXELS, &[], &mut bytes)?,
+                texel_table::<GpuTriangle>(ctx, "triangles", TRIANGLE_TEXELS, &[], &mut bytes)?,
+            )
+        };
+        let placements: Vec<GpuPlacement> = a.instances.iter().map(GpuPlacement::from).collect();
         let volume_grid = volume_grid_buffer(ctx, &a, limit, &mut bytes)?;
         Ok(Self {
-            tlas_nodes: storage_buffer(ctx, "TLAS nodes", &a.tlas_nodes, limit, &mut bytes)?,
+            tlas_texels: texel_table(ctx, "TLAS nodes", NODE_TEXELS, &a.tlas_nodes, &mut bytes)?,
+            placement_texels: texel_table(
+                ctx,
+                "instance placements",
+                PLACEMENT_TEXELS,
+                &placements,
+                &mut bytes,
+            )?,
             instances: storage_buffer(ctx, "instances", &a.instances, limit, &mut bytes)?,
             blas_nodes,
             triangles,
+            blas_nodes_texels,
+            triangles_texels,
             node_page_shift,
             triangle_page_shift,
             node_pages,
@@ -592,14 +711,26 @@ impl GpuScene {
         };
         // Every binding the layout for these features has (`bindings::bound`), and only
         // those: optional buffers exist exactly when their feature is on.
+        let views: Vec<(u32, wgpu::TextureView)> = bound(&features)
+            .filter_map(|b| {
+                let texture = match b.resource {
+                    Resource::TlasTexels => &self.tlas_texels,
+                    Resource::PlacementTexels => &self.placement_texels,
+                    Resource::NodeTexels => &self.blas_nodes_texels,
+                    Resource::TriangleTexels => &self.triangles_texels,
+                    _ => return None,
+                };
+                Some((b.binding, texture.create_view(&Default::default())))
+            })
+            .collect();
         let buffers: Vec<(u32, &wgpu::Buffer)> = bound(&features)
+            .filter(|b| b.space != Space::Texels)
             .map(|b| {
                 let buffer = match b.resource {
                     Resource::Params => frame.params,
                     Resource::FilmSum => frame.film_sum,
                     Resource::FilmCompensation => frame.film_compensation,
                     Resource::Stats => frame.stats,
-                    Resource::TlasNodes => &self.tlas_nodes,
                     Resource::Instances => &self.instances,
                     Resource::BlasNodes { page } => &self.blas_nodes[page as usize],
                     Resource::Triangles { page } => &self.triangles[page as usize],
@@ -617,6 +748,10 @@ impl GpuScene {
                     Resource::VolumeGrid => &self.volume_grid,
                     // Bound only when `features.aovs`, which is `film_aov.is_some()`.
                     Resource::FilmAov => frame.film_aov.expect("AOVs are bound with a film"),
+                    Resource::TlasTexels
+                    | Resource::PlacementTexels
+                    | Resource::NodeTexels
+                    | Resource::TriangleTexels => unreachable!("texel tables are views"),
                 };
                 (b.binding, buffer)
             })
@@ -627,6 +762,10 @@ impl GpuScene {
                 binding: *binding,
                 resource: b.as_entire_binding(),
             })
+            .chain(views.iter().map(|(binding, view)| wgpu::BindGroupEntry {
+                binding: *binding,
+                resource: wgpu::BindingResource::TextureView(view),
+            }))
             .collect();
         device.create_bind_group(&wgpu::BindGroupDescriptor {
             label: Some("scene"),

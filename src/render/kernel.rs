@@ -251,7 +251,12 @@ mod tests {
             uv1: true,
             ..nothing_optional
         };
-        vec![everything, nothing_optional, mixed]
+        let in_texels = KernelFeatures {
+            node_pages: 0,
+            triangle_pages: 0,
+            ..mixed
+        };
+        vec![everything, nothing_optional, mixed, in_texels]
     }
 
     /// naga's address space for a table entry.
@@ -264,6 +269,7 @@ mod tests {
             Space::ReadWrite => naga::AddressSpace::Storage {
                 access: naga::StorageAccess::LOAD | naga::StorageAccess::STORE,
             },
+            Space::Texels => naga::AddressSpace::Handle,
         }
     }
 
@@ -315,6 +321,40 @@ mod tests {
                 let (name, space, stride) = &declared[&b.binding];
                 assert_eq!(name, b.name, "name of binding {}", b.binding);
                 assert_eq!(*space, address_space(b.space), "address space of {name}");
+                if b.space == Space::Texels {
+                    let var = module
+                        .global_variables
+                        .iter()
+                        .find(|(_, v)| v.name.as_deref() == Some(b.name))
+                        .map(|(_, v)| v)
+                        .expect("declared");
+                    assert!(
+                        matches!(
+                            module.types[var.ty].inner,
+                            naga::TypeInner::Image {
+                                dim: naga::ImageDimension::D2,
+                                arrayed: false,
+                                class: naga::ImageClass::Sampled {
+                                    kind: naga::ScalarKind::Uint,
+                                    multi: false
+                                },
+                            }
+                        ),
+                        "{name} is a texture_2d<u32>"
+                    );
+                    assert!(
+                        matches!(
+                            layout[&b.binding].ty,
+                            wgpu::BindingType::Texture {
+                                sample_type: wgpu::TextureSampleType::Uint,
+                                view_dimension: wgpu::TextureViewDimension::D2,
+                                multisampled: false,
+                            }
+                        ),
+                        "layout type of {name}"
+                    );
+                    continue;
+                }
                 assert_eq!(
                     *stride as u64, b.element_bytes,
                     "bytes per element of {name}: WGSL vs the Rust data uploaded"

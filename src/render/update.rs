@@ -18,7 +18,7 @@
 use thiserror::Error;
 
 use super::gpu_scene::{
-    LightArrays, instance_arrays, instanced_lobes, light_arrays, write_grid_headers,
+    LightArrays, instance_arrays, instanced_lobes, light_arrays, write_grid_headers, write_texels,
 };
 use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
@@ -26,7 +26,8 @@ use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
-use crate::shader::gpu_types::{BvhNode, GpuInstance};
+use crate::shader::bindings::{NODE_TEXELS, PLACEMENT_TEXELS};
+use crate::shader::gpu_types::{GpuInstance, GpuPlacement};
 use crate::shader::sampling::Sampling;
 
 /// Why an edit was not applied in place.
@@ -253,7 +254,7 @@ impl Renderer {
         }
         let tlas = build_tlas(scene, &self.blas).map_err(RenderError::from)?;
         let nodes = tlas.as_ref().map_or(0, |t| t.nodes.len());
-        if (nodes * std::mem::size_of::<BvhNode>()) as u64 > self.gpu_scene.tlas_nodes.size() {
+        if NODE_TEXELS.rows(nodes) > self.gpu_scene.tlas_texels.height() {
             return Err(UpdateError::rebuild(
                 "the instances' BVH outgrows its buffer",
             ));
@@ -274,7 +275,15 @@ impl Renderer {
         packed: &[GpuInstance],
     ) -> Result<(), UpdateError> {
         let nodes = tlas.map_or(&[][..], |t| &t.nodes[..]);
-        self.write("TLAS nodes", &self.gpu_scene.tlas_nodes, nodes)?;
+        let queue = &self.ctx.queue;
+        write_texels(queue, &self.gpu_scene.tlas_texels, NODE_TEXELS, nodes);
+        let placements: Vec<GpuPlacement> = packed.iter().map(GpuPlacement::from).collect();
+        write_texels(
+            queue,
+            &self.gpu_scene.placement_texels,
+            PLACEMENT_TEXELS,
+            &placements,
+        );
         self.write("instances", &self.gpu_scene.instances, packed)?;
         self.gpu_scene.tlas_root = nodes.first().copied();
         Ok(())

@@ -4,15 +4,16 @@
 //! ([`scene_layout_entries`]) and the bind group (`GpuScene::bind_group`). The structs the
 //! bindings hold stay in `shaders/scene.wgsl`, mirrored in [`super::gpu_types`].
 //!
-//! It is not a general shader-interface description: every binding here is a buffer, and
-//! a probe's group 1 ([`PROBE_BINDINGS`]) keeps its element types in its own test kernel.
+//! It is not a general shader-interface description: every binding is a buffer or a
+//! table of texels (`texture_2d<u32>`, rgba32uint), and a probe's group 1
+//! ([`PROBE_BINDINGS`]) keeps its element types in its own test kernel.
 
 use std::num::NonZeroU64;
 
 use super::KernelFeatures;
 use super::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats,
-    GpuTriangle,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuPlacement,
+    GpuStats, GpuTriangle,
 };
 
 /// How the kernel sees a buffer.
@@ -24,26 +25,85 @@ pub enum Space {
     ReadOnly,
     /// `var<storage, read_write>`
     ReadWrite,
+    /// `texture_2d<u32>` of rgba32uint texels holding an array of fixed-size elements
+    /// ([`TexelLayout`]), read with `textureLoad`. The traversal reads the BVHs, the
+    /// triangles and the instances' placements this way: on a software rasteriser
+    /// (llvmpipe) a texel fetch is one vector gather, while a storage-buffer load that
+    /// differs between lanes is a loop over the lanes for every word (`kiln bench
+    /// --fetch`: 10× slower from the cache).
+    Texels,
 }
 
 impl Space {
-    /// The address space and access as written between `var<` and `>`.
+    /// What is written between `var` and the name: `<uniform>`, `<storage, read>`, …
     pub fn wgsl(self) -> &'static str {
         match self {
-            Space::Uniform => "uniform",
-            Space::ReadOnly => "storage, read",
-            Space::ReadWrite => "storage, read_write",
+            Space::Uniform => "<uniform>",
+            Space::ReadOnly => "<storage, read>",
+            Space::ReadWrite => "<storage, read_write>",
+            Space::Texels => "",
         }
     }
 
-    pub fn buffer_binding_type(self) -> wgpu::BufferBindingType {
-        match self {
+    fn binding_type(self, min_bytes: u64) -> wgpu::BindingType {
+        let ty = match self {
             Space::Uniform => wgpu::BufferBindingType::Uniform,
             Space::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
             Space::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
+            Space::Texels => {
+                return wgpu::BindingType::Texture {
+                    sample_type: wgpu::TextureSampleType::Uint,
+                    view_dimension: wgpu::TextureViewDimension::D2,
+                    multisampled: false,
+                };
+            }
+        };
+        wgpu::BindingType::Buffer {
+            ty,
+            has_dynamic_offset: false,
+            min_binding_size: NonZeroU64::new(min_bytes),
         }
     }
 }
+
+/// How an array of fixed-size elements lies in a [`Space::Texels`] binding: `texels`
+/// rgba32uint texels per element, `per_row` elements per row of the texture, so that no
+/// element straddles two rows. The rows are 4096 texels wide or less, within every
+/// adapter's limit; the rows a table may have are the adapter's
+/// `max_texture_dimension_2d`.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct TexelLayout {
+    pub texels: u32,
+    pub per_row: u32,
+}
+
+impl TexelLayout {
+    pub const fn width(self) -> u32 {
+        self.texels * self.per_row
+    }
+
+    /// Rows holding `count` elements (at least one).
+    pub fn rows(self, count: usize) -> u32 {
+        (count.div_ceil(self.per_row as usize) as u32).max(1)
+    }
+}
+
+/// BVH nodes (TLAS and BLAS): 32 bytes, two texels.
+pub const NODE_TEXELS: TexelLayout = TexelLayout {
+    texels: 2,
+    per_row: 2048,
+};
+/// Triangles: 48 bytes, three texels.
+pub const TRIANGLE_TEXELS: TexelLayout = TexelLayout {
+    texels: 3,
+    per_row: 1365,
+};
+/// An instance's placement as traversal reads it: the world-to-object rows and the root
+/// of its mesh's BVH (`GpuPlacement`), four texels.
+pub const PLACEMENT_TEXELS: TexelLayout = TexelLayout {
+    texels: 4,
+    per_row: 1024,
+};
 
 /// The buffer a binding holds; `GpuScene::bind_group` names one buffer for each.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
@@ -52,7 +112,10 @@ pub enum Resource {
     FilmSum,
     FilmCompensation,
     Stats,
-    TlasNodes,
+    /// The BVH over instances, in texels ([`NODE_TEXELS`]).
+    TlasTexels,
+    /// The instances' placements in TLAS leaf order, in texels ([`PLACEMENT_TEXELS`]).
+    PlacementTexels,
     Instances,
     /// Page `page` of the BLAS nodes (see [`PAGES`]).
     BlasNodes {
@@ -62,6 +125,10 @@ pub enum Resource {
     Triangles {
         page: u32,
     },
+    /// All BLAS nodes in texels, instead of the pages (a scene's `node_pages` is 0).
+    NodeTexels,
+    /// All triangles in texels, instead of the pages (`triangle_pages` is 0).
+    TriangleTexels,
     TriangleVertices,
     Vertices,
     Materials,
@@ -77,7 +144,7 @@ pub enum Resource {
     VolumeGrid,
 }
 
-/// One buffer binding of group 0.
+/// One binding of group 0.
 #[derive(Clone, Copy, Debug)]
 pub struct Binding {
     pub resource: Resource,
@@ -103,6 +170,8 @@ impl Binding {
         match self.resource {
             Resource::BlasNodes { page } => page < features.node_pages,
             Resource::Triangles { page } => page < features.triangle_pages,
+            Resource::NodeTexels => features.node_pages == 0,
+            Resource::TriangleTexels => features.triangle_pages == 0,
             Resource::Textures => features.textures,
             Resource::FilmAov => features.aovs,
             Resource::Uv1 => features.uv1,
@@ -115,7 +184,9 @@ impl Binding {
 /// Pages of the paged arrays (`blas_nodes_*`, `triangles_*`): the two largest arrays are
 /// split into up to four bindings, so a scene is not limited by the per-binding size
 /// (128 MiB on lavapipe). Pages a scene does not use take no binding slot, which keeps
-/// ordinary scenes within GL's 16 storage buffers per stage.
+/// ordinary scenes within GL's 16 storage buffers per stage. A scene whose nodes and
+/// triangles fit in one texture each reads them as texels instead, with no page bound
+/// (`GpuScene::upload`).
 pub const PAGES: usize = 4;
 
 const fn bytes<T>() -> u64 {
@@ -171,6 +242,26 @@ const fn read_only(
     }
 }
 
+/// A texel table ([`Space::Texels`]) holding elements of `element_bytes`.
+const fn texels(
+    resource: Resource,
+    name: &'static str,
+    binding: u32,
+    element_bytes: u64,
+    doc: &'static str,
+) -> Binding {
+    Binding {
+        resource,
+        name,
+        binding,
+        space: Space::Texels,
+        wgsl_type: "texture_2d<u32>",
+        element_bytes,
+        stand_in: None,
+        doc,
+    }
+}
+
 /// The group of the scene's bindings.
 pub const SCENE_GROUP: u32 = 0;
 
@@ -216,13 +307,13 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         stand_in: None,
         doc: "",
     },
-    read_only(
-        Resource::TlasNodes,
-        "tlas_nodes",
+    texels(
+        Resource::TlasTexels,
+        "tlas_texels",
         4,
-        "array<BvhNode>",
         bytes::<BvhNode>(),
-        "",
+        "The BVH over instances and the instances' placements in its leaf order, as texels:\n\
+         read them through fetch_tlas_node and fetch_placement (src/shader/features.rs).",
     ),
     read_only(
         Resource::Instances,
@@ -363,6 +454,28 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         doc: "The heterogeneous volumes baked into grids (src/render/volume_grid.rs), when a scene\n\
               has any: written by bake_volume_grid, read by the path tracer.",
     },
+    texels(
+        Resource::PlacementTexels,
+        "placement_texels",
+        27,
+        bytes::<GpuPlacement>(),
+        "",
+    ),
+    texels(
+        Resource::NodeTexels,
+        "blas_nodes_texels",
+        28,
+        bytes::<BvhNode>(),
+        "The BLAS nodes and the triangles as texels, when they fit: read them through\n\
+         fetch_blas_node and fetch_triangle too.",
+    ),
+    texels(
+        Resource::TriangleTexels,
+        "triangles_texels",
+        29,
+        bytes::<GpuTriangle>(),
+        "",
+    ),
 ];
 
 /// Elements of `material_params`: live constants beyond it are compiled inline.
@@ -377,7 +490,7 @@ pub fn bindings_wgsl(features: &KernelFeatures) -> String {
         }
         if b.is_bound(features) {
             text.push_str(&format!(
-                "@group({SCENE_GROUP}) @binding({}) var<{}> {}: {};\n",
+                "@group({SCENE_GROUP}) @binding({}) var{} {}: {};\n",
                 b.binding,
                 b.space.wgsl(),
                 b.name,
@@ -399,11 +512,7 @@ fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGroupLa
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: space.buffer_binding_type(),
-            has_dynamic_offset: false,
-            min_binding_size: NonZeroU64::new(min_bytes),
-        },
+        ty: space.binding_type(min_bytes),
         count: None,
     }
 }
@@ -490,7 +599,7 @@ mod tests {
             .iter()
             .map(|b| {
                 format!(
-                    "@group({PROBE_GROUP}) @binding({}) var<{}> {}:",
+                    "@group({PROBE_GROUP}) @binding({}) var{} {}:",
                     b.binding,
                     b.space.wgsl(),
                     b.name
