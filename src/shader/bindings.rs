@@ -313,7 +313,7 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         4,
         bytes::<BvhNode>(),
         "The BVH over instances and the instances' placements in its leaf order, as texels:\n\
-         read them through fetch_tlas_node and fetch_placement (src/shader/features.rs).",
+         read them through fetch_tlas_node and fetch_placement (shaders/texels.wgsl).",
     ),
     read_only(
         Resource::Instances,

@@ -1,7 +1,7 @@
 //! What a kernel is specialised for, and the WGSL generated from it: the `FEATURE_*`
 //! constants and the paged-array accessors.
 
-use super::bindings::{NODE_TEXELS, PLACEMENT_TEXELS, TRIANGLE_TEXELS, TexelLayout};
+use super::bindings::{NODE_TEXELS, PLACEMENT_TEXELS, TRIANGLE_TEXELS};
 use super::lobes;
 
 /// What a kernel is specialised for; only what a scene uses is compiled in. The shaders
@@ -135,10 +135,10 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     text
 }
 
-/// The traversal's accessors: `fetch_tlas_node` and `fetch_placement` from their texel
-/// tables, and `fetch_blas_node` and `fetch_triangle` from texels (0 pages) or from the
-/// pages a scene uses. With one page the accessor is a plain load: on lavapipe even an
-/// untaken branch to the other pages slows traversal by 40%.
+/// The texel tables' shapes (shaders/texels.wgsl reads them), and `fetch_blas_node` and
+/// `fetch_triangle` from texels (0 pages) or from the pages a scene uses. With one page
+/// the accessor is a plain load: on lavapipe even an untaken branch to the other pages
+/// slows traversal by 40%.
 pub fn paging_wgsl(features: &KernelFeatures) -> String {
     // The bindings are declared by `bindings_wgsl`.
     fn accessor(name: &str, ty: &str, array: &str, shift: &str, pages: u32) -> String {
@@ -162,42 +162,21 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
         }
         format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n")
     }
-    // An element's texels lie side by side in one row (`TexelLayout`).
-    let texel = |layout: TexelLayout, k: u32| {
+    // The shapes of the texel tables (shaders/texels.wgsl).
+    let texel_layouts = [
+        ("NODE", NODE_TEXELS),
+        ("TRIANGLE", TRIANGLE_TEXELS),
+        ("PLACEMENT", PLACEMENT_TEXELS),
+    ]
+    .map(|(name, layout)| {
         format!(
-            "textureLoad(t, vec2<u32>({} * (i % {}u) + {k}u, i / {}u), 0)",
-            if layout.texels == 1 {
-                "1u".to_owned()
-            } else {
-                format!("{}u", layout.texels)
-            },
-            layout.per_row,
-            layout.per_row
+            "const TEXELS_PER_{name}: u32 = {}u;\nconst {name}S_PER_TEXEL_ROW: u32 = {}u;\n",
+            layout.texels, layout.per_row
         )
-    };
-    let texel_readers = format!(
-        "struct Placement {{\n    to_object: array<vec4<f32>, 3>,\n    blas_root: u32,\n}};\n\n\
-         fn node_from_texels(t: texture_2d<u32>, i: u32) -> BvhNode {{\n\
-         \x20   let a = {};\n    let b = {};\n\
-         \x20   return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);\n}}\n\n\
-         fn triangle_from_texels(t: texture_2d<u32>, i: u32) -> Triangle {{\n\
-         \x20   return Triangle(bitcast<vec4<f32>>({}), bitcast<vec4<f32>>({}), bitcast<vec4<f32>>({}));\n}}\n\n\
-         fn fetch_tlas_node(i: u32) -> BvhNode {{\n    return node_from_texels(tlas_texels, i);\n}}\n\n\
-         fn fetch_placement(i: u32) -> Placement {{\n    let t = placement_texels;\n\
-         \x20   let rows = array<vec4<f32>, 3>(bitcast<vec4<f32>>({}), bitcast<vec4<f32>>({}), bitcast<vec4<f32>>({}));\n\
-         \x20   return Placement(rows, {}.x);\n}}\n",
-        texel(NODE_TEXELS, 0),
-        texel(NODE_TEXELS, 1),
-        texel(TRIANGLE_TEXELS, 0),
-        texel(TRIANGLE_TEXELS, 1),
-        texel(TRIANGLE_TEXELS, 2),
-        texel(PLACEMENT_TEXELS, 0),
-        texel(PLACEMENT_TEXELS, 1),
-        texel(PLACEMENT_TEXELS, 2),
-        texel(PLACEMENT_TEXELS, 3),
-    );
+    })
+    .concat();
     format!(
-        "// Generated for {} node page(s) and {} triangle page(s) (0: in texels).\n{texel_readers}\n{}\n{}",
+        "// Generated for {} node page(s) and {} triangle page(s) (0: in texels).\n{texel_layouts}\n{}\n{}",
         features.node_pages,
         features.triangle_pages,
         accessor(

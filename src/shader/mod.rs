@@ -38,6 +38,7 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("sampling.wgsl"),
     shader_file!("float_error.wgsl"),
     shader_file!("intersect.wgsl"),
+    shader_file!("texels.wgsl"),
     shader_file!("traverse.wgsl"),
     shader_file!("surface.wgsl"),
     shader_file!("camera.wgsl"),
