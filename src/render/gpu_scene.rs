@@ -35,6 +35,14 @@ pub enum UploadError {
         bytes: u64,
         limit: u64,
     },
+    #[error(
+        "the scene's {table} need a texel table of {rows} rows, more than this adapter's {max_rows}"
+    )]
+    TooManyRows {
+        table: &'static str,
+        rows: u32,
+        max_rows: u32,
+    },
 }
 
 /// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
@@ -424,12 +432,10 @@ fn texel_table<T: bytemuck::Pod>(
     let rows = layout.rows(data.len());
     let max_rows = ctx.device.limits().max_texture_dimension_2d;
     if rows > max_rows {
-        return Err(UploadError::TooLarge {
-            buffer: name,
-            bytes: std::mem::size_of_val(data) as u64,
-            limit: u64::from(max_rows)
-                * u64::from(layout.per_row)
-                * std::mem::size_of::<T>() as u64,
+        return Err(UploadError::TooManyRows {
+            table: name,
+            rows,
+            max_rows,
         });
     }
     let texture = ctx.device.create_texture(&wgpu::TextureDescriptor {
