@@ -9,9 +9,11 @@ use anyhow::Result;
 use glam::{Affine3A, Vec3};
 
 use crate::accel::build_scene_accel;
+use crate::render::gpu_scene::texel_table;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Material, Scene, UNLIMITED_BOUNCES, shapes};
 use crate::shader::Ablation;
+use crate::shader::bindings::{Space, TexelLayout, layout_entry};
 use crate::shader::sampling::Sampler;
 
 #[derive(clap::Args, Debug)]
@@ -505,25 +507,17 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
         contents: bytemuck::cast_slice(&words),
         usage: wgpu::BufferUsages::STORAGE,
     });
-    let texels = device.create_texture_with_data(
-        &ctx.queue,
-        &wgpu::TextureDescriptor {
-            label: Some("fetch texels"),
-            size: wgpu::Extent3d {
-                width: ROW,
-                height: ENTRIES / ROW,
-                depth_or_array_layers: 1,
-            },
-            mip_level_count: 1,
-            sample_count: 1,
-            dimension: wgpu::TextureDimension::D2,
-            format: wgpu::TextureFormat::Rgba32Uint,
-            usage: wgpu::TextureUsages::TEXTURE_BINDING,
-            view_formats: &[],
+    // One texel per entry, ROW to a row, as shaders/bench/fetch.wgsl reads them.
+    let texels = texel_table(
+        ctx,
+        "fetch texels",
+        TexelLayout {
+            texels: 1,
+            per_row: ROW,
         },
-        wgpu::util::TextureDataOrder::LayerMajor,
-        bytemuck::cast_slice(&words),
-    );
+        bytemuck::cast_slice::<u32, [u32; 4]>(&words),
+        &mut 0,
+    )?;
     let view = texels.create_view(&Default::default());
     let sink = device.create_buffer(&wgpu::BufferDescriptor {
         label: Some("fetch sink"),
@@ -531,31 +525,12 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let storage = |binding, read_only| wgpu::BindGroupLayoutEntry {
-        binding,
-        visibility: wgpu::ShaderStages::COMPUTE,
-        ty: wgpu::BindingType::Buffer {
-            ty: wgpu::BufferBindingType::Storage { read_only },
-            has_dynamic_offset: false,
-            min_binding_size: None,
-        },
-        count: None,
-    };
     let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
         label: Some("fetch"),
         entries: &[
-            storage(0, true),
-            wgpu::BindGroupLayoutEntry {
-                binding: 1,
-                visibility: wgpu::ShaderStages::COMPUTE,
-                ty: wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Uint,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                },
-                count: None,
-            },
-            storage(2, false),
+            layout_entry(0, Space::ReadOnly, 0),
+            layout_entry(1, Space::Texels, 0),
+            layout_entry(2, Space::ReadWrite, 0),
         ],
     });
     let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {

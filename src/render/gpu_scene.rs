@@ -422,7 +422,7 @@ fn paged_buffers<T: bytemuck::Pod + Default>(
 
 /// A texel table holding `data` laid out as `layout` says, with as many rows as it needs
 /// (one for no data).
-fn texel_table<T: bytemuck::Pod>(
+pub fn texel_table<T: bytemuck::Pod>(
     ctx: &GpuContext,
     name: &'static str,
     layout: TexelLayout,

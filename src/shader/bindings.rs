@@ -508,7 +508,8 @@ pub fn bound(features: &KernelFeatures) -> impl Iterator<Item = &'static Binding
     SCENE_BINDINGS.iter().filter(|b| b.is_bound(features))
 }
 
-fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGroupLayoutEntry {
+/// A compute stage's layout entry for a binding in `space`; `min_bytes` 0 for no minimum.
+pub fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
         visibility: wgpu::ShaderStages::COMPUTE,
