@@ -251,14 +251,15 @@ const fn texels(
     doc: &'static str,
 ) -> Binding {
     Binding {
-        resource,
-        name,
-        binding,
         space: Space::Texels,
-        wgsl_type: "texture_2d<u32>",
-        element_bytes,
-        stand_in: None,
-        doc,
+        ..read_only(
+            resource,
+            name,
+            binding,
+            "texture_2d<u32>",
+            element_bytes,
+            doc,
+        )
     }
 }
 

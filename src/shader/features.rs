@@ -141,13 +141,18 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
 /// slows traversal by 40%.
 pub fn paging_wgsl(features: &KernelFeatures) -> String {
     // The bindings are declared by `bindings_wgsl`.
-    fn accessor(name: &str, ty: &str, array: &str, shift: &str, pages: u32) -> String {
-        let reader = if ty == "BvhNode" { "node" } else { "triangle" };
+    // `reader`: the shaders/texels.wgsl function that reads one element from texels.
+    fn accessor(
+        name: &str,
+        ty: &str,
+        reader: &str,
+        array: &str,
+        shift: &str,
+        pages: u32,
+    ) -> String {
         let mut body = String::new();
         if pages == 0 {
-            body.push_str(&format!(
-                "    return {reader}_from_texels({array}_texels, i);\n"
-            ));
+            body.push_str(&format!("    return {reader}({array}_texels, i);\n"));
         } else if pages <= 1 {
             body.push_str(&format!("    return {array}_0[i];\n"));
         } else {
@@ -182,6 +187,7 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
         accessor(
             "fetch_blas_node",
             "BvhNode",
+            "node_from_texels",
             "blas_nodes",
             "node_page_shift",
             features.node_pages
@@ -189,6 +195,7 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
         accessor(
             "fetch_triangle",
             "Triangle",
+            "triangle_from_texels",
             "triangles",
             "triangle_page_shift",
             features.triangle_pages
