@@ -32,7 +32,7 @@ fn decode_octahedral(packed: u32) -> vec3<f32> {
 }
 
 fn surface_at(hit: SceneHit) -> Surface {
-    let inst = instances[hit.instance];
+    let inst = fetch_instance(hit.instance);
     let tri = fetch_triangle(hit.triangle);
     let b0 = 1.0 - hit.b1 - hit.b2;
     let p0 = tri.p0.xyz;
@@ -49,10 +49,10 @@ fn surface_at(hit: SceneHit) -> Surface {
     var uv = vec2<f32>(hit.b1, hit.b2);
     var dpdu = vec3<f32>(0.0);
     var dpdv = vec3<f32>(0.0);
-    let base = hit.triangle * 3u;
-    let v0 = vertices[triangle_vertices[base]];
-    let v1 = vertices[triangle_vertices[base + 1u]];
-    let v2 = vertices[triangle_vertices[base + 2u]];
+    let corners = fetch_triangle_vertices(hit.triangle);
+    let v0 = fetch_vertex(corners.x);
+    let v1 = fetch_vertex(corners.y);
+    let v2 = fetch_vertex(corners.z);
     if ((inst.flags & INSTANCE_HAS_NORMALS) != 0u) {
         let n_object = b0 * decode_octahedral(v0.x) + hit.b1 * decode_octahedral(v1.x) + hit.b2 * decode_octahedral(v2.x);
         let len = length(n_object);
@@ -82,10 +82,7 @@ fn surface_at(hit: SceneHit) -> Surface {
     let color = b0 * unpack4x8unorm(v0.w) + hit.b1 * unpack4x8unorm(v1.w) + hit.b2 * unpack4x8unorm(v2.w);
     var uv1 = vec2<f32>(0.0);
     if (FEATURE_UV1 && (inst.flags & INSTANCE_HAS_UV1) != 0u) {
-        let i0 = triangle_vertices[base];
-        let i1 = triangle_vertices[base + 1u];
-        let i2 = triangle_vertices[base + 2u];
-        uv1 = b0 * uv1_data[i0] + hit.b1 * uv1_data[i1] + hit.b2 * uv1_data[i2];
+        uv1 = b0 * uv1_data[corners.x] + hit.b1 * uv1_data[corners.y] + hit.b2 * uv1_data[corners.z];
     }
     return Surface(pe, ng, ns, uv, dpdu, dpdv, color, uv1, inst.material);
 }

@@ -1,12 +1,12 @@
 // Texel tables (`Space::Texels` in src/shader/bindings.rs): arrays of fixed-size elements
 // in rgba32uint texels, `TEXELS_PER_*` of them side by side in one row of
 // `*_PER_TEXEL_ROW` elements (both generated from `TexelLayout`). Traversal reads the BVHs, the
-// triangles and the instances' placements from them: on a software rasteriser a texel
-// fetch is one vector gather, a storage load that differs between lanes a loop over the
-// lanes for every word.
+// triangles and the instances from them, and shading the instances, the vertices and their
+// indices: on a software rasteriser a texel fetch is one vector gather, a storage load that
+// differs between lanes a loop over the lanes for every word.
 
-// What traversal reads of an instance (`GpuPlacement`): the world-to-object rows and the
-// root of its mesh's BVH.
+// What traversal reads of an instance: the world-to-object rows and the root of its mesh's
+// BVH, texels 3–6 of its seven (`Instance` in shaders/scene.wgsl).
 struct Placement {
     to_object: array<vec4<f32>, 3>,
     blas_root: u32,
@@ -36,12 +36,85 @@ fn fetch_tlas_node(i: u32) -> BvhNode {
     return node_from_texels(tlas_texels, i);
 }
 
+// Texel `k` of instance `i`.
+fn instance_texel(i: u32, k: u32) -> vec4<u32> {
+    return texel_of(instance_texels, i, TEXELS_PER_INSTANCE, INSTANCES_PER_TEXEL_ROW, k);
+}
+
 fn fetch_placement(i: u32) -> Placement {
-    let t = placement_texels;
     let rows = array<vec4<f32>, 3>(
-        bitcast<vec4<f32>>(texel_of(t, i, TEXELS_PER_PLACEMENT, PLACEMENTS_PER_TEXEL_ROW, 0u)),
-        bitcast<vec4<f32>>(texel_of(t, i, TEXELS_PER_PLACEMENT, PLACEMENTS_PER_TEXEL_ROW, 1u)),
-        bitcast<vec4<f32>>(texel_of(t, i, TEXELS_PER_PLACEMENT, PLACEMENTS_PER_TEXEL_ROW, 2u)),
+        bitcast<vec4<f32>>(instance_texel(i, 3u)),
+        bitcast<vec4<f32>>(instance_texel(i, 4u)),
+        bitcast<vec4<f32>>(instance_texel(i, 5u)),
     );
-    return Placement(rows, texel_of(t, i, TEXELS_PER_PLACEMENT, PLACEMENTS_PER_TEXEL_ROW, 3u).x);
+    return Placement(rows, instance_texel(i, 6u).x);
+}
+
+fn fetch_instance(i: u32) -> Instance {
+    let to_world = array<vec4<f32>, 3>(
+        bitcast<vec4<f32>>(instance_texel(i, 0u)),
+        bitcast<vec4<f32>>(instance_texel(i, 1u)),
+        bitcast<vec4<f32>>(instance_texel(i, 2u)),
+    );
+    let to_object = array<vec4<f32>, 3>(
+        bitcast<vec4<f32>>(instance_texel(i, 3u)),
+        bitcast<vec4<f32>>(instance_texel(i, 4u)),
+        bitcast<vec4<f32>>(instance_texel(i, 5u)),
+    );
+    let last = instance_texel(i, 6u);
+    return Instance(to_world, to_object, last.x, last.y, last.z, last.w);
+}
+
+// The attributes of vertex `i` (`vertex_texels`).
+fn fetch_vertex(i: u32) -> vec4<u32> {
+    return texel_of(vertex_texels, i, TEXELS_PER_VERTEX, VERTICES_PER_TEXEL_ROW, 0u);
+}
+
+// The global vertex indices of triangle `i`.
+fn fetch_triangle_vertices(i: u32) -> vec3<u32> {
+    let t = triangle_vertex_texels;
+    return texel_of(t, i, TEXELS_PER_TRIANGLE_VERTEX, TRIANGLE_VERTICES_PER_TEXEL_ROW, 0u).xyz;
+}
+
+// Texel `k` of material `i`.
+fn material_texel(i: u32, k: u32) -> vec4<u32> {
+    return texel_of(material_texels, i, TEXELS_PER_MATERIAL, MATERIALS_PER_TEXEL_ROW, k);
+}
+
+fn fetch_material(i: u32) -> Material {
+    var principled: array<vec4<f32>, PRINCIPLED_VEC4S>;
+    for (var k = 0u; k < PRINCIPLED_VEC4S; k++) {
+        principled[k] = bitcast<vec4<f32>>(material_texel(i, k));
+    }
+    let n = PRINCIPLED_VEC4S;
+    let flags = material_texel(i, n + 1u);
+    return Material(
+        principled,
+        bitcast<vec4<f32>>(material_texel(i, n)),
+        flags.x,
+        flags.y,
+        bitcast<f32>(flags.z),
+        flags.w,
+        bitcast<vec4<f32>>(material_texel(i, n + 2u)),
+        bitcast<vec4<f32>>(material_texel(i, n + 3u)),
+        bitcast<vec4<f32>>(material_texel(i, n + 4u)),
+    );
+}
+
+fn fetch_light_triangle(i: u32) -> LightTriangle {
+    let t = light_triangle_texels;
+    let n = TEXELS_PER_LIGHT_TRIANGLE;
+    let per_row = LIGHT_TRIANGLES_PER_TEXEL_ROW;
+    return LightTriangle(
+        bitcast<vec4<f32>>(texel_of(t, i, n, per_row, 0u)),
+        bitcast<vec4<f32>>(texel_of(t, i, n, per_row, 1u)),
+        bitcast<vec4<f32>>(texel_of(t, i, n, per_row, 2u)),
+        bitcast<vec4<f32>>(texel_of(t, i, n, per_row, 3u)),
+    );
+}
+
+// Entry `i` of the light CDF, four to a texel.
+fn light_cdf_at(i: u32) -> f32 {
+    let t = texel_of(light_cdf_texels, i / 4u, TEXELS_PER_LIGHT_CDF, LIGHT_CDFS_PER_TEXEL_ROW, 0u);
+    return bitcast<f32>(t[i % 4u]);
 }

@@ -51,12 +51,12 @@ fn media_entered(media_in: Media, material: u32, instance: u32, absorption: vec3
         media.instance[i] = instance;
         media.medium[i] = material_medium(material, absorption);
         media.majorant[i] = 0.0;
-        let majorant = materials[material].volume_majorant;
+        let majorant = fetch_material(material).volume_majorant;
         if (FEATURE_HETEROGENEOUS && majorant > 0.0) {
             let a = max(absorption, vec3<f32>(0.0));
             media.majorant[i] = majorant + max(a.x, max(a.y, a.z));
         }
-        media.emission[i] = materials[material].volume_emission.xyz;
+        media.emission[i] = fetch_material(material).volume_emission.xyz;
         media.count = i + 1u;
     }
     return media;
@@ -70,10 +70,10 @@ fn camera_media() -> Media {
     var media = media_empty();
     for (var i = 0u; i < min(params.camera_media_count, MEDIA_DEPTH); i++) {
         let instance = params.camera_media[i];
-        let material = instances[instance].material;
+        let material = fetch_instance(instance).material;
         var absorption = vec3<f32>(0.0);
-        if (materials[material].boundary_only == 0u) {
-            let p = principled_unpack(materials[material].principled);
+        if (fetch_material(material).boundary_only == 0u) {
+            let p = principled_unpack(fetch_material(material).principled);
             if (p.thin_walled) {
                 continue;
             }
@@ -113,7 +113,7 @@ fn media_left(media_in: Media, material: u32) -> Media {
 // The medium inside material `id`: its homogeneous volume (the material buffer's), with
 // `absorption` more (a transmissive surface's Beer–Lambert extinction).
 fn material_medium(id: u32, absorption: vec3<f32>) -> Medium {
-    let m = materials[id];
+    let m = fetch_material(id);
     let sigma_s = max(m.volume_scattering.xyz, vec3<f32>(0.0));
     let sigma_t = max(m.volume_absorption.xyz, vec3<f32>(0.0)) + max(absorption, vec3<f32>(0.0)) + sigma_s;
     let albedo = select(vec3<f32>(0.0), min(sigma_s / sigma_t, vec3<f32>(1.0)), sigma_t > vec3<f32>(0.0));
@@ -290,7 +290,7 @@ fn grid_voxel(data: u32, index: u32) -> VolumeEval {
 // The baked volume of instance `instance` at world point `p`: the trilinear blend of the
 // eight grid points around it (points outside the grid take its nearest face's).
 fn volume_grid_at(instance: u32, p: vec3<f32>) -> VolumeEval {
-    let inst = instances[instance];
+    let inst = fetch_instance(instance);
     let g = inst.volume_grid;
     let h = grid_header(g);
     let top = vec3<f32>(h.dims - vec3<u32>(1u));

@@ -34,7 +34,7 @@ const MAX_PASS_THROUGH: u32 = 64u;
 
 // The fixed-parameter material of the material buffer (materials without a graph).
 fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
-    return material_eval(principled_unpack(materials[id].principled), sp.n);
+    return material_eval(principled_unpack(fetch_material(id).principled), sp.n);
 }
 
 // A small hash of the instance index in [0, 1), for the Object Info node.
@@ -59,7 +59,7 @@ fn instance_location(inst: Instance) -> vec3<f32> {
 
 // What material graphs see of a hit (shaders/nodes/inputs.wgsl).
 fn shading_point(s: Surface, hit: SceneHit, wo: vec3<f32>, front: bool) -> ShadingPoint {
-    let inst = instances[hit.instance];
+    let inst = fetch_instance(hit.instance);
     let p_object = transform_point(inst.to_object, s.pe.p);
     let n_object = normalize(transform_vector(transpose_rows(inst.to_world), s.ns));
     return ShadingPoint(
@@ -73,7 +73,7 @@ fn shading_point(s: Surface, hit: SceneHit, wo: vec3<f32>, front: bool) -> Shadi
 // travelling along `dir`: as in Cycles, the normal faces back along the path; there are
 // no texture coordinates or vertex colours inside.
 fn volume_point(instance: u32, p: vec3<f32>, dir: vec3<f32>) -> ShadingPoint {
-    let inst = instances[instance];
+    let inst = fetch_instance(instance);
     let p_object = transform_point(inst.to_object, p);
     let n = -dir;
     let n_object = normalize(transform_vector(transpose_rows(inst.to_world), n));
@@ -157,7 +157,7 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
             return tr;
         }
         let s = surface_at(hit);
-        if (materials[s.material].boundary_only == 0u || !any(tr > vec3<f32>(0.0))) {
+        if (fetch_material(s.material).boundary_only == 0u || !any(tr > vec3<f32>(0.0))) {
             return vec3<f32>(0.0);
         }
         if (dot(dir, s.ng) < 0.0) {
@@ -411,7 +411,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     break;
                 }
                 s = surface_at(hit);
-                let material = materials[s.material];
+                let material = fetch_material(s.material);
                 let front = dot(ray.dir, s.ng) < 0.0;
                 if (FEATURE_VOLUME && material.boundary_only != 0u) {
                     // A volume's bare boundary: the path enters or leaves its medium unchanged.

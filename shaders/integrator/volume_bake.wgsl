@@ -23,7 +23,7 @@ fn bake_volume_grid(@builtin(global_invocation_id) id: vec3<u32>) {
     );
     let material = volume_grid[g + 10u];
     let instance = volume_grid[g + 11u];
-    let p = transform_point(instances[instance].to_world, h.lo + vec3<f32>(i) * cell);
+    let p = transform_point(fetch_instance(instance).to_world, h.lo + vec3<f32>(i) * cell);
     let v = evaluate_volume(material, volume_point(instance, p, vec3<f32>(0.0, 0.0, -1.0)));
     let inverse = select(0.0, 1.0 / h.scale, h.scale > 0.0);
     let a = max(v.absorption, vec3<f32>(0.0)) * inverse;

@@ -18,7 +18,7 @@ fn pick_light_triangle(u: f32) -> u32 {
     var hi = params.light_count - 1u;
     while (lo < hi) {
         let mid = (lo + hi) / 2u;
-        if (light_cdf[mid] <= u) {
+        if (light_cdf_at(mid) <= u) {
             lo = mid + 1u;
         } else {
             hi = mid;
@@ -33,12 +33,12 @@ fn pick_light_triangle(u: f32) -> u32 {
 // rather than split between triangles at random.
 fn sample_light_triangle(p: vec3<f32>, u: vec2<f32>) -> LightSample {
     let index = pick_light_triangle(u.x);
-    let light = light_triangles[index];
+    let light = fetch_light_triangle(index);
     var lo = 0.0;
     if (index > 0u) {
-        lo = light_cdf[index - 1u];
+        lo = light_cdf_at(index - 1u);
     }
-    let hi = light_cdf[index];
+    let hi = light_cdf_at(index);
     var x = 0.0;
     if (hi > lo) {
         x = clamp((u.x - lo) / (hi - lo), 0.0, 0.99999994);

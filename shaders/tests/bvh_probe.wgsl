@@ -15,7 +15,7 @@ fn brute_force(ray: Ray) -> SceneHit {
     var best = SceneHit(false, 3.0e38, 0u, 0u, 0.0, 0.0);
     let instance_count = probe_in[0].y;
     for (var i = 0u; i < instance_count; i++) {
-        let inst = instances[i];
+        let inst = fetch_instance(i);
         let range = probe_in[1u + i];
         let local = Ray(transform_point(inst.to_object, ray.origin), transform_vector(inst.to_object, ray.dir));
         let rs = ray_shear(local.dir);

@@ -16,12 +16,13 @@ use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::SceneAccel;
 use crate::scene::{Scene, shapes};
 use crate::shader::bindings::{
-    MATERIAL_PARAMS, NODE_TEXELS, PAGES, PLACEMENT_TEXELS, Resource, Space, TRIANGLE_TEXELS,
-    TexelLayout, bound, scene_layout_entries,
+    INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_PARAMS, MATERIAL_TEXELS,
+    NODE_TEXELS, PAGES, Resource, Space, TRIANGLE_TEXELS, TRIANGLE_VERTEX_TEXELS, TexelLayout,
+    VERTEX_TEXELS, bound, scene_layout_entries,
 };
 use crate::shader::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuPlacement,
-    GpuTriangle, INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
 };
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -47,11 +48,10 @@ pub enum UploadError {
 
 /// The scene's buffers on the device, plus the scalars the kernel's `Params` needs.
 pub struct GpuScene {
-    /// The BVH over instances and the instances' placements in its leaf order, as texels
-    /// ([`NODE_TEXELS`], [`PLACEMENT_TEXELS`]); edits write them in place.
+    /// The BVH over instances and the instances in its leaf order, as texels
+    /// ([`NODE_TEXELS`], [`INSTANCE_TEXELS`]); edits write them in place.
     pub tlas_texels: wgpu::Texture,
-    pub placement_texels: wgpu::Texture,
-    pub instances: wgpu::Buffer,
+    pub instances: wgpu::Texture,
     /// `PAGES` buffers; unused pages hold one element.
     pub blas_nodes: Vec<wgpu::Buffer>,
     pub triangles: Vec<wgpu::Buffer>,
@@ -66,13 +66,18 @@ pub struct GpuScene {
     /// read as texels.
     pub node_pages: u32,
     pub triangle_pages: u32,
-    pub triangle_vertices: wgpu::Buffer,
-    pub vertices: wgpu::Buffer,
+    /// Each triangle's vertex indices and the vertex attributes, as texels
+    /// ([`TRIANGLE_VERTEX_TEXELS`], [`VERTEX_TEXELS`]).
+    pub triangle_vertices: wgpu::Texture,
+    pub vertices: wgpu::Texture,
     pub uv1: wgpu::Buffer,
     pub has_uv1: bool,
-    pub materials: wgpu::Buffer,
-    pub light_triangles: wgpu::Buffer,
-    pub light_cdf: wgpu::Buffer,
+    /// The materials, the emissive triangles and their CDF, as texels
+    /// ([`MATERIAL_TEXELS`], [`LIGHT_TRIANGLE_TEXELS`], [`LIGHT_CDF_TEXELS`]).
+    pub materials: wgpu::Texture,
+    pub material_count: u32,
+    pub light_triangles: wgpu::Texture,
+    pub light_cdf: wgpu::Texture,
     pub analytic_lights: wgpu::Buffer,
     /// The BSDFs' energy tables (`tables::DIELECTRIC_ENERGY`), a uniform buffer.
     pub bsdf_tables: wgpu::Buffer,
@@ -114,7 +119,8 @@ pub struct SceneArrays {
     pub instances: Vec<GpuInstance>,
     pub blas_nodes: Vec<BvhNode>,
     pub triangles: Vec<GpuTriangle>,
-    pub triangle_vertices: Vec<u32>,
+    /// Three global vertex indices per triangle and a word of padding.
+    pub triangle_vertices: Vec<[u32; 4]>,
     pub vertices: Vec<[u32; 4]>,
     /// The second UV set per vertex (all vertices, zero where a mesh has none), or empty
     /// when no mesh has one.
@@ -258,8 +264,8 @@ impl SceneArrays {
                     p1: p1.extend(1.0).into(),
                     p2: p2.extend(1.0).into(),
                 });
-                a.triangle_vertices
-                    .extend(mesh.indices[t as usize].map(|i| vertex_base + i));
+                let [i0, i1, i2] = mesh.indices[t as usize].map(|i| vertex_base + i);
+                a.triangle_vertices.push([i0, i1, i2, 0]);
             }
             let mut normals = mesh.normals.clone();
             if normals.iter().any(|n| n.length_squared() == 0.0) {
@@ -458,6 +464,15 @@ pub fn texel_table<T: bytemuck::Pod>(
     Ok(texture)
 }
 
+/// `values` four to an element (the last padded with ones), for a table of four floats
+/// to a texel such as the light CDF.
+pub(super) fn in_fours(values: &[f32]) -> Vec<[f32; 4]> {
+    values
+        .chunks(4)
+        .map(|c| std::array::from_fn(|k| c.get(k).copied().unwrap_or(1.0)))
+        .collect()
+}
+
 /// Writes `data` into the first rows of a texel table laid out as `layout` says.
 pub(super) fn write_texels<T: bytemuck::Pod>(
     queue: &wgpu::Queue,
@@ -537,18 +552,10 @@ impl GpuScene {
                 texel_table::<GpuTriangle>(ctx, "triangles", TRIANGLE_TEXELS, &[], &mut bytes)?,
             )
         };
-        let placements: Vec<GpuPlacement> = a.instances.iter().map(GpuPlacement::from).collect();
         let volume_grid = volume_grid_buffer(ctx, &a, limit, &mut bytes)?;
         Ok(Self {
             tlas_texels: texel_table(ctx, "TLAS nodes", NODE_TEXELS, &a.tlas_nodes, &mut bytes)?,
-            placement_texels: texel_table(
-                ctx,
-                "instance placements",
-                PLACEMENT_TEXELS,
-                &placements,
-                &mut bytes,
-            )?,
-            instances: storage_buffer(ctx, "instances", &a.instances, limit, &mut bytes)?,
+            instances: texel_table(ctx, "instances", INSTANCE_TEXELS, &a.instances, &mut bytes)?,
             blas_nodes,
             triangles,
             blas_nodes_texels,
@@ -557,25 +564,38 @@ impl GpuScene {
             triangle_page_shift,
             node_pages,
             triangle_pages,
-            triangle_vertices: storage_buffer(
+            triangle_vertices: texel_table(
                 ctx,
                 "triangle vertex indices",
+                TRIANGLE_VERTEX_TEXELS,
                 &a.triangle_vertices,
-                limit,
                 &mut bytes,
             )?,
-            vertices: storage_buffer(ctx, "vertex attributes", &a.vertices, limit, &mut bytes)?,
+            vertices: texel_table(
+                ctx,
+                "vertex attributes",
+                VERTEX_TEXELS,
+                &a.vertices,
+                &mut bytes,
+            )?,
             uv1: storage_buffer(ctx, "second UV set", &a.uv1, limit, &mut bytes)?,
             has_uv1: !a.uv1.is_empty(),
-            materials: storage_buffer(ctx, "materials", &a.materials, limit, &mut bytes)?,
-            light_triangles: storage_buffer(
+            materials: texel_table(ctx, "materials", MATERIAL_TEXELS, &a.materials, &mut bytes)?,
+            material_count: a.materials.len() as u32,
+            light_triangles: texel_table(
                 ctx,
                 "emissive triangles",
+                LIGHT_TRIANGLE_TEXELS,
                 &a.light_triangles,
-                limit,
                 &mut bytes,
             )?,
-            light_cdf: storage_buffer(ctx, "light CDF", &a.light_cdf, limit, &mut bytes)?,
+            light_cdf: texel_table(
+                ctx,
+                "light CDF",
+                LIGHT_CDF_TEXELS,
+                &in_fours(&a.light_cdf),
+                &mut bytes,
+            )?,
             analytic_lights: storage_buffer(ctx, "lights", &a.analytic_lights, limit, &mut bytes)?,
             analytic_light_count: a.analytic_lights.len() as u32,
             bsdf_tables: bsdf_tables_buffer(ctx),
@@ -721,7 +741,12 @@ impl GpuScene {
             .filter_map(|b| {
                 let texture = match b.resource {
                     Resource::TlasTexels => &self.tlas_texels,
-                    Resource::PlacementTexels => &self.placement_texels,
+                    Resource::Instances => &self.instances,
+                    Resource::TriangleVertices => &self.triangle_vertices,
+                    Resource::Vertices => &self.vertices,
+                    Resource::Materials => &self.materials,
+                    Resource::LightTriangles => &self.light_triangles,
+                    Resource::LightCdf => &self.light_cdf,
                     Resource::NodeTexels => &self.blas_nodes_texels,
                     Resource::TriangleTexels => &self.triangles_texels,
                     _ => return None,
@@ -737,14 +762,8 @@ impl GpuScene {
                     Resource::FilmSum => frame.film_sum,
                     Resource::FilmCompensation => frame.film_compensation,
                     Resource::Stats => frame.stats,
-                    Resource::Instances => &self.instances,
                     Resource::BlasNodes { page } => &self.blas_nodes[page as usize],
                     Resource::Triangles { page } => &self.triangles[page as usize],
-                    Resource::TriangleVertices => &self.triangle_vertices,
-                    Resource::Vertices => &self.vertices,
-                    Resource::Materials => &self.materials,
-                    Resource::LightTriangles => &self.light_triangles,
-                    Resource::LightCdf => &self.light_cdf,
                     Resource::AnalyticLights => &self.analytic_lights,
                     Resource::EnvironmentData => &self.environment_data,
                     Resource::DielectricEnergyTable => &self.bsdf_tables,
@@ -755,7 +774,12 @@ impl GpuScene {
                     // Bound only when `features.aovs`, which is `film_aov.is_some()`.
                     Resource::FilmAov => frame.film_aov.expect("AOVs are bound with a film"),
                     Resource::TlasTexels
-                    | Resource::PlacementTexels
+                    | Resource::Instances
+                    | Resource::TriangleVertices
+                    | Resource::Vertices
+                    | Resource::Materials
+                    | Resource::LightTriangles
+                    | Resource::LightCdf
                     | Resource::NodeTexels
                     | Resource::TriangleTexels => unreachable!("texel tables are views"),
                 };

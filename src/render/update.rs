@@ -18,7 +18,8 @@
 use thiserror::Error;
 
 use super::gpu_scene::{
-    LightArrays, instance_arrays, instanced_lobes, light_arrays, write_grid_headers, write_texels,
+    LightArrays, in_fours, instance_arrays, instanced_lobes, light_arrays, write_grid_headers,
+    write_texels,
 };
 use super::materials::SceneMaterials;
 use super::renderer::{RenderError, Renderer, kernel_features};
@@ -26,8 +27,11 @@ use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
 use crate::shader::KernelFeatures;
-use crate::shader::bindings::{NODE_TEXELS, PLACEMENT_TEXELS};
-use crate::shader::gpu_types::{GpuInstance, GpuPlacement};
+use crate::shader::bindings::{
+    INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_TEXELS, NODE_TEXELS,
+    TexelLayout,
+};
+use crate::shader::gpu_types::GpuInstance;
 use crate::shader::sampling::Sampling;
 
 /// Why an edit was not applied in place.
@@ -277,14 +281,7 @@ impl Renderer {
         let nodes = tlas.map_or(&[][..], |t| &t.nodes[..]);
         let queue = &self.ctx.queue;
         write_texels(queue, &self.gpu_scene.tlas_texels, NODE_TEXELS, nodes);
-        let placements: Vec<GpuPlacement> = packed.iter().map(GpuPlacement::from).collect();
-        write_texels(
-            queue,
-            &self.gpu_scene.placement_texels,
-            PLACEMENT_TEXELS,
-            &placements,
-        );
-        self.write("instances", &self.gpu_scene.instances, packed)?;
+        write_texels(queue, &self.gpu_scene.instances, INSTANCE_TEXELS, packed);
         self.gpu_scene.tlas_root = nodes.first().copied();
         Ok(())
     }
@@ -341,9 +338,7 @@ impl Renderer {
     /// kernel has them (with their live constants, if the kernel reads those).
     fn check_materials(&self, scene: &Scene) -> Result<SceneMaterials, UpdateError> {
         self.check_features(scene)?;
-        let packed = std::mem::size_of::<crate::shader::gpu_types::GpuMaterial>()
-            * scene.materials.len().max(1);
-        if packed as u64 != self.gpu_scene.materials.size() {
+        if scene.materials.len() as u32 != self.gpu_scene.material_count {
             return Err(UpdateError::rebuild("the material count changed"));
         }
         let compiled = super::materials::scene_materials(scene, self.settings.kernel)
@@ -371,7 +366,8 @@ impl Renderer {
             .iter()
             .map(super::gpu_scene::pack_material)
             .collect();
-        self.write("materials", &self.gpu_scene.materials, &packed)?;
+        let queue = &self.ctx.queue;
+        write_texels(queue, &self.gpu_scene.materials, MATERIAL_TEXELS, &packed);
         let words = super::materials::scene_textures(scene).gpu_words();
         if !words.is_empty() {
             self.write("textures", &self.gpu_scene.textures, &words)?;
@@ -405,13 +401,19 @@ impl Renderer {
     }
 
     fn check_lights(&self, lights: &LightArrays) -> Result<(), UpdateError> {
-        let fits = |bytes: usize, buffer: &wgpu::Buffer| bytes as u64 <= buffer.size();
+        let fits = |layout: TexelLayout, count: usize, table: &wgpu::Texture| {
+            layout.rows(count) <= table.height()
+        };
         let g = &self.gpu_scene;
         if !fits(
-            std::mem::size_of_val(&lights.light_triangles[..]),
+            LIGHT_TRIANGLE_TEXELS,
+            lights.light_triangles.len(),
             &g.light_triangles,
-        ) || !fits(std::mem::size_of_val(&lights.light_cdf[..]), &g.light_cdf)
-            || lights.analytic_lights.len() as u32 != g.analytic_light_count
+        ) || !fits(
+            LIGHT_CDF_TEXELS,
+            lights.light_cdf.len().div_ceil(4),
+            &g.light_cdf,
+        ) || lights.analytic_lights.len() as u32 != g.analytic_light_count
         {
             return Err(UpdateError::rebuild(
                 "the emissive triangles or lights outgrow their buffers",
@@ -421,12 +423,20 @@ impl Renderer {
     }
 
     fn write_lights(&mut self, scene: &Scene, lights: &LightArrays) -> Result<(), UpdateError> {
-        self.write(
-            "emissive triangles",
-            &self.gpu_scene.light_triangles,
+        let queue = &self.ctx.queue;
+        let g = &self.gpu_scene;
+        write_texels(
+            queue,
+            &g.light_triangles,
+            LIGHT_TRIANGLE_TEXELS,
             &lights.light_triangles,
-        )?;
-        self.write("light CDF", &self.gpu_scene.light_cdf, &lights.light_cdf)?;
+        );
+        write_texels(
+            queue,
+            &g.light_cdf,
+            LIGHT_CDF_TEXELS,
+            &in_fours(&lights.light_cdf),
+        );
         self.write(
             "lights",
             &self.gpu_scene.analytic_lights,

@@ -12,8 +12,8 @@ use std::num::NonZeroU64;
 
 use super::KernelFeatures;
 use super::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuPlacement,
-    GpuStats, GpuTriangle,
+    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats,
+    GpuTriangle,
 };
 
 /// How the kernel sees a buffer.
@@ -98,11 +98,66 @@ pub const TRIANGLE_TEXELS: TexelLayout = TexelLayout {
     texels: 3,
     per_row: 1365,
 };
-/// An instance's placement as traversal reads it: the world-to-object rows and the root
-/// of its mesh's BVH (`GpuPlacement`), four texels.
-pub const PLACEMENT_TEXELS: TexelLayout = TexelLayout {
+/// Instances (`GpuInstance`): 112 bytes, seven texels. Traversal reads texels 3–6 of one
+/// (the world-to-object rows and the BVH root, `fetch_placement`).
+pub const INSTANCE_TEXELS: TexelLayout = TexelLayout {
+    texels: 7,
+    per_row: 585,
+};
+/// Vertex attributes: one texel each (see the `vertex_texels` binding).
+pub const VERTEX_TEXELS: TexelLayout = TexelLayout {
+    texels: 1,
+    per_row: 4096,
+};
+/// A triangle's three global vertex indices and a word of padding: one texel.
+pub const TRIANGLE_VERTEX_TEXELS: TexelLayout = TexelLayout {
+    texels: 1,
+    per_row: 4096,
+};
+
+/// Materials (`GpuMaterial`): the packed principled parameters and five texels more.
+pub const MATERIAL_TEXELS: TexelLayout = TexelLayout {
+    texels: super::principled::PACKED_VEC4S as u32 + 5,
+    per_row: 4096 / (super::principled::PACKED_VEC4S as u32 + 5),
+};
+/// Emissive triangles (`GpuLightTriangle`): four texels.
+pub const LIGHT_TRIANGLE_TEXELS: TexelLayout = TexelLayout {
     texels: 4,
     per_row: 1024,
+};
+/// The light CDF, four floats to a texel.
+pub const LIGHT_CDF_TEXELS: TexelLayout = TexelLayout {
+    texels: 1,
+    per_row: 4096,
+};
+
+/// Every texel table's shape, by the names the generated WGSL gives it:
+/// `TEXELS_PER_{singular}` and `{plural}_PER_TEXEL_ROW` (shaders/texels.wgsl).
+pub const TEXEL_LAYOUTS: [(&str, &str, TexelLayout); 8] = [
+    ("NODE", "NODES", NODE_TEXELS),
+    ("TRIANGLE", "TRIANGLES", TRIANGLE_TEXELS),
+    ("INSTANCE", "INSTANCES", INSTANCE_TEXELS),
+    ("VERTEX", "VERTICES", VERTEX_TEXELS),
+    (
+        "TRIANGLE_VERTEX",
+        "TRIANGLE_VERTICES",
+        TRIANGLE_VERTEX_TEXELS,
+    ),
+    ("MATERIAL", "MATERIALS", MATERIAL_TEXELS),
+    ("LIGHT_TRIANGLE", "LIGHT_TRIANGLES", LIGHT_TRIANGLE_TEXELS),
+    ("LIGHT_CDF", "LIGHT_CDFS", LIGHT_CDF_TEXELS),
+];
+
+// The Rust elements uploaded to each table fill its texels exactly.
+const _: () = {
+    assert!(bytes::<BvhNode>() == NODE_TEXELS.texels as u64 * 16);
+    assert!(bytes::<GpuTriangle>() == TRIANGLE_TEXELS.texels as u64 * 16);
+    assert!(bytes::<GpuInstance>() == INSTANCE_TEXELS.texels as u64 * 16);
+    assert!(bytes::<[u32; 4]>() == VERTEX_TEXELS.texels as u64 * 16);
+    assert!(bytes::<[u32; 4]>() == TRIANGLE_VERTEX_TEXELS.texels as u64 * 16);
+    assert!(bytes::<GpuMaterial>() == MATERIAL_TEXELS.texels as u64 * 16);
+    assert!(bytes::<GpuLightTriangle>() == LIGHT_TRIANGLE_TEXELS.texels as u64 * 16);
+    assert!(bytes::<[f32; 4]>() == LIGHT_CDF_TEXELS.texels as u64 * 16);
 };
 
 /// The buffer a binding holds; `GpuScene::bind_group` names one buffer for each.
@@ -114,8 +169,7 @@ pub enum Resource {
     Stats,
     /// The BVH over instances, in texels ([`NODE_TEXELS`]).
     TlasTexels,
-    /// The instances' placements in TLAS leaf order, in texels ([`PLACEMENT_TEXELS`]).
-    PlacementTexels,
+    /// The instances in TLAS leaf order, in texels ([`INSTANCE_TEXELS`]).
     Instances,
     /// Page `page` of the BLAS nodes (see [`PAGES`]).
     BlasNodes {
@@ -129,10 +183,15 @@ pub enum Resource {
     NodeTexels,
     /// All triangles in texels, instead of the pages (`triangle_pages` is 0).
     TriangleTexels,
+    /// Each triangle's vertex indices, in texels ([`TRIANGLE_VERTEX_TEXELS`]).
     TriangleVertices,
+    /// The vertex attributes, in texels ([`VERTEX_TEXELS`]).
     Vertices,
+    /// The materials, in texels ([`MATERIAL_TEXELS`]).
     Materials,
+    /// The emissive triangles, in texels ([`LIGHT_TRIANGLE_TEXELS`]).
     LightTriangles,
+    /// The light CDF, in texels ([`LIGHT_CDF_TEXELS`]).
     LightCdf,
     AnalyticLights,
     EnvironmentData,
@@ -313,14 +372,13 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         "tlas_texels",
         4,
         bytes::<BvhNode>(),
-        "The BVH over instances and the instances' placements in its leaf order, as texels:\n\
-         read them through fetch_tlas_node and fetch_placement (shaders/texels.wgsl).",
+        "The BVH over instances and the instances in its leaf order, as texels: read them\n\
+         through fetch_tlas_node, fetch_placement and fetch_instance (shaders/texels.wgsl).",
     ),
-    read_only(
+    texels(
         Resource::Instances,
-        "instances",
+        "instance_texels",
         5,
-        "array<Instance>",
         bytes::<GpuInstance>(),
         "",
     ),
@@ -331,46 +389,43 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         ..blas_page("blas_nodes_0", 6, 0)
     },
     triangle_page("triangles_0", 7, 0),
-    read_only(
+    texels(
         Resource::TriangleVertices,
-        "triangle_vertices",
+        "triangle_vertex_texels",
         8,
-        "array<u32>",
-        bytes::<u32>(),
-        "Three global vertex indices per triangle, in the same order as `triangles`.",
-    ),
-    read_only(
-        Resource::Vertices,
-        "vertices",
-        9,
-        "array<vec4<u32>>",
         bytes::<[u32; 4]>(),
-        "Per vertex: x = octahedral normal (pack2x16snorm), y, z = uv as f32 bits, w = colour\n\
-         (pack4x8unorm).",
+        "Per triangle, in the same order as the triangles: its three global vertex indices\n\
+         (fetch_triangle_vertices).",
     ),
-    read_only(
+    texels(
+        Resource::Vertices,
+        "vertex_texels",
+        9,
+        bytes::<[u32; 4]>(),
+        "Per vertex (fetch_vertex): x = octahedral normal (pack2x16snorm), y, z = uv as f32\n\
+         bits, w = colour (pack4x8unorm).",
+    ),
+    texels(
         Resource::Materials,
-        "materials",
+        "material_texels",
         10,
-        "array<Material>",
         bytes::<GpuMaterial>(),
-        "",
+        "The materials (fetch_material), the emissive triangles (fetch_light_triangle) and the\n\
+         inclusive prefix sums of their pick probabilities (light_cdf_at, last entry == 1).",
     ),
-    read_only(
+    texels(
         Resource::LightTriangles,
-        "light_triangles",
+        "light_triangle_texels",
         11,
-        "array<LightTriangle>",
         bytes::<GpuLightTriangle>(),
         "",
     ),
-    read_only(
+    texels(
         Resource::LightCdf,
-        "light_cdf",
+        "light_cdf_texels",
         12,
-        "array<f32>",
-        bytes::<f32>(),
-        "Inclusive prefix sums of the light triangles' pick probabilities (last entry == 1).",
+        bytes::<[f32; 4]>(),
+        "",
     ),
     blas_page("blas_nodes_1", 13, 1),
     blas_page("blas_nodes_2", 14, 2),
@@ -455,13 +510,6 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         doc: "The heterogeneous volumes baked into grids (src/render/volume_grid.rs), when a scene\n\
               has any: written by bake_volume_grid, read by the path tracer.",
     },
-    texels(
-        Resource::PlacementTexels,
-        "placement_texels",
-        27,
-        bytes::<GpuPlacement>(),
-        "",
-    ),
     texels(
         Resource::NodeTexels,
         "blas_nodes_texels",

@@ -1,7 +1,7 @@
 //! What a kernel is specialised for, and the WGSL generated from it: the `FEATURE_*`
 //! constants and the paged-array accessors.
 
-use super::bindings::{NODE_TEXELS, PLACEMENT_TEXELS, TRIANGLE_TEXELS};
+use super::bindings::TEXEL_LAYOUTS;
 use super::lobes;
 
 /// What a kernel is specialised for; only what a scene uses is compiled in. The shaders
@@ -168,18 +168,14 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
         format!("fn {name}(i: u32) -> {ty} {{\n{body}}}\n")
     }
     // The shapes of the texel tables (shaders/texels.wgsl).
-    let texel_layouts = [
-        ("NODE", NODE_TEXELS),
-        ("TRIANGLE", TRIANGLE_TEXELS),
-        ("PLACEMENT", PLACEMENT_TEXELS),
-    ]
-    .map(|(name, layout)| {
-        format!(
-            "const TEXELS_PER_{name}: u32 = {}u;\nconst {name}S_PER_TEXEL_ROW: u32 = {}u;\n",
-            layout.texels, layout.per_row
-        )
-    })
-    .concat();
+    let texel_layouts = TEXEL_LAYOUTS
+        .map(|(one, many, layout)| {
+            format!(
+                "const TEXELS_PER_{one}: u32 = {}u;\nconst {many}_PER_TEXEL_ROW: u32 = {}u;\n",
+                layout.texels, layout.per_row
+            )
+        })
+        .concat();
     format!(
         "// Generated for {} node page(s) and {} triangle page(s) (0: in texels).\n{texel_layouts}\n{}\n{}",
         features.node_pages,

@@ -105,27 +105,6 @@ pub struct GpuInstance {
     pub volume_grid: u32,
 }
 
-/// What traversal reads of an instance (`Placement` in the generated WGSL, from the
-/// `placement_texels` table): the world-to-object rows of [`GpuInstance`] and the root of
-/// its mesh's BVH.
-#[repr(C)]
-#[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
-pub struct GpuPlacement {
-    pub to_object: [[f32; 4]; 3],
-    pub blas_root: u32,
-    pub _pad: [u32; 3],
-}
-
-impl From<&GpuInstance> for GpuPlacement {
-    fn from(instance: &GpuInstance) -> Self {
-        Self {
-            to_object: instance.to_object,
-            blas_root: instance.blas_root,
-            _pad: [0; 3],
-        }
-    }
-}
-
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, Pod, Zeroable)]
 pub struct GpuTriangle {
