@@ -63,8 +63,10 @@ struct Params {
     // (shaders/integrator/volume_bake.wgsl); unused by the path tracer.
     bake_grid: u32,
     bake_first: u32,
-    _pad2: u32,
-    _pad3: u32,
+    // The firefly clamp: the most a sample's direct (scattered at most once) and indirect
+    // light may add, per contribution; 0 for no limit.
+    clamp_direct: f32,
+    clamp_indirect: f32,
     _pad4: u32,
     // The pixel filter's quantile function at FILTER_TABLE_SIZE evenly spaced
     // probabilities, in pixels, four to a vector (shaders/sampling.wgsl).

@@ -47,6 +47,15 @@ pub struct BenchArgs {
     /// Samples per pixel of each --depth render.
     #[arg(long, default_value_t = 256, value_name = "SPP")]
     pub depth_spp: u32,
+    /// Instead of samples/s: what the firefly clamp does to each scene at --clamp-spp, a
+    /// ladder of direct and indirect limits against a reference of --reference-spp without
+    /// one: the light it takes away (its bias) and the error left (RMSE). Use a small
+    /// --size.
+    #[arg(long)]
+    pub clamp: bool,
+    /// Samples per pixel of each --clamp render.
+    #[arg(long, default_value_t = 64, value_name = "SPP")]
+    pub clamp_spp: u32,
     /// Instead of samples/s of each kernel kind: where the specialised kernel's time goes.
     /// Each scene is timed with the kernel cut down to camera rays, to primary hits, and to
     /// a walk of closest-hit and shadow rays with no shading, then whole; the table gives
@@ -176,6 +185,10 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     if args.depth {
         let ctx = GpuContext::new(backend)?;
         return depth(&ctx, &bench_scenes(args)?, args, out);
+    }
+    if args.clamp {
+        let ctx = GpuContext::new(backend)?;
+        return clamp(&ctx, &bench_scenes(args)?, args, out);
     }
     if args.ablation {
         let ctx = GpuContext::new(backend)?;
@@ -340,6 +353,103 @@ fn convergence(
             out,
             "{name}: RMSE of sobol / independent at equal spp: {ratios}"
         )?;
+    }
+    Ok(())
+}
+
+/// The (direct, indirect) limits `kiln bench --clamp` measures; the first is off.
+const CLAMPS: [(f32, f32); 7] = [
+    (0.0, 0.0),
+    (0.0, 10.0),
+    (0.0, 3.0),
+    (0.0, 1.0),
+    (0.0, 0.3),
+    (10.0, 1.0),
+    (3.0, 0.3),
+];
+
+/// What the firefly clamp trades: each scene's renders at the limits of [`CLAMPS`] against
+/// a reference without one (two halves of different seeds, their own noise taken out of
+/// the RMSE). The bias is the image mean's change against the reference; all clamped
+/// renders share a seed, so their differences from one another are the clamp's alone.
+fn clamp(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    let half = (args.reference_spp / 2).max(1);
+    writeln!(
+        out,
+        "Adapter: {}; {}x{} px, {} spp against an unclamped reference of {} spp (two seeds), \
+         specialised kernels, each scene's bounces, NEE + MIS.",
+        ctx.describe(),
+        args.size,
+        args.size,
+        args.clamp_spp,
+        2 * half
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "| scene | clamp direct | clamp indirect | seconds | mean R | G | B against the reference | RMSE | RMSE ÷ unclamped's |"
+    )?;
+    writeln!(out, "|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    for (name, scene) in scenes {
+        let settings = |seed: u32, direct: f32, indirect: f32| RenderSettings {
+            seed,
+            clamp: crate::scene::Clamp { direct, indirect },
+            ..args.settings(scene, KernelKind::Specialized)
+        };
+        let mut halves = Vec::new();
+        for seed in [0x5eed_0001, 0x5eed_0002] {
+            let mut r = Renderer::new(Arc::clone(ctx), scene, settings(seed, 0.0, 0.0))?;
+            r.render(0..half, RenderControl::default())?;
+            halves.push(r.read_film()?.radiance());
+        }
+        let reference: Vec<Vec3> = halves[0]
+            .iter()
+            .zip(&halves[1])
+            .map(|(a, b)| (*a + *b) * 0.5)
+            .collect();
+        let reference_noise = mean_square_difference(&halves[0], &halves[1]) / 4.0;
+        let mean = |image: &[Vec3]| {
+            image.iter().map(|c| c.as_dvec3()).sum::<glam::DVec3>() / image.len() as f64
+        };
+        let reference_mean = mean(&reference);
+        let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings(1, 0.0, 0.0))?;
+        let mut unclamped_rmse = None;
+        for (direct, indirect) in CLAMPS {
+            renderer.set_clamp(crate::scene::Clamp { direct, indirect });
+            renderer.clear_film();
+            let seconds = renderer
+                .render(0..args.clamp_spp, RenderControl::default())?
+                .elapsed
+                .as_secs_f64();
+            let image = renderer.read_film()?.radiance();
+            let rmse = (mean_square_difference(&image, &reference) - reference_noise)
+                .max(0.0)
+                .sqrt();
+            let unclamped = *unclamped_rmse.get_or_insert(rmse);
+            let change = (mean(&image) - reference_mean) / reference_mean * 100.0;
+            let limit = |l: f32| {
+                if l == 0.0 {
+                    "off".to_owned()
+                } else {
+                    l.to_string()
+                }
+            };
+            writeln!(
+                out,
+                "| {name} | {} | {} | {seconds:.2} | {:+.2}% | {:+.2}% | {:+.2}% | {rmse:.5} | {:.2} |",
+                limit(direct),
+                limit(indirect),
+                change.x,
+                change.y,
+                change.z,
+                rmse / unclamped
+            )?;
+        }
     }
     Ok(())
 }

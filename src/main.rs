@@ -157,6 +157,16 @@ struct RenderArgs {
     /// Image size as WIDTHxHEIGHT (default: the scene's).
     #[arg(long, value_parser = parse_size)]
     size: Option<(u32, u32)>,
+    /// Firefly clamp of direct light: the most one sample's light that scattered at most
+    /// once may add, its colour kept; cuts noise from small bright lights at the cost of
+    /// darker highlights (default: the scene's, or 0: off).
+    #[arg(long, value_name = "RADIANCE", value_parser = parse_clamp)]
+    clamp_direct: Option<f32>,
+    /// Firefly clamp of indirect light (scattered twice or more): cuts fireflies from
+    /// caustics and glossy bounces at the cost of darker ones (default: the scene's, or 0:
+    /// off).
+    #[arg(long, value_name = "RADIANCE", value_parser = parse_clamp)]
+    clamp_indirect: Option<f32>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -208,6 +218,19 @@ fn parse_size(s: &str) -> Result<(u32, u32), String> {
         }
     };
     Ok((parse(w)?, parse(h)?))
+}
+
+fn parse_clamp(s: &str) -> Result<f32, String> {
+    let limit: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number"))?;
+    if !(limit.is_finite() && limit >= 0.0) {
+        return Err(format!(
+            "a clamp is 0 (off) or a finite radiance above 0, got {s}"
+        ));
+    }
+    Ok(limit)
 }
 
 #[derive(Clone, Debug)]
@@ -510,6 +533,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     }
     if let Some(seed) = args.seed {
         settings.seed = seed;
+    }
+    if let Some(limit) = args.clamp_direct {
+        settings.clamp.direct = limit;
+    }
+    if let Some(limit) = args.clamp_indirect {
+        settings.clamp.indirect = limit;
     }
     if let Some(sampler) = args.sampler {
         settings.sampling.sampler = sampler;

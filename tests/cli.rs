@@ -57,6 +57,12 @@ fn malformed_size_is_a_usage_error() {
 fn missing_scene_file_names_the_file() {
     let (code, err) = run(&["render", "no/such/scene.kiln", "-o", "x.png"]);
     assert_clean_error(code, &err, 1, "no/such/scene.kiln");
+    // The cause once, not once per level of the error chain.
+    let cause = std::io::Error::from(std::io::ErrorKind::NotFound).to_string();
+    let os_cause = "No such file or directory";
+    for c in [cause.as_str(), os_cause] {
+        assert!(err.matches(c).count() <= 1, "the cause is repeated: {err}");
+    }
 }
 
 #[test]

@@ -10,8 +10,8 @@ use base64::Engine;
 use glam::{Affine3A, EulerRot, Quat, Vec2, Vec3, Vec4};
 use kiln::plugin::PluginHost;
 use kiln::scene::{
-    Camera, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, load_scene,
-    save_scene,
+    Camera, Clamp, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings,
+    load_scene, save_scene,
 };
 use kiln::shader::principled::Principled;
 use kiln::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, PixelFilter, Sampler, Sampling};
@@ -134,6 +134,10 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
             },
         },
         volume_resolution: 96,
+        clamp: Clamp {
+            direct: 4.5,
+            indirect: 0.75,
+        },
         view: ViewSettings {
             exposure_ev: -1.25,
             tonemap: Tonemap::PbrNeutral,
@@ -681,6 +685,10 @@ fn scene() -> impl Strategy<Value = Scene> {
                     Just(kiln::scene::DEFAULT_VOLUME_RESOLUTION),
                     kiln::scene::VOLUME_RESOLUTIONS
                 ],
+                (
+                    prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
+                    prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
+                ),
             ),
         ),
     )
@@ -714,7 +722,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let (
                     (width, height, samples_per_pixel, max_bounces),
                     (seed, ev, tonemap, max_volume_bounces),
-                    (sampler, filter, filter_width, volume_resolution),
+                    (sampler, filter, filter_width, volume_resolution, (direct, indirect)),
                 ) = settings;
                 scene.settings = SceneSettings {
                     width,
@@ -731,6 +739,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                         },
                     },
                     volume_resolution,
+                    clamp: Clamp { direct, indirect },
                     view: ViewSettings {
                         exposure_ev: ev,
                         tonemap,

@@ -37,6 +37,19 @@ fn material_from_buffer(id: u32, sp: ShadingPoint) -> MaterialEval {
     return material_eval(principled_unpack(fetch_material(id).principled), sp.n);
 }
 
+// A contribution `c` of light that scattered `scatterings` times on its way to the
+// camera, limited by the firefly clamp (Params.clamp_*; 0: no limit): its largest channel
+// at most the limit, its colour kept. Light that scattered at most once is direct (Cycles'
+// Light Paths ▸ Clamping).
+fn clamped(c: vec3<f32>, scatterings: u32) -> vec3<f32> {
+    let limit = select(params.clamp_indirect, params.clamp_direct, scatterings <= 1u);
+    let peak = max(c.x, max(c.y, c.z));
+    if (limit > 0.0 && peak > limit) {
+        return c * (limit / peak);
+    }
+    return c;
+}
+
 // A small hash of the instance index in [0, 1), for the Object Info node.
 fn instance_random(i: u32) -> f32 {
     var x = i * 747796405u + 2891336453u;
@@ -353,7 +366,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 let scatters = volume_depth < params.max_volume_bounces;
                 if (FEATURE_HETEROGENEOUS && media.majorant[top] > 0.0) {
                     let tracked = heterogeneous_flight(media, ray.origin, ray.dir, t_segment, throughput, scatters);
-                    radiance += tracked.emitted;
+                    radiance += clamped(tracked.emitted, depth);
                     throughput = tracked.throughput;
                     if (!tracked.valid) {
                         break;
@@ -368,7 +381,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     }
                 } else {
                     if (FEATURE_VOLUME && any(media.emission[top] > vec3<f32>(0.0))) {
-                        radiance += throughput * medium_emission(m, media.emission[top], t_segment);
+                        radiance += clamped(throughput * medium_emission(m, media.emission[top], t_segment), depth);
                     }
                     if (FEATURE_VOLUME && scatters && any(m.albedo > vec3<f32>(0.0))) {
                         let flight = medium_free_flight(m, throughput, t_segment, rand(), rand());
@@ -396,7 +409,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     if (nee && !prev_delta) {
                         w = power_heuristic(prev_bsdf_pdf, light_hit.pdf);
                     }
-                    radiance += throughput * light_hit.radiance * w;
+                    radiance += clamped(throughput * light_hit.radiance * w, depth);
                     if (light_hit.t < t_scene) {
                         // The sphere light is opaque: the path ends on it.
                         break;
@@ -407,7 +420,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     if (nee && !prev_delta && params.environment.w > 0.0) {
                         w = power_heuristic(prev_bsdf_pdf, params.environment.w * environment_pdf(ray.dir));
                     }
-                    radiance += throughput * environment_radiance(ray.dir) * w;
+                    radiance += clamped(throughput * environment_radiance(ray.dir) * w, depth);
                     break;
                 }
                 s = surface_at(hit);
@@ -454,7 +467,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                         let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, distance(vertex, s.pe.p), -dot(ray.dir, s.ng));
                         w = power_heuristic(prev_bsdf_pdf, light_pdf);
                     }
-                    radiance += throughput * emission * w;
+                    radiance += clamped(throughput * emission * w, depth);
                 }
                 // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
                 // Surfaces light passes through keep their front, so inside and outside differ.
@@ -492,7 +505,8 @@ fn trace_path(primary: Ray) -> vec3<f32> {
         }
 
         if (nee) {
-            radiance += throughput * sample_direct(v, p, beyond);
+            // Light sampled here has scattered once more than the path.
+            radiance += clamped(throughput * sample_direct(v, p, beyond), depth + 1u);
         }
 
         if (event == EVENT_MEDIUM) {

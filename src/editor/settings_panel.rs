@@ -162,6 +162,25 @@ pub fn render_tab_ui(
             changed = Some(None);
         }
     });
+    section(ui, "Clamping", |ui| {
+        for (name, limit, tooltip) in [
+            (
+                "Direct Light",
+                &mut settings.clamp.direct,
+                "The most one sample's direct light (scattered at most once) may add, its \
+                 colour kept: less noise from small bright lights, darker highlights. 0: off.",
+            ),
+            (
+                "Indirect Light",
+                &mut settings.clamp.indirect,
+                "The most one sample's indirect light (scattered twice or more) may add: \
+                 fewer fireflies from caustics and glossy bounces, darker ones. 0: off.",
+            ),
+        ] {
+            let field = DragValue::new(limit).range(0.0..=1.0e6).speed(0.05);
+            changed = count_row(ui, name, field, tooltip).or(changed);
+        }
+    });
     section(ui, "Volumes", |ui| {
         let resolution =
             DragValue::new(&mut settings.volume_resolution).range(crate::scene::VOLUME_RESOLUTIONS);

@@ -28,11 +28,10 @@ pub const MATERIAL_FORMAT_VERSION: u32 = 1;
 
 #[derive(Debug, Error)]
 pub enum MaterialFileError {
-    #[error("cannot read {path}: {source}")]
-    Io {
-        path: String,
-        source: std::io::Error,
-    },
+    // The cause is in the message, not a `source`: a report of the error chain would
+    // name it twice.
+    #[error("cannot read {path}: {cause}")]
+    Io { path: String, cause: std::io::Error },
     #[error("{path}:{line}:{column}: {message}")]
     Syntax {
         path: String,
@@ -174,9 +173,9 @@ pub fn save_material(path: &Path, name: &str, graph: &Graph) -> Result<(), Mater
 }
 
 pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> {
-    let text = std::fs::read_to_string(path).map_err(|source| MaterialFileError::Io {
+    let text = std::fs::read_to_string(path).map_err(|cause| MaterialFileError::Io {
         path: path.display().to_string(),
-        source,
+        cause,
     })?;
     parse_material(&text, &path.display().to_string())
 }

@@ -136,6 +136,8 @@ pub struct RenderSettings {
     /// Grid points along the longest side of a heterogeneous volume's bounds
     /// ([`crate::scene::SceneSettings::volume_resolution`]).
     pub volume_resolution: u32,
+    /// The firefly clamp ([`crate::scene::Clamp`]); a parameter, not a kernel change.
+    pub clamp: crate::scene::Clamp,
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
     pub light_sampling: bool,
@@ -180,6 +182,7 @@ impl RenderSettings {
             samples_per_pixel: scene.settings.samples_per_pixel,
             max_bounces: scene.settings.max_bounces,
             max_volume_bounces: scene.settings.max_volume_bounces,
+            clamp: scene.settings.clamp,
             seed: scene.settings.seed,
             sampling: scene.settings.sampling,
             volume_resolution: scene.settings.volume_resolution,
@@ -347,6 +350,8 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         seed: settings.seed,
         max_bounces: settings.max_bounces,
         max_volume_bounces: settings.max_volume_bounces,
+        clamp_direct: settings.clamp.direct,
+        clamp_indirect: settings.clamp.indirect,
         sampler: settings.sampling.sampler.gpu_id(),
         filter_quantiles: settings.sampling.filter.quantiles(),
         flags: if settings.light_sampling {

@@ -76,6 +76,8 @@ pub struct Updated {
     /// How samples are drawn: the seed of the random sequence, the sampler, the pixel
     /// filter (the scene's render settings).
     pub sampling: bool,
+    /// The firefly clamp.
+    pub clamp: bool,
 }
 
 impl Updated {
@@ -87,6 +89,7 @@ impl Updated {
             || self.lights
             || self.max_bounces
             || self.sampling
+            || self.clamp
     }
 }
 
@@ -190,6 +193,10 @@ impl Renderer {
         if old.settings.max_volume_bounces != new.settings.max_volume_bounces {
             self.set_max_volume_bounces(new.settings.max_volume_bounces);
             updated.max_bounces = true;
+        }
+        if old.settings.clamp != new.settings.clamp {
+            self.set_clamp(new.settings.clamp);
+            updated.clamp = true;
         }
         if old.settings.seed != new.settings.seed {
             self.settings.seed = new.settings.seed;
@@ -326,6 +333,13 @@ impl Renderer {
         self.settings.sampling = sampling;
         self.base_params.sampler = sampling.sampler.gpu_id();
         self.base_params.filter_quantiles = sampling.filter.quantiles();
+    }
+
+    /// Changes the firefly clamp; a parameter, not a kernel change.
+    pub fn set_clamp(&mut self, clamp: crate::scene::Clamp) {
+        self.settings.clamp = clamp;
+        self.base_params.clamp_direct = clamp.direct;
+        self.base_params.clamp_indirect = clamp.indirect;
     }
 
     /// Changes the path length; a parameter, not a kernel change.

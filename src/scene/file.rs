@@ -37,10 +37,12 @@ pub const SCENE_FORMAT_VERSION: u32 = 1;
 
 #[derive(Debug, Error)]
 pub enum SceneError {
-    #[error("cannot read scene file {path}: {source}")]
+    // The cause is in the message, not a `source`: a report of the error chain would
+    // name it twice.
+    #[error("cannot read scene file {path}: {cause}")]
     Io {
         path: PathBuf,
-        source: std::io::Error,
+        cause: std::io::Error,
     },
     #[error("{path}:{line}:{column}: {message}")]
     Parse {

@@ -15,7 +15,7 @@ use super::file::{SCENE_FORMAT_VERSION, SceneError};
 use super::obj::load_obj;
 use super::schema::*;
 use super::{
-    Camera, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, shapes,
+    Camera, Clamp, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, shapes,
 };
 use crate::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 use crate::shader::view::{Tonemap, ViewSettings};
@@ -139,9 +139,9 @@ impl TransformDesc {
 
 /// Reads and validates a scene file.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|source| SceneError::Io {
+    let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Io {
         path: path.to_owned(),
-        source,
+        cause,
     })?;
     let base = path.parent().unwrap_or(Path::new("."));
     parse_scene(&text, path, base)
@@ -243,6 +243,10 @@ fn build_scene(
             },
         },
         volume_resolution: render.volume_resolution,
+        clamp: Clamp {
+            direct: render.clamp_direct,
+            indirect: render.clamp_indirect,
+        },
         view: ViewSettings {
             exposure_ev: render.exposure,
             tonemap,

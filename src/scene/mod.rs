@@ -89,8 +89,34 @@ pub struct SceneSettings {
     /// Grid points along the longest side of a heterogeneous volume's bounds: such a
     /// volume's graph is baked into a grid of this resolution (`render::volume_grid`).
     pub volume_resolution: u32,
+    /// The firefly clamp; off by default.
+    pub clamp: Clamp,
     /// Exposure and view transform (Blender's colour management).
     pub view: ViewSettings,
+}
+
+/// The firefly clamp (Cycles' Light Paths ▸ Clamping): the most one sample's direct light
+/// (scattered at most once on its way to the camera) and indirect light may add to a
+/// pixel, each contribution scaled down with its colour kept. It trades bias for noise:
+/// the highlights and caustics it cuts come out darker (`kiln bench --clamp` measures
+/// both). 0 turns a limit off, the default.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct Clamp {
+    pub direct: f32,
+    pub indirect: f32,
+}
+
+impl Clamp {
+    pub fn validate(&self) -> Result<(), String> {
+        for (name, limit) in [("direct", self.direct), ("indirect", self.indirect)] {
+            if !(limit.is_finite() && limit >= 0.0) {
+                return Err(format!(
+                    "the {name} clamp must be a finite value of 0 (off) or more, got {limit}"
+                ));
+            }
+        }
+        Ok(())
+    }
 }
 
 impl Default for SceneSettings {
@@ -104,6 +130,7 @@ impl Default for SceneSettings {
             seed: 0,
             sampling: Sampling::default(),
             volume_resolution: DEFAULT_VOLUME_RESOLUTION,
+            clamp: Clamp::default(),
             view: ViewSettings::default(),
         }
     }
@@ -117,6 +144,7 @@ impl SceneSettings {
         }
         self.sampling.filter.validate()?;
         validate_volume_resolution(self.volume_resolution)?;
+        self.clamp.validate()?;
         self.view.validate()
     }
 }

@@ -235,6 +235,8 @@ pub fn save_scene(
             filter: scene.settings.sampling.filter.kind.key().to_owned(),
             filter_width: scene.settings.sampling.filter.width,
             volume_resolution: scene.settings.volume_resolution,
+            clamp_direct: scene.settings.clamp.direct,
+            clamp_indirect: scene.settings.clamp.indirect,
             exposure: scene.settings.view.exposure_ev,
             view_transform: scene.settings.view.tonemap.key().to_owned(),
         },

@@ -160,8 +160,13 @@ pub(super) struct RenderDesc {
     /// Grid points along the longest side of a heterogeneous volume.
     #[serde(skip_serializing_if = "is_default_volume_resolution")]
     pub(super) volume_resolution: u32,
+    /// The firefly clamp's limits ([`super::Clamp`]); 0: off.
+    #[serde(skip_serializing_if = "is_zero_scalar")]
+    pub(super) clamp_direct: f32,
+    #[serde(skip_serializing_if = "is_zero_scalar")]
+    pub(super) clamp_indirect: f32,
     /// Stops (EV) before the view transform.
-    #[serde(skip_serializing_if = "is_zero_ev")]
+    #[serde(skip_serializing_if = "is_zero_scalar")]
     pub(super) exposure: f32,
     /// A [`Tonemap::key`](crate::shader::view::Tonemap::key): "agx", "none", "aces",
     /// "pbr-neutral".
@@ -193,9 +198,9 @@ fn is_zero_seed(seed: &u32) -> bool {
     *seed == 0
 }
 
-fn is_zero_ev(ev: &f32) -> bool {
+fn is_zero_scalar(value: &f32) -> bool {
     // Bit for bit, so that -0 is written and read back as itself.
-    ev.to_bits() == 0
+    value.to_bits() == 0
 }
 
 fn is_default_view_transform(key: &String) -> bool {
@@ -216,6 +221,8 @@ impl Default for RenderDesc {
             filter: s.sampling.filter.kind.key().to_owned(),
             filter_width: s.sampling.filter.width,
             volume_resolution: s.volume_resolution,
+            clamp_direct: s.clamp.direct,
+            clamp_indirect: s.clamp.indirect,
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),
         }

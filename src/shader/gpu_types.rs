@@ -84,8 +84,10 @@ pub struct GpuParams {
     /// (`bake_volume_grid`); unused by the path tracer.
     pub bake_grid: u32,
     pub bake_first: u32,
-    pub _pad2: u32,
-    pub _pad3: u32,
+    /// The firefly clamp ([`crate::scene::Clamp`]): the most a sample's direct and indirect
+    /// light may add, per contribution; 0 for no limit.
+    pub clamp_direct: f32,
+    pub clamp_indirect: f32,
     pub _pad4: u32,
     /// The pixel filter's quantile function at [`FILTER_TABLE_SIZE`] evenly spaced
     /// probabilities, in pixels ([`crate::shader::filter::PixelFilter::quantiles`]).
@@ -290,8 +292,8 @@ mod tests {
                 sampler,
                 bake_grid,
                 bake_first,
-                _pad2,
-                _pad3,
+                clamp_direct,
+                clamp_indirect,
                 _pad4,
                 filter_quantiles,
             ]

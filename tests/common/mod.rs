@@ -27,6 +27,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         seed: 1,
         sampling: kiln::shader::sampling::Sampling::default(),
         volume_resolution: kiln::scene::DEFAULT_VOLUME_RESOLUTION,
+        clamp: kiln::scene::Clamp::default(),
         light_sampling: true,
         page_bytes: None,
         kernel: KernelKind::Specialized,
