@@ -397,7 +397,12 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
     let png = dir.path().join("render.png");
     let mut dialogs = ScriptedDialogs::default();
     dialogs.export.push_back(png.clone());
-    let mut harness = harness(dialogs);
+    // Tall enough for the whole Render tab and the render's buttons below it.
+    let mut harness = start(Setup {
+        dialogs,
+        size: egui::vec2(1280.0, 1100.0),
+        ..Setup::default()
+    });
     harness.step();
 
     // The Render tab sets the document's render settings, one undo step each.
@@ -413,6 +418,11 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
         (48, 32, 3)
     );
     assert_eq!(settings.volume_resolution, 64, "Volumes > Grid Resolution");
+    // The firefly clamp, as Cycles' Light Paths > Clamping: off until set.
+    assert_eq!(settings.clamp, kiln::scene::Clamp::default());
+    set_value(&mut harness, "Indirect Light", 10.0);
+    let clamp = harness.state().document().scene().settings.clamp;
+    assert_eq!((clamp.direct, clamp.indirect), (0.0, 10.0), "Clamping");
     // The pixel filter and the sampling pattern, as Cycles' Film and Sampling panels.
     set_value(&mut harness, "Filter Width", 2.5);
     for (combo, choice) in [("Pixel Filter", "Gaussian"), ("Pattern", "Independent")] {
