@@ -67,7 +67,7 @@ struct Params {
     // light may add, per contribution; 0 for no limit.
     clamp_direct: f32,
     clamp_indirect: f32,
-    _pad4: u32,
+    noise_threshold: f32,
     // The pixel filter's quantile function at FILTER_TABLE_SIZE evenly spaced
     // probabilities, in pixels, four to a vector (shaders/sampling.wgsl).
     filter_quantiles: array<vec4<f32>, 32>,
@@ -164,4 +164,6 @@ struct AnalyticLight {
 struct Stats {
     rays: atomic<u32>,
     non_finite: atomic<u32>,
+    active_pixels: atomic<u32>,
+    skipped_samples: atomic<u32>,
 };

@@ -167,6 +167,14 @@ struct RenderArgs {
     /// off).
     #[arg(long, value_name = "RADIANCE", value_parser = parse_clamp)]
     clamp_indirect: Option<f32>,
+    /// Adaptive sampling: a pixel stops taking samples once its estimated noise is below
+    /// this (checked from 16 spp on; 0.01 is fine, 0.05 a preview), so the samples go
+    /// where noise remains; --spp and --time-limit still bound the render. The noise is
+    /// the 90 % confidence half-width of the pixel's r+g+b over the square root of its
+    /// value; an EXR output gets it as the `noise` layer (default: the scene's, or 0:
+    /// off).
+    #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = parse_noise_threshold)]
+    noise_threshold: Option<f32>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -231,6 +239,15 @@ fn parse_clamp(s: &str) -> Result<f32, String> {
         ));
     }
     Ok(limit)
+}
+
+fn parse_noise_threshold(s: &str) -> Result<f32, String> {
+    let t: f32 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("\"{s}\" is not a number"))?;
+    kiln::scene::validate_noise_threshold(t)?;
+    Ok(t)
 }
 
 #[derive(Clone, Debug)]
@@ -540,6 +557,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     if let Some(limit) = args.clamp_indirect {
         settings.clamp.indirect = limit;
     }
+    if let Some(t) = args.noise_threshold {
+        settings.noise_threshold = t;
+    }
     if let Some(sampler) = args.sampler {
         settings.sampling.sampler = sampler;
     }
@@ -562,12 +582,16 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     // What `write_output` holds whole on the host, per pixel, for a plugin and the host's
     // writer alike: radiance and display RGBA f32, the sample counts, the AOVs. Refused
     // before the kernel is built when it cannot fit; docs/BENCHMARKS.md has the peaks.
-    let output_bytes = 36 + if settings.aovs { 28 } else { 0 };
+    let noise = settings.aovs || settings.noise_threshold > 0.0;
+    let output_bytes = 36 + if settings.aovs { 28 } else { 0 } + if noise { 4 } else { 0 };
     kiln::render::memory_check(
         &ctx,
         settings.width,
         settings.height,
-        settings.aovs,
+        kiln::render::DeviceFilm {
+            aovs: settings.aovs,
+            noise,
+        },
         output_bytes,
     )?;
     let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
@@ -634,8 +658,15 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         } else {
             "-".to_owned()
         };
+        let converged = match p.active_pixels {
+            Some(active) => format!(
+                "  {:.0}% converged",
+                100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
+            ),
+            None => String::new(),
+        };
         bar.set_message(format!(
-            "pass {} (+{} spp) {:.0}%, next whole image in {next}  {:.2} Msamples/s  {:.1} Mrays/s",
+            "pass {} (+{} spp) {:.0}%, next whole image in {next}  {:.2} Msamples/s  {:.1} Mrays/s{converged}",
             p.passes_done + 1,
             p.pass_samples,
             p.pass_fraction * 100.0,
@@ -695,8 +726,15 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         ),
         _ => String::new(),
     };
+    let adaptive = match stats.active_pixels {
+        Some(active) => format!(
+            "; adaptive sampling: {:.1} % of pixels converged",
+            100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
+        ),
+        None => String::new(),
+    };
     eprintln!(
-        "wrote {}: {:.1} spp average in {:.2} s{reason}, {} whole passes, {:.2} Msamples/s, {:.1} Mrays/s{}{overrun}",
+        "wrote {}: {:.1} spp average in {:.2} s{reason}, {} whole passes, {:.2} Msamples/s, {:.1} Mrays/s{}{overrun}{adaptive}",
         args.output.display(),
         stats.pixel_samples as f64 / pixels as f64,
         secs,

@@ -604,3 +604,42 @@ fn bench_convergence_falls_at_the_monte_carlo_rate() {
         "{text}"
     );
 }
+
+#[test]
+fn noise_threshold_flag_stops_converged_pixels_and_writes_the_estimate() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("adaptive.exr");
+    let err = render(
+        &out,
+        &["--size", "24x24", "--spp", "96", "--noise-threshold", "0.3"],
+    );
+    assert!(err.contains("of pixels converged"), "{err}");
+    let e = read_exr(&out);
+    let samples = e.channel("samples.Y");
+    let noise = e.channel("noise.Y");
+    // Converged pixels stopped at a check (16, 32, …), short of the 96 asked for, with
+    // their estimate below the threshold.
+    let stopped: Vec<usize> = (0..samples.len()).filter(|&p| samples[p] < 96.0).collect();
+    assert!(stopped.len() > samples.len() / 2, "{samples:?}");
+    for &p in &stopped {
+        assert!(
+            samples[p] % 16.0 == 0.0,
+            "pixel {p}: {} samples",
+            samples[p]
+        );
+        assert!(noise[p] < 0.3, "pixel {p}: noise {}", noise[p]);
+    }
+    for bad in ["-0.1", "nan", "inf", "x"] {
+        let result = kiln()
+            .args(["render", "--noise-threshold", bad, "-q", "-o"])
+            .arg(dir.path().join("bad.png"))
+            .output()
+            .unwrap();
+        let err = stderr(&result);
+        assert!(
+            !result.status.success(),
+            "--noise-threshold {bad} was taken"
+        );
+        assert!(err.contains("--noise-threshold"), "{err}");
+    }
+}

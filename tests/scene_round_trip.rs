@@ -138,6 +138,7 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
             direct: 4.5,
             indirect: 0.75,
         },
+        noise_threshold: 0.025,
         view: ViewSettings {
             exposure_ev: -1.25,
             tonemap: Tonemap::PbrNeutral,
@@ -688,6 +689,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 (
                     prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
                     prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
+                    prop_oneof![Just(0.0f32), 0.0f32..1.0],
                 ),
             ),
         ),
@@ -722,7 +724,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let (
                     (width, height, samples_per_pixel, max_bounces),
                     (seed, ev, tonemap, max_volume_bounces),
-                    (sampler, filter, filter_width, volume_resolution, (direct, indirect)),
+                    (sampler, filter, filter_width, volume_resolution, (direct, indirect, noise)),
                 ) = settings;
                 scene.settings = SceneSettings {
                     width,
@@ -740,6 +742,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     },
                     volume_resolution,
                     clamp: Clamp { direct, indirect },
+                    noise_threshold: noise,
                     view: ViewSettings {
                         exposure_ev: ev,
                         tonemap,

@@ -631,6 +631,15 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     // one piece of it, so that how the film is split never changes a sample.
     let pixel = px.y * params.film_size.x + px.x;
     let index = pixel - params.film_piece_start;
+    var noise = vec4<f32>(0.0);
+    if (FEATURE_NOISE) {
+        noise = film_noise[index];
+        // Adaptive sampling found the pixel converged (shaders/integrator/adaptive.wgsl).
+        if (noise.w != 0.0) {
+            atomicAdd(&stats.skipped_samples, params.sample_count);
+            return;
+        }
+    }
     var sum = film_sum[index];
     var compensation = film_compensation[index];
     var non_finite = 0u;
@@ -665,6 +674,15 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             aov_a += vec4<f32>(aov_albedo, aov_depth);
             aov_n += vec4<f32>(aov_normal, 1.0);
         }
+        if (FEATURE_NOISE) {
+            // The second moment of the sample's r + g + b, for the noise estimate; Kahan
+            // too, its compensation in y.
+            let s = l.r + l.g + l.b;
+            let y2 = s * s - noise.y;
+            let t2 = noise.x + y2;
+            noise.y = (t2 * params.opaque_one - noise.x) - y2;
+            noise.x = t2;
+        }
         // Kahan summation; w counts samples.
         let y = vec4<f32>(l, 1.0) - compensation;
         let t = sum + y;
@@ -673,6 +691,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     }
     film_sum[index] = sum;
     film_compensation[index] = compensation;
+    if (FEATURE_NOISE) {
+        film_noise[index] = noise;
+    }
     if (FEATURE_AOVS) {
         film_aov[2u * index] = aov_a;
         film_aov[2u * index + 1u] = aov_n;

@@ -460,6 +460,7 @@ fn evaluate(ctx: &GpuContext, scene: &Scene, code: &str) -> Result<egui::ColorIm
         height: 1,
         samples_per_pixel: 1,
         kernel: KernelKind::General,
+        noise_threshold: 0.0,
         ..RenderSettings::from_scene(scene)
     };
     let out = run_probe(

@@ -147,6 +147,15 @@ pub fn render_tab_ui(
         let seed = DragValue::new(&mut settings.seed);
         let tooltip = "The same seed renders the same image; another gives other noise.";
         changed = count_row(ui, "Seed", seed, tooltip).or(changed);
+        let threshold = DragValue::new(&mut settings.noise_threshold)
+            .range(0.0..=1.0)
+            .speed(0.001)
+            .max_decimals(4);
+        let tooltip = "Adaptive sampling in final renders: a pixel stops taking samples once \
+                       its estimated noise is below this (checked from 16 samples on), so \
+                       the samples go where noise remains. 0.01 is clean, 0.05 a preview; \
+                       0: off. The viewport samples every pixel.";
+        changed = count_row(ui, "Noise Threshold", threshold, tooltip).or(changed);
         let tooltip = "Where each path's random numbers come from. Sobol: stratified over a \
                        pixel's samples, less noise at the same samples. Independent: white \
                        noise, for comparison.";

@@ -239,6 +239,7 @@ fn render(
             // The editor's kernel: interpreted graphs, every lobe; usually already
             // compiled for the viewport.
             kernel: KernelKind::Interpreted,
+            noise_threshold: 0.0,
             ..RenderSettings::from_scene(&scene)
         };
         let mut renderer =

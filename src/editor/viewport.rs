@@ -353,6 +353,8 @@ fn build_renderer(
         height: size[1],
         samples_per_pixel: target.sample_limit,
         kernel,
+        // The viewport samples every pixel (its kernel takes edits without a compile).
+        noise_threshold: 0.0,
         ..RenderSettings::from_scene(scene)
     };
     let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)

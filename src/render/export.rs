@@ -33,6 +33,13 @@ pub fn export_film(renderer: &Renderer, view: ViewSettings) -> Result<ExportFilm
             });
         }
     }
+    if let Some(noise) = renderer.read_noise()? {
+        film.layers.push(ExportLayer {
+            name: "noise".into(),
+            channels: 1,
+            data: noise,
+        });
+    }
     film.layers.push(ExportLayer {
         name: "samples".into(),
         channels: 1,

@@ -23,12 +23,16 @@ use crate::film::Film;
 pub const SUM_BYTES: u64 = 16;
 /// Bytes per pixel of the AOV film (two `vec4<f32>`).
 pub const AOV_BYTES: u64 = 32;
+/// Bytes per pixel of the noise estimate's film (one `vec4<f32>`).
+pub const NOISE_BYTES: u64 = 16;
 /// One band of the film's rows on the device.
 pub struct FilmPiece {
     pub rows: Range<u32>,
     pub sum: wgpu::Buffer,
     pub compensation: wgpu::Buffer,
     pub aov: Option<wgpu::Buffer>,
+    /// The noise estimate's film (`shaders/integrator/adaptive.wgsl`).
+    pub noise: Option<wgpu::Buffer>,
     /// The scene's buffers with this piece's film.
     pub bind_group: wgpu::BindGroup,
 }
@@ -67,11 +71,11 @@ pub fn memory_check(
     ctx: &GpuContext,
     width: u32,
     height: u32,
-    aovs: bool,
+    film: DeviceFilm,
     host_pixel_bytes: u64,
 ) -> Result<(), RenderError> {
     let device = if ctx.info.device_type == wgpu::DeviceType::Cpu {
-        2 * SUM_BYTES + if aovs { AOV_BYTES } else { 0 }
+        film.pixel_bytes()
     } else {
         0
     };
@@ -114,6 +118,22 @@ fn available_memory() -> Option<u64> {
     Some(kib * 1024)
 }
 
+/// The optional layers of the film on the device.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct DeviceFilm {
+    pub aovs: bool,
+    pub noise: bool,
+}
+
+impl DeviceFilm {
+    /// Bytes per pixel of the film on the device.
+    pub fn pixel_bytes(self) -> u64 {
+        2 * SUM_BYTES
+            + if self.aovs { AOV_BYTES } else { 0 }
+            + if self.noise { NOISE_BYTES } else { 0 }
+    }
+}
+
 /// The per-render buffers every piece binds beside its own.
 pub struct SharedBuffers<'a> {
     pub params: &'a wgpu::Buffer,
@@ -128,7 +148,7 @@ pub fn allocate_pieces(
     layout: &wgpu::BindGroupLayout,
     rows: &[Range<u32>],
     width: u32,
-    aovs: bool,
+    film: DeviceFilm,
     shared: SharedBuffers,
 ) -> Result<Vec<FilmPiece>, RenderError> {
     let device = &ctx.device;
@@ -149,7 +169,10 @@ pub fn allocate_pieces(
             let pixels = width as u64 * r.len() as u64;
             let sum = storage("film sum", pixels * SUM_BYTES);
             let compensation = storage("film compensation", pixels * SUM_BYTES);
-            let aov = aovs.then(|| storage("film AOVs", pixels * AOV_BYTES));
+            let aov = film.aovs.then(|| storage("film AOVs", pixels * AOV_BYTES));
+            let noise = film
+                .noise
+                .then(|| storage("film noise", pixels * NOISE_BYTES));
             let bind_group = scene.bind_group(
                 device,
                 layout,
@@ -159,6 +182,7 @@ pub fn allocate_pieces(
                     film_compensation: &compensation,
                     stats: shared.stats,
                     film_aov: aov.as_ref(),
+                    film_noise: noise.as_ref(),
                 },
             );
             FilmPiece {
@@ -166,6 +190,7 @@ pub fn allocate_pieces(
                 sum,
                 compensation,
                 aov,
+                noise,
                 bind_group,
             }
         })
@@ -175,7 +200,7 @@ pub fn allocate_pieces(
         return Err(RenderError::FilmOutOfMemory {
             width,
             height,
-            bytes: width as u64 * height as u64 * (2 * SUM_BYTES + aovs as u64 * AOV_BYTES),
+            bytes: width as u64 * height as u64 * film.pixel_bytes(),
             message: e.to_string(),
         });
     }
@@ -260,6 +285,26 @@ pub fn read_aov_rows(
         }
     }
     Ok(Some(aovs))
+}
+
+/// Rows `rows` of the noise estimate (see `shaders/integrator/adaptive.wgsl`), one value
+/// per pixel; None without it.
+pub fn read_noise_rows(
+    ctx: &GpuContext,
+    pieces: &[FilmPiece],
+    width: u32,
+    rows: Range<u32>,
+) -> Result<Option<Vec<f32>>, RenderError> {
+    let mut noise = Vec::with_capacity(width as usize * rows.len());
+    for (piece, r) in overlapping(pieces, rows) {
+        let Some(buffer) = &piece.noise else {
+            return Ok(None);
+        };
+        let raw = read_piece_rows(ctx, piece, buffer, width, &r, NOISE_BYTES)?;
+        let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
+        noise.extend(raw.iter().map(|m| m[2]));
+    }
+    Ok(Some(noise))
 }
 
 #[cfg(test)]

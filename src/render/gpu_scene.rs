@@ -706,6 +706,8 @@ pub struct FrameBuffers<'a> {
     pub stats: &'a wgpu::Buffer,
     /// The AOV film, when AOVs are rendered.
     pub film_aov: Option<&'a wgpu::Buffer>,
+    /// The noise estimate's film, when the noise is estimated.
+    pub film_noise: Option<&'a wgpu::Buffer>,
 }
 
 impl GpuScene {
@@ -720,6 +722,7 @@ impl GpuScene {
             emissive_triangles: self.light_count > 0,
             textures: self.texture_count > 0,
             aovs: false,
+            noise: false,
             uv1: self.has_uv1,
             ablation: Ablation::Full,
         }
@@ -733,6 +736,7 @@ impl GpuScene {
     ) -> wgpu::BindGroup {
         let features = KernelFeatures {
             aovs: frame.film_aov.is_some(),
+            noise: frame.film_noise.is_some(),
             ..self.features()
         };
         // Every binding the layout for these features has (`bindings::bound`), and only
@@ -773,6 +777,7 @@ impl GpuScene {
                     Resource::VolumeGrid => &self.volume_grid,
                     // Bound only when `features.aovs`, which is `film_aov.is_some()`.
                     Resource::FilmAov => frame.film_aov.expect("AOVs are bound with a film"),
+                    Resource::FilmNoise => frame.film_noise.expect("noise is bound with a film"),
                     Resource::TlasTexels
                     | Resource::Instances
                     | Resource::TriangleVertices

@@ -10,7 +10,7 @@ use thiserror::Error;
 use super::context::GpuContext;
 use crate::shader::bindings::bindings_wgsl;
 use crate::shader::features::{features_wgsl, paging_wgsl};
-use crate::shader::{KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
+use crate::shader::{ADAPTIVE, KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
 
 #[derive(Debug, Error)]
 pub enum KernelError {
@@ -210,6 +210,9 @@ pub fn path_tracing_kernel(
     if features.lobes & lobes::HETEROGENEOUS != 0 {
         source.push(VOLUME_BAKE.path, VOLUME_BAKE.source);
     }
+    if features.noise {
+        source.push(ADAPTIVE.path, ADAPTIVE.source);
+    }
     source
 }
 
@@ -241,6 +244,7 @@ mod tests {
             textures: false,
             aovs: false,
             uv1: false,
+            noise: false,
             ablation: Ablation::Full,
         };
         let mixed = KernelFeatures {

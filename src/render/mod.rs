@@ -24,10 +24,10 @@ pub mod volume_grid;
 
 pub use context::{Backend, GpuContext, GpuError};
 pub use export::export_film;
-pub use film_pieces::memory_check;
+pub use film_pieces::{DeviceFilm, memory_check};
 pub use readback::map_and_read;
 pub use renderer::{
     Aovs, BuildInfo, KernelKind, Pacing, Progress, RenderControl, RenderError, RenderSettings,
-    RenderStats, Renderer,
+    RenderStats, Renderer, is_adaptive_check, next_adaptive_check,
 };
 pub use update::{UpdateError, Updated};

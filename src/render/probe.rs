@@ -119,6 +119,7 @@ pub fn run_probe(
             film_compensation: &compensation,
             stats: &stats,
             film_aov: None,
+            film_noise: None,
         },
     );
     let padded_input = if input.is_empty() {

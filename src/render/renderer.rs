@@ -25,8 +25,8 @@ use thiserror::Error;
 
 use super::context::{GpuContext, GpuError};
 use super::film_pieces::{
-    AOV_BYTES, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check, piece_rows,
-    read_aov_rows, read_film_rows,
+    AOV_BYTES, DeviceFilm, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check,
+    piece_rows, read_aov_rows, read_film_rows, read_noise_rows,
 };
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
@@ -48,6 +48,28 @@ const TARGET_DISPATCH: Duration = Duration::from_millis(60);
 /// pixel of long paths (tests/determinism.rs checks every pixel's count); 64 is safe and
 /// already amortises the per-dispatch overhead.
 const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
+/// Adaptive sampling checks the film first after this many samples per pixel: fewer
+/// make the variance estimate too noisy to stop on.
+pub const ADAPTIVE_MIN_SAMPLES: u32 = 16;
+
+/// Whether adaptive sampling checks the film once a pixel has `samples` samples: after
+/// [`ADAPTIVE_MIN_SAMPLES`], then every 16 samples up to 256, then in steps of about an
+/// eighth of the count (multiples of 16), so that a check's cost stays small next to the
+/// samples between checks. A function of the count alone, so the same render stops the
+/// same pixels however it is timed.
+pub fn is_adaptive_check(samples: u32) -> bool {
+    next_adaptive_check(samples.saturating_sub(1)) == samples
+}
+
+/// The first sample count after `samples` at which adaptive sampling checks the film.
+pub fn next_adaptive_check(samples: u32) -> u32 {
+    let mut check = ADAPTIVE_MIN_SAMPLES;
+    while check <= samples {
+        check = check.saturating_add((check / 8 / 16 * 16).max(16));
+    }
+    check
+}
+
 /// `bake_volume_grid`'s workgroup size, and the grid points one bake dispatch evaluates:
 /// short dispatches, as the render's.
 const BAKE_WORKGROUP_SIZE: u32 = 64;
@@ -138,6 +160,10 @@ pub struct RenderSettings {
     pub volume_resolution: u32,
     /// The firefly clamp ([`crate::scene::Clamp`]); a parameter, not a kernel change.
     pub clamp: crate::scene::Clamp,
+    /// Adaptive sampling: a pixel whose estimated noise (`shaders/integrator/adaptive.wgsl`)
+    /// falls below this takes no more samples; 0 for off. The samples per pixel and the
+    /// time limit still bound the render.
+    pub noise_threshold: f32,
     /// Next-event estimation with multiple importance sampling; off means BSDF sampling
     /// alone (useful as a reference: both must converge to the same image).
     pub light_sampling: bool,
@@ -147,7 +173,8 @@ pub struct RenderSettings {
     /// What the kernel is specialised to: final renders compile only what the scene uses,
     /// the editor a kernel that takes edits without a compile.
     pub kernel: KernelKind,
-    /// Also render the albedo, normal and depth AOVs ([`Renderer::read_aovs`]).
+    /// Also render the albedo, normal and depth AOVs ([`Renderer::read_aovs`]), and
+    /// estimate the noise ([`Renderer::read_noise`]).
     pub aovs: bool,
     /// Largest film buffer in bytes; default: the largest binding the adapter allows. A
     /// film beyond it is split into pieces of whole rows; tests lower it to split small
@@ -183,6 +210,7 @@ impl RenderSettings {
             max_bounces: scene.settings.max_bounces,
             max_volume_bounces: scene.settings.max_volume_bounces,
             clamp: scene.settings.clamp,
+            noise_threshold: scene.settings.noise_threshold,
             seed: scene.settings.seed,
             sampling: scene.settings.sampling,
             volume_resolution: scene.settings.volume_resolution,
@@ -222,6 +250,8 @@ pub struct Progress {
     pub pass_fraction: f64,
     /// Time since the pass under way began.
     pub pass_elapsed: Duration,
+    /// Pixels adaptive sampling has not found converged (see [`RenderStats`]).
+    pub active_pixels: Option<u64>,
 }
 
 /// How a caller steers a render: stop it, bound it in time, watch it.
@@ -236,6 +266,15 @@ pub struct RenderControl<'a> {
     pub cancel_first_pass: bool,
 }
 
+impl RenderStats {
+    /// Adds what a dispatch (or a pass's dispatches) reported.
+    fn add(&mut self, s: &GpuStats) {
+        self.rays += s.rays as u64;
+        self.non_finite += s.non_finite as u64;
+        self.pixel_samples -= self.pixel_samples.min(s.skipped_samples as u64);
+    }
+}
+
 #[derive(Clone, Copy, Debug, Default)]
 pub struct RenderStats {
     pub pixel_samples: u64,
@@ -248,6 +287,9 @@ pub struct RenderStats {
     pub completed: bool,
     /// Whole passes over the image finished.
     pub passes: u32,
+    /// Pixels adaptive sampling has not found converged, after its last check in this
+    /// call; None without adaptive sampling or before its first check.
+    pub active_pixels: Option<u64>,
     /// How long the film's first whole pass took, when this call rendered it: a cancel or
     /// deadline waits for it, so it can run past a time limit.
     pub first_pass: Option<Duration>,
@@ -279,6 +321,10 @@ pub struct Renderer {
     pipeline: wgpu::ComputePipeline,
     /// `bake_volume_grid`, for a scene with heterogeneous volumes.
     bake_pipeline: Option<wgpu::ComputePipeline>,
+    /// `adaptive_error` and `adaptive_converge`, when the noise is estimated.
+    noise_pipelines: Option<[wgpu::ComputePipeline; 2]>,
+    /// Whether adaptive sampling found every pixel converged.
+    all_converged: bool,
     params_buffer: wgpu::Buffer,
     /// The scene's buffers, which edits write into (`update.rs`).
     pub(super) gpu_scene: GpuScene,
@@ -315,6 +361,7 @@ pub(super) fn kernel_features(
 ) -> KernelFeatures {
     let features = KernelFeatures {
         aovs: settings.aovs,
+        noise: settings.aovs || settings.noise_threshold > 0.0,
         ablation: settings.ablation,
         ..scene_features
     };
@@ -352,6 +399,7 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         max_volume_bounces: settings.max_volume_bounces,
         clamp_direct: settings.clamp.direct,
         clamp_indirect: settings.clamp.indirect,
+        noise_threshold: settings.noise_threshold,
         sampler: settings.sampling.sampler.gpu_id(),
         filter_quantiles: settings.sampling.filter.quantiles(),
         flags: if settings.light_sampling {
@@ -441,9 +489,22 @@ impl Renderer {
         } else {
             Some(kernel.create_pipeline(&ctx, &[&layout], "bake_volume_grid")?)
         };
+        let noise_pipelines = if features.noise {
+            Some([
+                kernel.create_pipeline(&ctx, &[&layout], "adaptive_error")?,
+                kernel.create_pipeline(&ctx, &[&layout], "adaptive_converge")?,
+            ])
+        } else {
+            None
+        };
+        crate::scene::validate_noise_threshold(settings.noise_threshold)
+            .map_err(RenderError::Scene)?;
+        let film = DeviceFilm {
+            aovs: settings.aovs,
+            noise: features.noise,
+        };
 
         let (width, height) = (settings.width, settings.height);
-        let film_bytes = width as u64 * height as u64 * SUM_BYTES;
         let limits = ctx.limits();
         let binding_limit = limits
             .max_storage_buffer_binding_size
@@ -454,7 +515,7 @@ impl Renderer {
         let widest = if settings.aovs { AOV_BYTES } else { SUM_BYTES };
         let rows = piece_rows(width, height, widest, piece_limit)?;
         // The device film alone; callers check it with what they hold (`memory_check`).
-        memory_check(&ctx, width, height, settings.aovs, 0)?;
+        memory_check(&ctx, width, height, film, 0)?;
         let stats_size = std::mem::size_of::<GpuStats>() as u64;
         let stats_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("stats"),
@@ -482,7 +543,7 @@ impl Renderer {
             &layout,
             &rows,
             width,
-            settings.aovs,
+            film,
             SharedBuffers {
                 params: &params_buffer,
                 stats: &stats_buffer,
@@ -498,7 +559,7 @@ impl Renderer {
                 emissive_triangles: gpu_scene.light_count,
                 accel_build: accel.build_time,
                 upload,
-                upload_bytes: gpu_scene.bytes + 2 * film_bytes,
+                upload_bytes: gpu_scene.bytes + width as u64 * height as u64 * film.pixel_bytes(),
                 kernel_build: Duration::ZERO,
                 kernel_compiled,
                 volume_bake: Duration::ZERO,
@@ -507,6 +568,8 @@ impl Renderer {
             ctx,
             pipeline,
             bake_pipeline,
+            noise_pipelines,
+            all_converged: false,
             params_buffer,
             gpu_scene,
             blas: accel.blas,
@@ -598,12 +661,13 @@ impl Renderer {
         for piece in &self.pieces {
             encoder.clear_buffer(&piece.sum, 0, None);
             encoder.clear_buffer(&piece.compensation, 0, None);
-            if let Some(aov) = &piece.aov {
-                encoder.clear_buffer(aov, 0, None);
+            for buffer in [&piece.aov, &piece.noise].into_iter().flatten() {
+                encoder.clear_buffer(buffer, 0, None);
             }
         }
         self.ctx.queue.submit([encoder.finish()]);
         self.film_has_whole_pass = false;
+        self.all_converged = false;
     }
 
     /// How passes are cut into dispatches from now on (see [`Pacing`]); the film is the
@@ -748,8 +812,12 @@ impl Renderer {
             ..RenderStats::default()
         };
         let total = pixels * samples.len() as u64;
+        let adaptive = self.settings.noise_threshold > 0.0 && self.noise_pipelines.is_some();
         let mut next = samples.start;
         'passes: while next < samples.end {
+            if adaptive && self.all_converged {
+                break;
+            }
             // The first pass, which nothing but an error stops, is as short as it can be:
             // one sample per pixel, whatever batch an earlier render settled on.
             let batch = if self.film_has_whole_pass {
@@ -757,7 +825,12 @@ impl Renderer {
             } else {
                 1
             };
-            let count = batch.min(samples.end - next);
+            let mut count = batch.min(samples.end - next);
+            if adaptive {
+                // Passes end at the checks, so that they fall on the same counts however
+                // the passes are batched.
+                count = count.min(next_adaptive_check(next) - next);
+            }
             let pass_start = Instant::now();
             let mut pass_pixels = 0u64;
             let mut slowest = Duration::ZERO;
@@ -780,17 +853,15 @@ impl Renderer {
                 let tile_pixels = size[0] as u64 * size[1] as u64;
                 pass_pixels += tile_pixels;
                 stats.dispatches += 1;
-                if let Some(s) = s {
-                    stats.rays += s.rays as u64;
-                    stats.non_finite += s.non_finite as u64;
-                }
                 stats.pixel_samples += tile_pixels * count as u64;
+                if let Some(s) = s {
+                    stats.add(&s);
+                }
                 let pass_done = pass_pixels == pixels;
                 if pass_done && !read_each {
                     // One read-back a pass, not one per dispatch.
                     let s = self.take_stats()?;
-                    stats.rays += s.rays as u64;
-                    stats.non_finite += s.non_finite as u64;
+                    stats.add(&s);
                 }
                 if pass_done {
                     if !self.film_has_whole_pass {
@@ -819,10 +890,16 @@ impl Renderer {
                         } else {
                             pass_start.elapsed()
                         },
+                        active_pixels: stats.active_pixels,
                     });
                 }
             }
             next += count;
+            if adaptive && is_adaptive_check(next) {
+                let active = self.adaptive_check(true)?;
+                stats.active_pixels = Some(active as u64);
+                self.all_converged = active == 0;
+            }
             // Batching and tiling change only how work is cut, never the result.
             if let Pacing::Interactive { budget_us } = self.pacing {
                 let mean = pass_dispatch_time / tiles.len().max(1) as u32;
@@ -837,6 +914,65 @@ impl Renderer {
         }
         stats.elapsed = start.elapsed();
         Ok(stats)
+    }
+
+    /// Runs adaptive sampling's check over the whole film: estimates every pixel's noise,
+    /// then with `converge` marks converged the pixels below the threshold and returns how
+    /// many are not.
+    fn adaptive_check(&self, converge: bool) -> Result<u32, RenderError> {
+        let Some(pipelines) = &self.noise_pipelines else {
+            return Ok(0);
+        };
+        let passes = if converge {
+            &pipelines[..]
+        } else {
+            &pipelines[..1]
+        };
+        self.zero_stats();
+        let width = self.settings.width;
+        for piece in &self.pieces {
+            let params = GpuParams {
+                tile_origin: [0, piece.rows.start],
+                tile_size: [width, piece.rows.len() as u32],
+                film_piece_start: piece.rows.start * width,
+                ..self.base_params
+            };
+            self.ctx
+                .queue
+                .write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
+            let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
+            // One compute pass each: the second reads what the first wrote.
+            for pipeline in passes {
+                let mut pass = encoder.begin_compute_pass(&Default::default());
+                pass.set_pipeline(pipeline);
+                pass.set_bind_group(crate::shader::bindings::SCENE_GROUP, &piece.bind_group, &[]);
+                pass.dispatch_workgroups(
+                    width.div_ceil(WORKGROUP_SIZE),
+                    (piece.rows.len() as u32).div_ceil(WORKGROUP_SIZE),
+                    1,
+                );
+            }
+            self.submit_and_wait(encoder, "adaptive sampling's check")?;
+        }
+        Ok(self.take_stats()?.active_pixels)
+    }
+
+    /// Each pixel's noise estimate, from the top-left (see
+    /// `shaders/integrator/adaptive.wgsl`): the half-width of the 90 % confidence interval
+    /// of its mean's r + g + b over the square root of that mean; 3·10³⁸ where a pixel has
+    /// fewer than two samples. None unless the renderer estimates the noise (AOVs or
+    /// adaptive sampling).
+    pub fn read_noise(&self) -> Result<Option<Vec<f32>>, RenderError> {
+        if self.noise_pipelines.is_none() {
+            return Ok(None);
+        }
+        self.adaptive_check(false)?;
+        read_noise_rows(
+            &self.ctx,
+            &self.pieces,
+            self.settings.width,
+            0..self.settings.height,
+        )
     }
 
     /// The AOVs averaged over the samples taken, per pixel from the top-left: albedo

@@ -247,6 +247,7 @@ fn build_scene(
             direct: render.clamp_direct,
             indirect: render.clamp_indirect,
         },
+        noise_threshold: render.noise_threshold,
         view: ViewSettings {
             exposure_ev: render.exposure,
             tonemap,

@@ -91,6 +91,11 @@ pub struct SceneSettings {
     pub volume_resolution: u32,
     /// The firefly clamp; off by default.
     pub clamp: Clamp,
+    /// Adaptive sampling's noise threshold (Cycles' Sampling ▸ Noise Threshold): a pixel
+    /// whose estimated noise falls below it takes no more samples
+    /// (`shaders/integrator/adaptive.wgsl` defines the estimate); 0, the default, is off.
+    /// Final renders only: the editor's viewport samples every pixel.
+    pub noise_threshold: f32,
     /// Exposure and view transform (Blender's colour management).
     pub view: ViewSettings,
 }
@@ -131,6 +136,7 @@ impl Default for SceneSettings {
             sampling: Sampling::default(),
             volume_resolution: DEFAULT_VOLUME_RESOLUTION,
             clamp: Clamp::default(),
+            noise_threshold: 0.0,
             view: ViewSettings::default(),
         }
     }
@@ -145,8 +151,19 @@ impl SceneSettings {
         self.sampling.filter.validate()?;
         validate_volume_resolution(self.volume_resolution)?;
         self.clamp.validate()?;
+        validate_noise_threshold(self.noise_threshold)?;
         self.view.validate()
     }
+}
+
+/// A noise threshold: 0 (off) or a finite number above 0.
+pub fn validate_noise_threshold(threshold: f32) -> Result<(), String> {
+    if !(threshold.is_finite() && threshold >= 0.0) {
+        return Err(format!(
+            "the noise threshold must be 0 (off) or a finite number above 0, such as 0.01; got {threshold}"
+        ));
+    }
+    Ok(())
 }
 
 /// A heterogeneous volume's grid resolution within [`VOLUME_RESOLUTIONS`].

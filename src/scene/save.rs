@@ -237,6 +237,7 @@ pub fn save_scene(
             volume_resolution: scene.settings.volume_resolution,
             clamp_direct: scene.settings.clamp.direct,
             clamp_indirect: scene.settings.clamp.indirect,
+            noise_threshold: scene.settings.noise_threshold,
             exposure: scene.settings.view.exposure_ev,
             view_transform: scene.settings.view.tonemap.key().to_owned(),
         },

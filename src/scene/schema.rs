@@ -165,6 +165,10 @@ pub(super) struct RenderDesc {
     pub(super) clamp_direct: f32,
     #[serde(skip_serializing_if = "is_zero_scalar")]
     pub(super) clamp_indirect: f32,
+    /// Adaptive sampling's noise threshold ([`super::SceneSettings::noise_threshold`]);
+    /// 0: off.
+    #[serde(skip_serializing_if = "is_zero_scalar")]
+    pub(super) noise_threshold: f32,
     /// Stops (EV) before the view transform.
     #[serde(skip_serializing_if = "is_zero_scalar")]
     pub(super) exposure: f32,
@@ -223,6 +227,7 @@ impl Default for RenderDesc {
             volume_resolution: s.volume_resolution,
             clamp_direct: s.clamp.direct,
             clamp_indirect: s.clamp.indirect,
+            noise_threshold: s.noise_threshold,
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),
         }

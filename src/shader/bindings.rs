@@ -198,6 +198,7 @@ pub enum Resource {
     DielectricEnergyTable,
     Textures,
     FilmAov,
+    FilmNoise,
     Uv1,
     MaterialParams,
     VolumeGrid,
@@ -234,6 +235,7 @@ impl Binding {
             Resource::Textures => features.textures,
             Resource::FilmAov => features.aovs,
             Resource::Uv1 => features.uv1,
+            Resource::FilmNoise => features.noise,
             Resource::VolumeGrid => features.lobes & super::lobes::HETEROGENEOUS != 0,
             _ => true,
         }
@@ -509,6 +511,18 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         stand_in: Some("array<u32, 1>"),
         doc: "The heterogeneous volumes baked into grids (src/render/volume_grid.rs), when a scene\n\
               has any: written by bake_volume_grid, read by the path tracer.",
+    },
+    Binding {
+        resource: Resource::FilmNoise,
+        name: "film_noise",
+        binding: 27,
+        space: Space::ReadWrite,
+        wgsl_type: "array<vec4<f32>>",
+        element_bytes: bytes::<[f32; 4]>(),
+        stand_in: Some("array<vec4<f32>, 1>"),
+        doc: "Per pixel: the Kahan sum of the squared samples (r + g + b)² and its compensation,\n\
+              the noise estimate at the last check, and 1 once adaptive sampling found the pixel\n\
+              converged (shaders/integrator/adaptive.wgsl); when the noise is estimated.",
     },
     texels(
         Resource::NodeTexels,

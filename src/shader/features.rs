@@ -24,6 +24,9 @@ pub struct KernelFeatures {
     pub aovs: bool,
     /// A second UV set: binds `uv1_data`.
     pub uv1: bool,
+    /// The per-pixel noise estimate (a second moment per pixel) and adaptive sampling's
+    /// converged flags: binds `film_noise`.
+    pub noise: bool,
     /// The part of the path tracer's work the kernel does (`kiln bench --ablation`).
     pub ablation: Ablation,
 }
@@ -80,6 +83,7 @@ impl Default for KernelFeatures {
             textures: true,
             aovs: true,
             uv1: true,
+            noise: true,
             ablation: Ablation::Full,
         }
     }
@@ -118,7 +122,11 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }
-    for (name, on) in [("AOVS", features.aovs), ("UV1", features.uv1)] {
+    for (name, on) in [
+        ("AOVS", features.aovs),
+        ("UV1", features.uv1),
+        ("NOISE", features.noise),
+    ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }
     for ablation in Ablation::ALL {

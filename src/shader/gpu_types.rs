@@ -88,7 +88,9 @@ pub struct GpuParams {
     /// light may add, per contribution; 0 for no limit.
     pub clamp_direct: f32,
     pub clamp_indirect: f32,
-    pub _pad4: u32,
+    /// Adaptive sampling's noise threshold (`adaptive_converge`): a pixel whose estimated
+    /// error is below it takes no more samples; 0 for none.
+    pub noise_threshold: f32,
     /// The pixel filter's quantile function at [`FILTER_TABLE_SIZE`] evenly spaced
     /// probabilities, in pixels ([`crate::shader::filter::PixelFilter::quantiles`]).
     pub filter_quantiles: [[f32; 4]; FILTER_TABLE_SIZE as usize / 4],
@@ -164,6 +166,10 @@ pub struct GpuAnalyticLight {
 pub struct GpuStats {
     pub rays: u32,
     pub non_finite: u32,
+    /// Pixels adaptive sampling has not found converged (`adaptive_converge` counts them).
+    pub active_pixels: u32,
+    /// Pixel samples the render kernel skipped because their pixel had converged.
+    pub skipped_samples: u32,
 }
 
 /// One node as `BvhNode` in `shaders/scene.wgsl`: inner nodes (`count == 0`) have their
@@ -294,7 +300,7 @@ mod tests {
                 bake_first,
                 clamp_direct,
                 clamp_indirect,
-                _pad4,
+                noise_threshold,
                 filter_quantiles,
             ]
         );
@@ -334,7 +340,12 @@ mod tests {
             "AnalyticLight",
             [position, kind, axis, intensity, shape]
         );
-        assert_same_layout!(&module, GpuStats, "Stats", [rays, non_finite]);
+        assert_same_layout!(
+            &module,
+            GpuStats,
+            "Stats",
+            [rays, non_finite, active_pixels, skipped_samples]
+        );
     }
 
     #[test]

@@ -71,6 +71,10 @@ pub const PATH_INTEGRATOR: &[ShaderFile] = &[
 /// (`src/render/volume_grid.rs`): after the integrator, in kernels for scenes with one.
 pub const VOLUME_BAKE: ShaderFile = shader_file!("integrator/volume_bake.wgsl");
 
+/// Adaptive sampling's entry points, compiled into the path tracer's module when it
+/// estimates the noise ([`KernelFeatures::noise`]).
+pub const ADAPTIVE: ShaderFile = shader_file!("integrator/adaptive.wgsl");
+
 /// The principled surface's lobes, one bit each, as [`KernelFeatures::lobes`] counts them.
 pub mod lobes {
     pub const COAT: u32 = 1;

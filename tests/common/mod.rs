@@ -28,6 +28,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         sampling: kiln::shader::sampling::Sampling::default(),
         volume_resolution: kiln::scene::DEFAULT_VOLUME_RESOLUTION,
         clamp: kiln::scene::Clamp::default(),
+        noise_threshold: 0.0,
         light_sampling: true,
         page_bytes: None,
         kernel: KernelKind::Specialized,
