@@ -18,7 +18,7 @@ use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
 use kiln::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer, context};
-use kiln::scene::{self, Scene};
+use kiln::scene::{self, Denoiser, Scene};
 use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler};
 
 #[derive(Parser)]
@@ -175,6 +175,11 @@ struct RenderArgs {
     /// off).
     #[arg(long, value_name = "T", allow_hyphen_values = true, value_parser = parse_noise_threshold)]
     noise_threshold: Option<f32>,
+    /// Denoise the image before writing it: atrous is an edge-avoiding filter guided by
+    /// the albedo, normal and depth and by each pixel's noise; an EXR keeps the image as
+    /// rendered as its `noisy` layer (default: the scene's, or none).
+    #[arg(long, value_parser = key_parser(&Denoiser::ALL, Denoiser::key))]
+    denoise: Option<Denoiser>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -572,10 +577,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     settings.light_sampling = !args.no_light_sampling;
     // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,
     // which is the plugin's code).
-    settings.aovs = args
-        .output
-        .extension()
-        .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    let denoiser = args.denoise.unwrap_or(scene.settings.denoiser);
+    settings.aovs = denoiser != Denoiser::None
+        || args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
 
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
@@ -583,7 +590,12 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     // writer alike: radiance and display RGBA f32, the sample counts, the AOVs. Refused
     // before the kernel is built when it cannot fit; docs/BENCHMARKS.md has the peaks.
     let noise = settings.aovs || settings.noise_threshold > 0.0;
-    let output_bytes = 36 + if settings.aovs { 28 } else { 0 } + if noise { 4 } else { 0 };
+    // Denoising holds the whole film (32 bytes a pixel), its guides and the filtered image
+    // (72), and the noisy image as a layer (12).
+    let output_bytes = 36
+        + if settings.aovs { 40 } else { 0 }
+        + if noise { 4 } else { 0 }
+        + if denoiser != Denoiser::None { 116 } else { 0 };
     kiln::render::memory_check(
         &ctx,
         settings.width,
@@ -696,7 +708,14 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         // Whole passes rendered before an error still make an image with a sample in
         // every pixel: write it, then report the error.
         Err(e) if renderer.has_whole_pass() => {
-            let written = write_output(renderer, &args.output, plugins, view, &args.export_options);
+            let written = write_output(
+                renderer,
+                &args.output,
+                plugins,
+                view,
+                denoiser,
+                &args.export_options,
+            );
             return Err(match written {
                 Ok(()) => anyhow::anyhow!(
                     "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
@@ -709,7 +728,14 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         }
         Err(e) => return Err(e.into()),
     };
-    write_output(renderer, &args.output, plugins, view, &args.export_options)?;
+    write_output(
+        renderer,
+        &args.output,
+        plugins,
+        view,
+        denoiser,
+        &args.export_options,
+    )?;
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     let reason = if stats.completed {
         ""
@@ -812,9 +838,19 @@ fn write_output(
     output: &Path,
     plugins: &PluginHost,
     view: ViewSettings,
+    denoiser: Denoiser,
     export_options: &str,
 ) -> Result<()> {
-    let film = kiln::render::export_film(&renderer, view)?;
+    // A denoiser that fails does not cost the render: the image is written as rendered,
+    // and the error says so.
+    let (film, denoise_error) = match kiln::render::export_film(&renderer, view, denoiser) {
+        Ok(film) => (film, None),
+        Err(e) if denoiser != Denoiser::None => (
+            kiln::render::export_film(&renderer, view, Denoiser::None)?,
+            Some(e),
+        ),
+        Err(e) => return Err(e.into()),
+    };
     // The device's film is freed before the file is encoded.
     drop(renderer);
     let written = plugins
@@ -835,5 +871,11 @@ fn write_output(
             )),
         });
     }
-    Ok(())
+    match denoise_error {
+        Some(e) => Err(anyhow::Error::new(e).context(format!(
+            "{} was written without denoising",
+            output.display()
+        ))),
+        None => Ok(()),
+    }
 }

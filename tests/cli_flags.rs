@@ -643,3 +643,33 @@ fn noise_threshold_flag_stops_converged_pixels_and_writes_the_estimate() {
         assert!(err.contains("--noise-threshold"), "{err}");
     }
 }
+
+#[test]
+fn denoise_flag_writes_the_denoised_image_and_keeps_the_noisy_one() {
+    let dir = tempfile::tempdir().unwrap();
+    let e = cornell(
+        dir.path(),
+        "denoised",
+        "24x24",
+        "8",
+        &["--denoise", "atrous"],
+    );
+    let noisy = e.channel("noisy.R");
+    assert_eq!(noisy.len(), 24 * 24);
+    // The image differs from the noisy layer (it was filtered), with the same mean
+    // within 3 % (the energy test in tests/denoise.rs is tighter).
+    let red: Vec<f32> = (0..24 * 24).map(|p| e.rgb(p)[0]).collect();
+    assert!(red.iter().zip(noisy).any(|(a, b)| a != b));
+    let (a, b) = (
+        red.iter().sum::<f32>() / red.len() as f32,
+        noisy.iter().sum::<f32>() / noisy.len() as f32,
+    );
+    assert!((a / b - 1.0).abs() < 0.03, "means {a} and {b}");
+    let result = kiln()
+        .args(["render", "--denoise", "magic", "-q", "-o"])
+        .arg(dir.path().join("x.png"))
+        .output()
+        .unwrap();
+    assert!(!result.status.success());
+    assert!(stderr(&result).contains("atrous"), "{}", stderr(&result));
+}

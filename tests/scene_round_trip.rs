@@ -139,6 +139,7 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
             indirect: 0.75,
         },
         noise_threshold: 0.025,
+        denoiser: kiln::scene::Denoiser::Atrous,
         view: ViewSettings {
             exposure_ev: -1.25,
             tonemap: Tonemap::PbrNeutral,
@@ -690,6 +691,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
                     prop_oneof![Just(0.0f32), 0.0f32..1.0e6],
                     prop_oneof![Just(0.0f32), 0.0f32..1.0],
+                    prop::sample::select(kiln::scene::Denoiser::ALL.to_vec()),
                 ),
             ),
         ),
@@ -724,7 +726,13 @@ fn scene() -> impl Strategy<Value = Scene> {
                 let (
                     (width, height, samples_per_pixel, max_bounces),
                     (seed, ev, tonemap, max_volume_bounces),
-                    (sampler, filter, filter_width, volume_resolution, (direct, indirect, noise)),
+                    (
+                        sampler,
+                        filter,
+                        filter_width,
+                        volume_resolution,
+                        (direct, indirect, noise, denoiser),
+                    ),
                 ) = settings;
                 scene.settings = SceneSettings {
                     width,
@@ -743,6 +751,7 @@ fn scene() -> impl Strategy<Value = Scene> {
                     volume_resolution,
                     clamp: Clamp { direct, indirect },
                     noise_threshold: noise,
+                    denoiser,
                     view: ViewSettings {
                         exposure_ev: ev,
                         tonemap,

@@ -28,6 +28,9 @@ var<private> rays_traced: u32;
 var<private> aov_albedo: vec3<f32>;
 var<private> aov_normal: vec3<f32>;
 var<private> aov_depth: f32;
+// Light emitted by what the camera sees (surfaces, the sky), which the denoiser keeps
+// out of the light it filters.
+var<private> aov_emission: vec3<f32>;
 
 // Surfaces a path may pass through (alpha cut-outs) before it counts as lost.
 const MAX_PASS_THROUGH: u32 = 64u;
@@ -420,7 +423,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     if (nee && !prev_delta && params.environment.w > 0.0) {
                         w = power_heuristic(prev_bsdf_pdf, params.environment.w * environment_pdf(ray.dir));
                     }
-                    radiance += clamped(throughput * environment_radiance(ray.dir) * w, depth);
+                    let sky = clamped(throughput * environment_radiance(ray.dir) * w, depth);
+                    radiance += sky;
+                    if (FEATURE_AOVS && depth == 0u) {
+                        aov_emission += sky;
+                    }
                     break;
                 }
                 s = surface_at(hit);
@@ -467,7 +474,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                         let light_pdf = params.triangle_pick * light_triangle_pdf(material.emission.rgb, distance(vertex, s.pe.p), -dot(ray.dir, s.ng));
                         w = power_heuristic(prev_bsdf_pdf, light_pdf);
                     }
-                    radiance += clamped(throughput * emission * w, depth);
+                    let emitted = clamped(throughput * emission * w, depth);
+                    radiance += emitted;
+                    if (FEATURE_AOVS && depth == 0u) {
+                        aov_emission += emitted;
+                    }
                 }
                 // Opaque surfaces are two-sided: their frame turns toward the incoming ray.
                 // Surfaces light passes through keep their front, so inside and outside differ.
@@ -649,15 +660,18 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
     // batch size adapts to time).
     var aov_a = vec4<f32>(0.0);
     var aov_n = vec4<f32>(0.0);
+    var aov_e = vec4<f32>(0.0);
     if (FEATURE_AOVS) {
-        aov_a = film_aov[2u * index];
-        aov_n = film_aov[2u * index + 1u];
+        aov_a = film_aov[3u * index];
+        aov_n = film_aov[3u * index + 1u];
+        aov_e = film_aov[3u * index + 2u];
     }
     for (var i = 0u; i < params.sample_count; i++) {
         rng_begin(pixel, params.sample_start + i, params.seed, params.sampler);
         aov_albedo = vec3<f32>(0.0);
         aov_normal = vec3<f32>(0.0);
         aov_depth = 0.0;
+        aov_emission = vec3<f32>(0.0);
         let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
         let primary = camera_ray(film_pos, rand2());
         var l: vec3<f32>;
@@ -673,6 +687,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (FEATURE_AOVS) {
             aov_a += vec4<f32>(aov_albedo, aov_depth);
             aov_n += vec4<f32>(aov_normal, 1.0);
+            aov_e += vec4<f32>(aov_emission, 0.0);
         }
         if (FEATURE_NOISE) {
             // The second moment of the sample's r + g + b, for the noise estimate; Kahan
@@ -695,8 +710,9 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         film_noise[index] = noise;
     }
     if (FEATURE_AOVS) {
-        film_aov[2u * index] = aov_a;
-        film_aov[2u * index + 1u] = aov_n;
+        film_aov[3u * index] = aov_a;
+        film_aov[3u * index + 1u] = aov_n;
+        film_aov[3u * index + 2u] = aov_e;
     }
     atomicAdd(&stats.rays, rays_traced);
     if (non_finite > 0u) {

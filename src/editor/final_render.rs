@@ -116,7 +116,12 @@ fn render(
     cancel: &AtomicBool,
     set: &impl Fn(RenderState),
 ) -> Result<RenderResult, String> {
-    let settings = RenderSettings::from_scene(scene);
+    let denoiser = scene.settings.denoiser;
+    let settings = RenderSettings {
+        // The denoiser's guides.
+        aovs: denoiser != crate::scene::Denoiser::None,
+        ..RenderSettings::from_scene(scene)
+    };
     let view = scene.settings.view;
     let mut renderer = Renderer::new(ctx, scene, settings).map_err(|e| e.to_string())?;
     let spp = settings.samples_per_pixel;
@@ -137,7 +142,7 @@ fn render(
             },
         )
         .map_err(|e| e.to_string())?;
-    let film = export_film(&renderer, view).map_err(|e| e.to_string())?;
+    let film = export_film(&renderer, view, denoiser).map_err(|e| e.to_string())?;
     let pixels = settings.width as f64 * settings.height as f64;
     Ok(RenderResult {
         film,

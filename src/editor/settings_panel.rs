@@ -156,6 +156,20 @@ pub fn render_tab_ui(
                        the samples go where noise remains. 0.01 is clean, 0.05 a preview; \
                        0: off. The viewport samples every pixel.";
         changed = count_row(ui, "Noise Threshold", threshold, tooltip).or(changed);
+        let tooltip = "What a final render's image goes through before it is shown and \
+                       saved. À-trous: an edge-avoiding filter guided by the albedo, normals \
+                       and depth and by each pixel's noise; the image as rendered is kept as \
+                       the EXR's noisy layer. The viewport is never denoised.";
+        if choice_row(
+            ui,
+            "Denoise",
+            tooltip,
+            &mut settings.denoiser,
+            &crate::scene::Denoiser::ALL,
+            crate::scene::Denoiser::label,
+        ) {
+            changed = Some(None);
+        }
         let tooltip = "Where each path's random numbers come from. Sobol: stratified over a \
                        pixel's samples, less noise at the same samples. Independent: white \
                        noise, for comparison.";

@@ -21,8 +21,8 @@ use crate::film::Film;
 
 /// Bytes per pixel of the film's sum, and of its compensation (one `vec4<f32>` each).
 pub const SUM_BYTES: u64 = 16;
-/// Bytes per pixel of the AOV film (two `vec4<f32>`).
-pub const AOV_BYTES: u64 = 32;
+/// Bytes per pixel of the AOV film (three `vec4<f32>`).
+pub const AOV_BYTES: u64 = 48;
 /// Bytes per pixel of the noise estimate's film (one `vec4<f32>`).
 pub const NOISE_BYTES: u64 = 16;
 /// One band of the film's rows on the device.
@@ -273,12 +273,14 @@ pub fn read_aov_rows(
         };
         let raw = read_piece_rows(ctx, piece, buffer, width, &r, AOV_BYTES)?;
         let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-        for px in raw.chunks_exact(2) {
-            let [a, n] = [px[0], px[1]];
+        for px in raw.chunks_exact(3) {
+            let [a, n, e] = [px[0], px[1], px[2]];
             // The AOV film counts its own samples.
             let samples = n[3].max(1.0);
             aovs.albedo.extend([a[0], a[1], a[2]].map(|v| v / samples));
             aovs.depth.push(a[3] / samples);
+            aovs.emission
+                .extend([e[0], e[1], e[2]].map(|v| v / samples));
             let normal = glam::Vec3::new(n[0], n[1], n[2]);
             let unit = normal.try_normalize().unwrap_or(glam::Vec3::ZERO);
             aovs.normal.extend(unit.to_array());
@@ -305,6 +307,27 @@ pub fn read_noise_rows(
         noise.extend(raw.iter().map(|m| m[2]));
     }
     Ok(Some(noise))
+}
+
+/// Rows `rows` of the noise film's second moments: per pixel, the sum over its samples of
+/// (r + g + b)²; None without the noise film.
+pub fn read_second_moment_rows(
+    ctx: &GpuContext,
+    pieces: &[FilmPiece],
+    width: u32,
+    rows: Range<u32>,
+) -> Result<Option<Vec<f64>>, RenderError> {
+    let mut moments = Vec::with_capacity(width as usize * rows.len());
+    for (piece, r) in overlapping(pieces, rows) {
+        let Some(buffer) = &piece.noise else {
+            return Ok(None);
+        };
+        let raw = read_piece_rows(ctx, piece, buffer, width, &r, NOISE_BYTES)?;
+        let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
+        // Kahan: the running sum minus the compensation.
+        moments.extend(raw.iter().map(|m| m[0] as f64 - m[1] as f64));
+    }
+    Ok(Some(moments))
 }
 
 #[cfg(test)]

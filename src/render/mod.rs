@@ -8,6 +8,7 @@
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
 pub mod context;
+pub mod denoise;
 pub mod environment_cdf;
 mod export;
 mod film_pieces;

@@ -26,7 +26,7 @@ use thiserror::Error;
 use super::context::{GpuContext, GpuError};
 use super::film_pieces::{
     AOV_BYTES, DeviceFilm, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check,
-    piece_rows, read_aov_rows, read_film_rows, read_noise_rows,
+    piece_rows, read_aov_rows, read_film_rows, read_noise_rows, read_second_moment_rows,
 };
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
@@ -132,6 +132,8 @@ pub enum RenderError {
         bytes: u64,
         message: String,
     },
+    #[error("cannot denoise: {0}")]
+    Denoise(String),
     #[error(
         "one film row of {width} pixels needs {row_bytes} bytes, more than the {limit}-byte limit of a film buffer"
     )]
@@ -225,12 +227,15 @@ impl RenderSettings {
 }
 
 /// Auxiliary images of the first surface each camera path meets (see
-/// [`Renderer::read_aovs`]): 3, 3 and 1 floats per pixel.
+/// [`Renderer::read_aovs`]): 3, 3, 1 and 3 floats per pixel.
 #[derive(Clone, Debug, Default, PartialEq)]
 pub struct Aovs {
     pub albedo: Vec<f32>,
     pub normal: Vec<f32>,
     pub depth: Vec<f32>,
+    /// The light the camera sees emitted directly, by surfaces and the sky (Cycles' Emit
+    /// and Background passes together): part of the image, kept out of the denoiser.
+    pub emission: Vec<f32>,
 }
 
 /// Reported after every dispatch.
@@ -975,9 +980,21 @@ impl Renderer {
         )
     }
 
+    /// Per pixel from the top-left, the sum over its samples of (r + g + b)²: with the
+    /// film's sums, the samples' variance. None unless the noise is estimated.
+    pub fn read_second_moments(&self) -> Result<Option<Vec<f64>>, RenderError> {
+        read_second_moment_rows(
+            &self.ctx,
+            &self.pieces,
+            self.settings.width,
+            0..self.settings.height,
+        )
+    }
+
     /// The AOVs averaged over the samples taken, per pixel from the top-left: albedo
     /// (RGB), shading normal (world space, unit length where a surface was hit), depth
-    /// (distance from the camera to the first hit; 0 where the camera saw nothing). None
+    /// (distance from the camera to the first hit; 0 where the camera saw nothing), the
+    /// emission seen directly (RGB). None
     /// unless the settings asked for them.
     pub fn read_aovs(&self) -> Result<Option<Aovs>, RenderError> {
         self.read_aov_rows(0..self.settings.height)

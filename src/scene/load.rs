@@ -228,6 +228,10 @@ fn build_scene(
         render_key("sampler", &render.sampler, &Sampler::ALL, |s| s.key()).map_err(invalid)?;
     let filter =
         render_key("filter", &render.filter, &FilterKind::ALL, |f| f.key()).map_err(invalid)?;
+    let denoiser = render_key("denoise", &render.denoise, &super::Denoiser::ALL, |d| {
+        d.key()
+    })
+    .map_err(invalid)?;
     scene.settings = SceneSettings {
         width: render.width,
         height: render.height,
@@ -248,6 +252,7 @@ fn build_scene(
             indirect: render.clamp_indirect,
         },
         noise_threshold: render.noise_threshold,
+        denoiser,
         view: ViewSettings {
             exposure_ev: render.exposure,
             tonemap,

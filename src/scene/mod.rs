@@ -96,6 +96,8 @@ pub struct SceneSettings {
     /// (`shaders/integrator/adaptive.wgsl` defines the estimate); 0, the default, is off.
     /// Final renders only: the editor's viewport samples every pixel.
     pub noise_threshold: f32,
+    /// The denoiser a final render's image goes through; none by default.
+    pub denoiser: Denoiser,
     /// Exposure and view transform (Blender's colour management).
     pub view: ViewSettings,
 }
@@ -137,6 +139,7 @@ impl Default for SceneSettings {
             volume_resolution: DEFAULT_VOLUME_RESOLUTION,
             clamp: Clamp::default(),
             noise_threshold: 0.0,
+            denoiser: Denoiser::None,
             view: ViewSettings::default(),
         }
     }
@@ -153,6 +156,42 @@ impl SceneSettings {
         self.clamp.validate()?;
         validate_noise_threshold(self.noise_threshold)?;
         self.view.validate()
+    }
+}
+
+/// What a final render's image goes through before it is written (Cycles' Denoise).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub enum Denoiser {
+    /// The image as rendered.
+    #[default]
+    None,
+    /// An edge-avoiding à-trous wavelet filter guided by the albedo, normal and depth AOVs
+    /// and by each pixel's noise, on the GPU (`shaders/denoise/atrous.wgsl`).
+    Atrous,
+}
+
+impl Denoiser {
+    pub const ALL: [Denoiser; 2] = [Denoiser::None, Denoiser::Atrous];
+
+    /// The name in scene files and on the command line (`--denoise`).
+    pub fn key(self) -> &'static str {
+        match self {
+            Denoiser::None => "none",
+            Denoiser::Atrous => "atrous",
+        }
+    }
+
+    /// The denoiser named `key` ([`Denoiser::key`]).
+    pub fn from_key(key: &str) -> Option<Denoiser> {
+        Denoiser::ALL.into_iter().find(|d| d.key() == key)
+    }
+
+    /// The name the editor shows.
+    pub fn label(self) -> &'static str {
+        match self {
+            Denoiser::None => "None",
+            Denoiser::Atrous => "À-trous (albedo, normal, depth)",
+        }
     }
 }
 

@@ -238,6 +238,7 @@ pub fn save_scene(
             clamp_direct: scene.settings.clamp.direct,
             clamp_indirect: scene.settings.clamp.indirect,
             noise_threshold: scene.settings.noise_threshold,
+            denoise: scene.settings.denoiser.key().to_owned(),
             exposure: scene.settings.view.exposure_ev,
             view_transform: scene.settings.view.tonemap.key().to_owned(),
         },

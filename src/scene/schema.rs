@@ -169,6 +169,9 @@ pub(super) struct RenderDesc {
     /// 0: off.
     #[serde(skip_serializing_if = "is_zero_scalar")]
     pub(super) noise_threshold: f32,
+    /// A [`Denoiser::key`](super::Denoiser::key): "none", "atrous".
+    #[serde(skip_serializing_if = "is_default_denoiser")]
+    pub(super) denoise: String,
     /// Stops (EV) before the view transform.
     #[serde(skip_serializing_if = "is_zero_scalar")]
     pub(super) exposure: f32,
@@ -184,6 +187,10 @@ fn is_unlimited_volume_bounces(bounces: &u32) -> bool {
 
 fn is_default_volume_resolution(resolution: &u32) -> bool {
     *resolution == super::DEFAULT_VOLUME_RESOLUTION
+}
+
+fn is_default_denoiser(key: &String) -> bool {
+    *key == super::Denoiser::default().key()
 }
 
 fn is_default_sampler(key: &String) -> bool {
@@ -228,6 +235,7 @@ impl Default for RenderDesc {
             clamp_direct: s.clamp.direct,
             clamp_indirect: s.clamp.indirect,
             noise_threshold: s.noise_threshold,
+            denoise: s.denoiser.key().to_owned(),
             exposure: s.view.exposure_ev,
             view_transform: s.view.tonemap.key().to_owned(),
         }

@@ -477,8 +477,9 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         space: Space::ReadWrite,
         wgsl_type: "array<vec4<f32>>",
         element_bytes: bytes::<[f32; 4]>(),
-        stand_in: Some("array<vec4<f32>, 2>"),
-        doc: "Per pixel: (albedo sum, depth sum), (normal sum, samples); when AOVs are rendered.",
+        stand_in: Some("array<vec4<f32>, 3>"),
+        doc: "Per pixel: (albedo sum, depth sum), (normal sum, samples), (sum of the emission seen\n\
+              directly, 0); when AOVs are rendered.",
     },
     Binding {
         resource: Resource::Uv1,

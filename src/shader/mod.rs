@@ -71,6 +71,9 @@ pub const PATH_INTEGRATOR: &[ShaderFile] = &[
 /// (`src/render/volume_grid.rs`): after the integrator, in kernels for scenes with one.
 pub const VOLUME_BAKE: ShaderFile = shader_file!("integrator/volume_bake.wgsl");
 
+/// The denoiser's entry point `atrous` (`src/render/denoise.rs`), a module of its own.
+pub const DENOISE: ShaderFile = shader_file!("denoise/atrous.wgsl");
+
 /// Adaptive sampling's entry points, compiled into the path tracer's module when it
 /// estimates the noise ([`KernelFeatures::noise`]).
 pub const ADAPTIVE: ShaderFile = shader_file!("integrator/adaptive.wgsl");
