@@ -67,6 +67,22 @@ pub struct BenchArgs {
     /// does not (the loads of BVH traversal).
     #[arg(long)]
     pub fetch: bool,
+    /// Instead of samples/s: the speed/accuracy trade at equal time. Each scene rendered
+    /// for each of --budgets seconds plainly, with adaptive sampling (--tradeoff-threshold),
+    /// denoised (à-trous), and both; the error against a reference of --reference-spp
+    /// (RMSE, and relMSE: squared error over the reference squared plus 0.01). Use a small
+    /// --size.
+    #[arg(long)]
+    pub tradeoff: bool,
+    /// Seconds of rendering per --tradeoff render (the denoiser's time is added).
+    #[arg(long, value_delimiter = ',', default_values_t = [0.5, 1.0, 2.0, 4.0])]
+    pub budgets: Vec<f64>,
+    /// The noise threshold of --tradeoff's adaptive renders.
+    #[arg(long, default_value_t = 0.02)]
+    pub tradeoff_threshold: f32,
+    /// Also write --tradeoff's rows as CSV to this file.
+    #[arg(long, value_name = "FILE")]
+    pub csv: Option<std::path::PathBuf>,
 }
 
 impl BenchArgs {
@@ -197,6 +213,10 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     if args.fetch {
         return fetch(&*GpuContext::new(backend)?, out);
     }
+    if args.tradeoff {
+        let ctx = GpuContext::new(backend)?;
+        return tradeoff(&ctx, &bench_scenes(args)?, args, out);
+    }
     // The import first, so the memory it measures is not hidden under the renders' peak.
     let import = measure_import(args.triangles);
     let ctx = GpuContext::new(backend)?;
@@ -247,6 +267,32 @@ fn mean_square_difference(a: &[Vec3], b: &[Vec3]) -> f64 {
     sum / (3 * a.len().max(1)) as f64
 }
 
+/// A reference image of `half` samples per pixel rendered twice with different seeds
+/// (`settings` of the seed): their mean, and its own noise as a mean square (each half's
+/// variance is twice the mean's, and the halves differ by four times it).
+fn reference_halves(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    settings: impl Fn(u32) -> RenderSettings,
+    half: u32,
+) -> Result<(Vec<Vec3>, f64)> {
+    let mut halves = Vec::new();
+    for seed in [0x5eed_0001, 0x5eed_0002] {
+        let mut r = Renderer::new(Arc::clone(ctx), scene, settings(seed))?;
+        r.render(0..half, RenderControl::default())?;
+        halves.push(r.read_film()?.radiance());
+    }
+    let reference = halves[0]
+        .iter()
+        .zip(&halves[1])
+        .map(|(a, b)| (*a + *b) * 0.5)
+        .collect();
+    Ok((
+        reference,
+        mean_square_difference(&halves[0], &halves[1]) / 4.0,
+    ))
+}
+
 /// Each scene's error against a reference as samples grow: the RMSE of linear radiance
 /// over every pixel and channel, with the reference's own noise (measured from its two
 /// halves, rendered with different seeds) taken out. At the Monte Carlo rate the RMSE
@@ -285,19 +331,15 @@ fn convergence(
             settings.sampling.sampler = sampler;
             Renderer::new(Arc::clone(ctx), scene, settings)
         };
-        let mut halves = Vec::new();
-        for seed in [0x5eed_0001, 0x5eed_0002] {
-            let mut r = renderer(seed, scene.settings.sampling.sampler)?;
-            r.render(0..half, RenderControl::default())?;
-            halves.push(r.read_film()?.radiance());
-        }
-        let reference: Vec<Vec3> = halves[0]
-            .iter()
-            .zip(&halves[1])
-            .map(|(a, b)| (*a + *b) * 0.5)
-            .collect();
-        // Each half's variance is twice the reference's: the halves differ by four times it.
-        let reference_noise = mean_square_difference(&halves[0], &halves[1]) / 4.0;
+        let (reference, reference_noise) = reference_halves(
+            ctx,
+            scene,
+            |seed| RenderSettings {
+                seed,
+                ..args.settings(scene, KernelKind::Specialized)
+            },
+            half,
+        )?;
         // The kernel is the references' (the driver has compiled it): the timed renders
         // start warm. Each sampler against the same reference.
         let mut errors = Vec::new();
@@ -357,6 +399,126 @@ fn convergence(
     Ok(())
 }
 
+/// Mean over pixels and channels of the squared error relative to the reference's square
+/// plus 0.01 (relMSE, as pbrt and Mitsuba's papers use it: dark pixels count too).
+fn relative_mse(image: &[Vec3], reference: &[Vec3]) -> f64 {
+    let sum: f64 = image
+        .iter()
+        .zip(reference)
+        .flat_map(|(a, r)| (0..3).map(move |c| (a[c] as f64, r[c] as f64)))
+        .map(|(a, r)| (a - r).powi(2) / (r * r + 0.01))
+        .sum();
+    sum / (3 * image.len().max(1)) as f64
+}
+
+/// The speed/accuracy trade at equal time: each scene rendered for each budget plainly,
+/// with adaptive sampling, denoised, and both, against a reference. Every render has its
+/// own renderer, built (and its kernel compiled) before its clock starts.
+fn tradeoff(
+    ctx: &Arc<GpuContext>,
+    scenes: &[(String, Scene)],
+    args: &BenchArgs,
+    out: &mut dyn std::io::Write,
+) -> Result<()> {
+    let half = (args.reference_spp / 2).max(1);
+    let threshold = args.tradeoff_threshold;
+    writeln!(
+        out,
+        "Adapter: {}; {}x{} px, specialised kernels, each scene's settings, reference {} spp          (two seeds); adaptive: --noise-threshold {threshold}; denoised: --denoise atrous.",
+        ctx.describe(),
+        args.size,
+        args.size,
+        2 * half
+    )?;
+    writeln!(out)?;
+    writeln!(
+        out,
+        "| scene | method | budget s | seconds | spp (mean) | RMSE | relMSE | relMSE ÷ plain's |"
+    )?;
+    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|")?;
+    let mut csv = String::from("scene,method,budget_s,seconds,spp,rmse,rel_mse\n");
+    let mut headlines = Vec::new();
+    let methods = [
+        ("plain", 0.0, scene::Denoiser::None),
+        ("adaptive", threshold, scene::Denoiser::None),
+        ("denoised", 0.0, scene::Denoiser::Atrous),
+        ("adaptive + denoised", threshold, scene::Denoiser::Atrous),
+    ];
+    for (name, scene) in scenes {
+        let base = args.settings(scene, KernelKind::Specialized);
+        let (reference, reference_noise) =
+            reference_halves(ctx, scene, |seed| RenderSettings { seed, ..base }, half)?;
+        let pixels = (args.size * args.size) as f64;
+        for &budget in &args.budgets {
+            let mut plain = None;
+            for (method, noise_threshold, denoiser) in methods {
+                let settings = RenderSettings {
+                    seed: 1,
+                    noise_threshold,
+                    aovs: denoiser != scene::Denoiser::None,
+                    ..base
+                };
+                let mut r = Renderer::new(Arc::clone(ctx), scene, settings)?;
+                let deadline = Instant::now() + Duration::from_secs_f64(budget);
+                let stats = r.render(
+                    0..u32::MAX,
+                    RenderControl {
+                        deadline: Some(deadline),
+                        ..RenderControl::default()
+                    },
+                )?;
+                let start = Instant::now();
+                let film = r.read_film()?;
+                let image = match (r.read_aovs()?, r.read_second_moments()?) {
+                    (Some(aovs), Some(moments)) if denoiser != scene::Denoiser::None => {
+                        crate::render::denoise::denoise_film(ctx, &film, &aovs, &moments, denoiser)?
+                    }
+                    _ => film,
+                }
+                .radiance();
+                let seconds = stats.elapsed.as_secs_f64()
+                    + if denoiser == scene::Denoiser::None {
+                        0.0
+                    } else {
+                        start.elapsed().as_secs_f64()
+                    };
+                let rmse = (mean_square_difference(&image, &reference) - reference_noise)
+                    .max(0.0)
+                    .sqrt();
+                let rel = relative_mse(&image, &reference);
+                let plain_rel = *plain.get_or_insert(rel);
+                let spp = stats.pixel_samples as f64 / pixels;
+                writeln!(
+                    out,
+                    "| {name} | {method} | {budget} | {seconds:.2} | {spp:.1} | {rmse:.5} | {rel:.5} | {:.2} |",
+                    rel / plain_rel
+                )?;
+                csv.push_str(&format!(
+                    "{name},{method},{budget},{seconds:.3},{spp:.2},{rmse:.6},{rel:.6}\n"
+                ));
+                if method == "adaptive + denoised" {
+                    headlines.push(format!(
+                        "{name}: at {budget} s, adaptive + denoised has {:.1}× lower relMSE than plain",
+                        plain_rel / rel.max(1e-30)
+                    ));
+                }
+            }
+        }
+    }
+    writeln!(out)?;
+    for line in headlines {
+        writeln!(out, "{line}")?;
+    }
+    if let Some(path) = &args.csv {
+        use std::io::Write as _;
+        kiln_plugin_api::atomic::write_atomically(path, |w| {
+            w.write_all(csv.as_bytes()).map_err(|e| e.to_string())
+        })
+        .map_err(anyhow::Error::msg)?;
+    }
+    Ok(())
+}
+
 /// The (direct, indirect) limits `kiln bench --clamp` measures; the first is off.
 const CLAMPS: [(f32, f32); 7] = [
     (0.0, 0.0),
@@ -401,18 +563,8 @@ fn clamp(
             clamp: crate::scene::Clamp { direct, indirect },
             ..args.settings(scene, KernelKind::Specialized)
         };
-        let mut halves = Vec::new();
-        for seed in [0x5eed_0001, 0x5eed_0002] {
-            let mut r = Renderer::new(Arc::clone(ctx), scene, settings(seed, 0.0, 0.0))?;
-            r.render(0..half, RenderControl::default())?;
-            halves.push(r.read_film()?.radiance());
-        }
-        let reference: Vec<Vec3> = halves[0]
-            .iter()
-            .zip(&halves[1])
-            .map(|(a, b)| (*a + *b) * 0.5)
-            .collect();
-        let reference_noise = mean_square_difference(&halves[0], &halves[1]) / 4.0;
+        let (reference, reference_noise) =
+            reference_halves(ctx, scene, |seed| settings(seed, 0.0, 0.0), half)?;
         let mean = |image: &[Vec3]| {
             image.iter().map(|c| c.as_dvec3()).sum::<glam::DVec3>() / image.len() as f64
         };

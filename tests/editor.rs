@@ -481,7 +481,13 @@ fn view_settings_change_the_display_not_the_samples_and_are_saved_with_the_scene
     let path = dir.path().join("looks.kiln");
     let mut dialogs = ScriptedDialogs::default();
     dialogs.save.push_back(path.clone());
-    let mut harness = harness(dialogs);
+    // Tall enough for the Render tab's view settings and their menu below the sampling
+    // and denoising rows.
+    let mut harness = start(Setup {
+        dialogs,
+        size: egui::vec2(1280.0, 1100.0),
+        ..Setup::default()
+    });
     step_until(&mut harness, "the first samples", samples_done);
     let restarts = harness.state().viewport_status().unwrap().restarts;
     harness.get_by_label("📷 Render").click();
