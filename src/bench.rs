@@ -424,7 +424,7 @@ fn tradeoff(
     let threshold = args.tradeoff_threshold;
     writeln!(
         out,
-        "Adapter: {}; {}x{} px, specialised kernels, each scene's settings, reference {} spp          (two seeds); adaptive: --noise-threshold {threshold}; denoised: --denoise atrous.",
+        "Adapter: {}; {}x{} px, specialised kernels, each scene's settings, reference {} spp (two seeds); adaptive: --noise-threshold {threshold}; denoised: --denoise atrous.",
         ctx.describe(),
         args.size,
         args.size,

@@ -18,7 +18,7 @@ use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
 use kiln::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer, context};
-use kiln::scene::{self, Denoiser, Scene};
+use kiln::scene::{self, Denoiser, Quality, Scene};
 use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler};
 
 #[derive(Parser)]
@@ -180,6 +180,10 @@ struct RenderArgs {
     /// rendered as its `noisy` layer (default: the scene's, or none).
     #[arg(long, value_parser = key_parser(&Denoiser::ALL, Denoiser::key))]
     denoise: Option<Denoiser>,
+    /// A preset of the samples, bounces, clamp, noise threshold and denoiser, chosen from
+    /// measurements (docs/BENCHMARKS.md); flags given beside it win.
+    #[arg(long, value_parser = key_parser(&Quality::ALL, Quality::key), long_help = quality_help())]
+    quality: Option<Quality>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -244,6 +248,18 @@ fn parse_clamp(s: &str) -> Result<f32, String> {
         ));
     }
     Ok(limit)
+}
+
+/// `--quality`'s long help: what each preset sets, from the presets themselves.
+fn quality_help() -> String {
+    let mut help = String::from(
+        "A preset of the samples, bounces, clamp, noise threshold and denoiser, chosen from \
+         measurements (docs/BENCHMARKS.md); flags given beside it win.\n",
+    );
+    for q in Quality::ALL {
+        help.push_str(&format!("\n  {}", q.describe()));
+    }
+    help
 }
 
 fn parse_noise_threshold(s: &str) -> Result<f32, String> {
@@ -535,6 +551,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             scene.environment_map = Some(map);
         }
         None => {}
+    }
+    if let Some(quality) = args.quality {
+        quality.apply(&mut scene.settings);
     }
     let mut settings = RenderSettings::from_scene(&scene);
     if let Some((w, h)) = args.size {

@@ -673,3 +673,37 @@ fn denoise_flag_writes_the_denoised_image_and_keeps_the_noisy_one() {
     assert!(!result.status.success());
     assert!(stderr(&result).contains("atrous"), "{}", stderr(&result));
 }
+
+#[test]
+fn quality_presets_are_described_in_the_help_and_flags_beside_them_win() {
+    let help = kiln().args(["render", "--help"]).output().unwrap();
+    let help = String::from_utf8_lossy(&help.stdout);
+    for q in kiln::scene::Quality::ALL {
+        assert!(
+            help.contains(&q.describe()),
+            "--help lacks {}:\n{help}",
+            q.key()
+        );
+    }
+    let dir = tempfile::tempdir().unwrap();
+    // Draft denoises (the noisy layer is there) at its 16 spp, unless --spp says otherwise.
+    let draft = cornell(dir.path(), "draft", "16x16", "4", &["--quality", "draft"]);
+    assert!(draft.channel("samples.Y").iter().all(|&n| n == 4.0));
+    assert_eq!(draft.channel("noisy.R").len(), 16 * 16);
+    let out = dir.path().join("final.exr");
+    render(
+        &out,
+        &[
+            "--size",
+            "16x16",
+            "--quality",
+            "final",
+            "--denoise",
+            "atrous",
+            "--spp",
+            "16",
+        ],
+    );
+    let final_ = read_exr(&out);
+    assert_eq!(final_.channel("noisy.R").len(), 16 * 16);
+}

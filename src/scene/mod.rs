@@ -195,6 +195,119 @@ impl Denoiser {
     }
 }
 
+/// Render quality presets (`kiln render --quality`), each a set of render settings chosen
+/// from measurements on this project's scenes (docs/BENCHMARKS.md: `kiln bench --depth`,
+/// `--clamp` and `--tradeoff`), not guessed.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Quality {
+    /// Seconds on a laptop: few samples, denoised.
+    Draft,
+    /// A faithful look in a minute: more samples and bounces, denoised.
+    Preview,
+    /// Unbiased: every bounce, no clamp, no denoiser; adaptive sampling stops the pixels
+    /// that converged.
+    Final,
+}
+
+/// What a [`Quality`] preset sets.
+#[derive(Clone, Copy, Debug, PartialEq)]
+pub struct QualitySettings {
+    pub samples_per_pixel: u32,
+    pub max_bounces: u32,
+    pub clamp: Clamp,
+    pub noise_threshold: f32,
+    pub denoiser: Denoiser,
+}
+
+impl Quality {
+    pub const ALL: [Quality; 3] = [Quality::Draft, Quality::Preview, Quality::Final];
+
+    /// The name on the command line.
+    pub fn key(self) -> &'static str {
+        match self {
+            Quality::Draft => "draft",
+            Quality::Preview => "preview",
+            Quality::Final => "final",
+        }
+    }
+
+    /// The settings the preset sets, and why (measured on lavapipe, docs/BENCHMARKS.md).
+    pub fn settings(self) -> QualitySettings {
+        match self {
+            // 4 bounces lose 3.9 % of the Cornell box's light in 0.83 × the time;
+            // the indirect clamp at 10 takes the showcase's error to 0.64 × for 1–2 % of
+            // its light; denoising gives 0.57 × the relMSE at 0.5 s, where adaptive
+            // sampling (first checked at 16 spp) only costs.
+            Quality::Draft => QualitySettings {
+                samples_per_pixel: 16,
+                max_bounces: 4,
+                clamp: Clamp {
+                    direct: 0.0,
+                    indirect: 10.0,
+                },
+                noise_threshold: 0.0,
+                denoiser: Denoiser::Atrous,
+            },
+            // 8 bounces lose 0.4 % in 0.93 × the time; denoising at ~40 spp gives
+            // 0.44 × the relMSE.
+            Quality::Preview => QualitySettings {
+                samples_per_pixel: 64,
+                max_bounces: 8,
+                clamp: Clamp {
+                    direct: 0.0,
+                    indirect: 10.0,
+                },
+                noise_threshold: 0.0,
+                denoiser: Denoiser::Atrous,
+            },
+            // At a few hundred spp the denoiser's gain (0.93 ×) is not worth its bias;
+            // adaptive sampling at 0.02 gives 0.89–0.94 × the relMSE at equal time.
+            Quality::Final => QualitySettings {
+                samples_per_pixel: 1024,
+                max_bounces: UNLIMITED_BOUNCES,
+                clamp: Clamp::default(),
+                noise_threshold: 0.02,
+                denoiser: Denoiser::None,
+            },
+        }
+    }
+
+    /// Sets the preset's settings in `settings`.
+    pub fn apply(self, settings: &mut SceneSettings) {
+        let q = self.settings();
+        settings.samples_per_pixel = q.samples_per_pixel;
+        settings.max_bounces = q.max_bounces;
+        settings.clamp = q.clamp;
+        settings.noise_threshold = q.noise_threshold;
+        settings.denoiser = q.denoiser;
+    }
+
+    /// One line saying what the preset sets, for `--help`.
+    pub fn describe(self) -> String {
+        let q = self.settings();
+        let bounces = if q.max_bounces >= UNLIMITED_BOUNCES {
+            "unbounded".to_owned()
+        } else {
+            q.max_bounces.to_string()
+        };
+        let off = |v: f32| {
+            if v == 0.0 {
+                "off".to_owned()
+            } else {
+                v.to_string()
+            }
+        };
+        format!(
+            "{}: {} spp, max bounces {bounces}, clamp indirect {}, noise threshold {}, denoise {}",
+            self.key(),
+            q.samples_per_pixel,
+            off(q.clamp.indirect),
+            off(q.noise_threshold),
+            q.denoiser.key()
+        )
+    }
+}
+
 /// A noise threshold: 0 (off) or a finite number above 0.
 pub fn validate_noise_threshold(threshold: f32) -> Result<(), String> {
     if !(threshold.is_finite() && threshold >= 0.0) {
