@@ -138,7 +138,7 @@ fn spp_and_seconds(stderr: &str) -> (f64, f64) {
 fn time_limit_stops_early_and_still_writes() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("partial.exr");
-    let (limit, spp) = (2.0, 100_000.0);
+    let (limit, spp) = (4.0, 100_000.0);
     let started = std::time::Instant::now();
     let (code, err) = run(&[
         "render",
@@ -147,7 +147,7 @@ fn time_limit_stops_early_and_still_writes() {
         "--spp",
         "100000",
         "--time-limit",
-        "2",
+        "4",
         "-q",
         "-o",
         out.to_str().unwrap(),
@@ -164,10 +164,11 @@ fn time_limit_stops_early_and_still_writes() {
         average > 0.0 && average < spp,
         "{average} spp average of {spp} requested:\n{err}"
     );
-    // The render ran up to the limit (the summary rounds to 1/100 s), not past it by
-    // more than a generous hang guard.
+    // The render ran up to the limit (the summary rounds to 1/100 s) and stopped within
+    // 10 % of it: it checks the clock between dispatches, which are sized to about 60 ms
+    // (the first whole pass, which always completes, is 23 ms here).
     assert!(
-        seconds >= limit - 0.01 && seconds < limit + 60.0,
+        seconds >= limit - 0.01 && seconds <= limit * 1.1,
         "rendered {seconds} s with a {limit} s limit"
     );
     // What accumulated was written: a complete image of the cornell box, not a black
