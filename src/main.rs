@@ -2,6 +2,7 @@
 //! Errors reach the user as one message with its causes and a non-zero exit code
 //! (2 for usage errors, 1 for everything else), never as a panic.
 
+use std::cell::Cell;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -17,7 +18,10 @@ use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
-use kiln::render::{Backend, GpuContext, RenderControl, RenderSettings, Renderer, context};
+use kiln::render::checkpoint::{self, Checkpoint};
+use kiln::render::{
+    Backend, GpuContext, RenderControl, RenderSettings, RenderStats, Renderer, context,
+};
 use kiln::scene::{self, Denoiser, Quality, Scene};
 use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler};
 
@@ -207,6 +211,15 @@ struct RenderArgs {
     /// Stop after this many seconds and write what has accumulated.
     #[arg(long)]
     time_limit: Option<f64>,
+    /// Write a checkpoint of the film so far next to the output (OUT.kiln-checkpoint)
+    /// every this many seconds, at the end of a pass, for --resume; 0: never. It is
+    /// removed once the whole render is written.
+    #[arg(long, value_name = "SECS", default_value_t = 60.0)]
+    checkpoint_every: f64,
+    /// Continue from the checkpoint next to the output: the same scene and settings (--spp
+    /// may be higher), and the image is bit for bit the one an uninterrupted render makes.
+    #[arg(long)]
+    resume: bool,
     /// Environment: a uniform radiance R,G,B or an equirectangular .hdr/.exr map
     /// (overrides the scene's).
     #[arg(long, value_parser = parse_environment)]
@@ -603,6 +616,24 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             .extension()
             .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
 
+    if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
+        bail!(
+            "--checkpoint-every must be 0 (never) or a number of seconds, got {}",
+            args.checkpoint_every
+        );
+    }
+    let checkpoint_path = checkpoint::path_for(&args.output);
+    let key = checkpoint::key(&scene, &settings);
+    // Refused before anything is built: a checkpoint of another scene or other settings.
+    let resumed = if args.resume {
+        let c = Checkpoint::read(&checkpoint_path).map_err(anyhow::Error::msg)?;
+        c.check(&checkpoint_path, key, settings.width, settings.height)
+            .map_err(anyhow::Error::msg)?;
+        Some(c)
+    } else {
+        None
+    };
+
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
     // What `write_output` holds whole on the host, per pixel, for a plugin and the host's
@@ -627,6 +658,16 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     )?;
     let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
         .with_context(|| format!("cannot prepare {name} for rendering"))?;
+    let first = Cell::new(0);
+    if let Some(c) = resumed {
+        renderer.restore_film_state(&c.film)?;
+        first.set(c.next_sample);
+        eprintln!(
+            "resuming from {} at {} spp",
+            checkpoint_path.display(),
+            c.next_sample
+        );
+    }
 
     let cancel = Arc::new(AtomicBool::new(false));
     {
@@ -681,7 +722,7 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     );
     let mut on_progress = |p: &kiln::render::Progress| {
         // The bar counts the samples every pixel has: those of the whole passes.
-        bar.set_position(p.whole_pass_samples as u64);
+        bar.set_position((first.get() + p.whole_pass_samples) as u64);
         let secs = p.elapsed.as_secs_f64().max(1e-9);
         let next = if p.pass_fraction > 0.0 {
             let left = p.pass_elapsed.as_secs_f64() * (1.0 - p.pass_fraction) / p.pass_fraction;
@@ -708,15 +749,52 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     let deadline = args
         .time_limit
         .map(|t| Instant::now() + Duration::from_secs_f64(t));
-    let result = renderer.render(
-        0..settings.samples_per_pixel,
-        RenderControl {
-            cancel: Some(&cancel),
-            deadline,
-            progress: Some(&mut on_progress),
-            ..RenderControl::default()
-        },
-    );
+    let every =
+        (args.checkpoint_every > 0.0).then(|| Duration::from_secs_f64(args.checkpoint_every));
+    let mut total = RenderStats {
+        completed: true,
+        next_sample: first.get(),
+        ..RenderStats::default()
+    };
+    // One call per checkpoint: each stops at the end of a pass once `every` has passed.
+    let result = loop {
+        let call = renderer.render(
+            first.get()..settings.samples_per_pixel,
+            RenderControl {
+                cancel: Some(&cancel),
+                deadline,
+                progress: Some(&mut on_progress),
+                pass_deadline: every.map(|e| Instant::now() + e),
+                ..RenderControl::default()
+            },
+        );
+        let stats = match call {
+            Ok(stats) => stats,
+            Err(e) => break Err(e),
+        };
+        total.merge(&stats);
+        if !stats.checkpoint {
+            break Ok(total);
+        }
+        let saved = renderer
+            .film_state()
+            .map_err(|e| e.to_string())
+            .and_then(|film| {
+                Checkpoint {
+                    key,
+                    width: settings.width,
+                    height: settings.height,
+                    next_sample: stats.next_sample,
+                    film,
+                }
+                .write(&checkpoint_path)
+            });
+        // A checkpoint that cannot be written does not stop the render it protects.
+        if let Err(e) = saved {
+            bar.suspend(|| eprintln!("warning: no checkpoint: {e}"));
+        }
+        first.set(stats.next_sample);
+    };
     bar.finish_and_clear();
     let view = ViewSettings {
         exposure_ev: args.exposure.unwrap_or(scene.settings.view.exposure_ev),
@@ -755,6 +833,15 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         denoiser,
         &args.export_options,
     )?;
+    if stats.completed {
+        // The render is whole and written: its checkpoint has served.
+        let _ = std::fs::remove_file(&checkpoint_path);
+    } else if checkpoint_path.exists() {
+        eprintln!(
+            "{} holds the last whole pass: --resume continues from it",
+            checkpoint_path.display()
+        );
+    }
     let secs = stats.elapsed.as_secs_f64().max(1e-9);
     let reason = if stats.completed {
         ""

@@ -35,10 +35,10 @@ fn a_film_split_into_pieces_renders_the_same_bits_as_one_piece_aovs_included() {
     };
     let (one, film, aovs) = render(s, &[0, 2]);
     assert_eq!(one, 1, "a 512×512 film fits one binding");
-    // 100 rows of AOVs (32 bytes a pixel) to a piece at most: six pieces of 85 or 86 rows,
+    // 100 rows of AOVs (48 bytes a pixel) to a piece at most: six pieces of 85 or 86 rows,
     // four of whose seams fall inside the 256-row tiles of the unsplit film. Rendered in
     // two calls, so passes are cut differently too.
-    s.film_piece_bytes = Some(512 * 32 * 100);
+    s.film_piece_bytes = Some(512 * 48 * 100);
     let (pieces, split_film, split_aovs) = render(s, &[0, 1, 2]);
     assert_eq!(pieces, 6);
     assert!(

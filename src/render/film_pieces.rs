@@ -37,6 +37,21 @@ pub struct FilmPiece {
     pub bind_group: wgpu::BindGroup,
 }
 
+impl FilmPiece {
+    /// The piece's buffers: the sums, their compensation, then the AOV and noise films
+    /// when it has them.
+    pub fn buffers(&self) -> impl Iterator<Item = &wgpu::Buffer> {
+        [
+            Some(&self.sum),
+            Some(&self.compensation),
+            self.aov.as_ref(),
+            self.noise.as_ref(),
+        ]
+        .into_iter()
+        .flatten()
+    }
+}
+
 /// Cuts `height` rows of `width` pixels into bands of about equal height whose largest
 /// buffer (`pixel_bytes` per pixel) fits in `limit` bytes.
 pub fn piece_rows(

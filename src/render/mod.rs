@@ -7,6 +7,7 @@
 //! What the renderer does not do: decide file formats, print, or own threads. Callers
 //! (the CLI, benchmarks, tests) drive it in sample ranges and read the film back.
 
+pub mod checkpoint;
 pub mod context;
 pub mod denoise;
 pub mod environment_cdf;

@@ -109,7 +109,11 @@ pub fn run_probe(
     );
     let film = buffer("film", &[0u8; 16], storage);
     let compensation = buffer("film compensation", &[0u8; 16], storage);
-    let stats = buffer("stats", &[0u8; 8], storage);
+    let stats = buffer(
+        "stats",
+        bytemuck::bytes_of(&crate::shader::gpu_types::GpuStats::default()),
+        storage,
+    );
     let scene_group = gpu_scene.bind_group(
         device,
         &scene_layout,

@@ -269,9 +269,29 @@ pub struct RenderControl<'a> {
     /// pixels have no sample): the caller throws it away ([`Renderer::clear_film`]), as
     /// the editor's viewport does when a new scene or a built renderer replaces a pass.
     pub cancel_first_pass: bool,
+    /// Stops at the end of the first whole pass that ends after this instant, with
+    /// `checkpoint` set in the stats: every pixel then has the same samples (those below
+    /// [`RenderStats::next_sample`]), a state a checkpoint can keep and a later
+    /// `render(next_sample..)` continue bit for bit.
+    pub pass_deadline: Option<Instant>,
 }
 
 impl RenderStats {
+    /// Adds a later call's stats to these: one render made of several calls.
+    pub fn merge(&mut self, later: &RenderStats) {
+        self.pixel_samples += later.pixel_samples;
+        self.rays += later.rays;
+        self.non_finite += later.non_finite;
+        self.dispatches += later.dispatches;
+        self.elapsed += later.elapsed;
+        self.completed = later.completed;
+        self.passes += later.passes;
+        self.active_pixels = later.active_pixels.or(self.active_pixels);
+        self.next_sample = later.next_sample;
+        self.checkpoint = later.checkpoint;
+        self.first_pass = self.first_pass.or(later.first_pass);
+    }
+
     /// Adds what a dispatch (or a pass's dispatches) reported.
     fn add(&mut self, s: &GpuStats) {
         self.rays += s.rays as u64;
@@ -295,6 +315,10 @@ pub struct RenderStats {
     /// Pixels adaptive sampling has not found converged, after its last check in this
     /// call; None without adaptive sampling or before its first check.
     pub active_pixels: Option<u64>,
+    /// The first sample index not yet in every pixel: the end of the last whole pass.
+    pub next_sample: u32,
+    /// Stopped at the end of a pass for [`RenderControl::pass_deadline`].
+    pub checkpoint: bool,
     /// How long the film's first whole pass took, when this call rendered it: a cancel or
     /// deadline waits for it, so it can run past a time limit.
     pub first_pass: Option<Duration>,
@@ -819,6 +843,7 @@ impl Renderer {
         let total = pixels * samples.len() as u64;
         let adaptive = self.settings.noise_threshold > 0.0 && self.noise_pipelines.is_some();
         let mut next = samples.start;
+        stats.next_sample = next;
         'passes: while next < samples.end {
             if adaptive && self.all_converged {
                 break;
@@ -900,10 +925,16 @@ impl Renderer {
                 }
             }
             next += count;
+            stats.next_sample = next;
             if adaptive && is_adaptive_check(next) {
                 let active = self.adaptive_check(true)?;
                 stats.active_pixels = Some(active as u64);
                 self.all_converged = active == 0;
+            }
+            if next < samples.end && control.pass_deadline.is_some_and(|d| Instant::now() >= d) {
+                stats.completed = false;
+                stats.checkpoint = true;
+                break;
             }
             // Batching and tiling change only how work is cut, never the result.
             if let Pacing::Interactive { budget_us } = self.pacing {
@@ -960,6 +991,46 @@ impl Renderer {
             self.submit_and_wait(encoder, "adaptive sampling's check")?;
         }
         Ok(self.take_stats()?.active_pixels)
+    }
+
+    /// The film's state on the device, bit for bit: per piece its sums, their
+    /// compensation, and the AOV and noise films it has (a checkpoint's content).
+    pub fn film_state(&self) -> Result<Vec<Vec<u8>>, RenderError> {
+        let mut state = Vec::new();
+        for piece in &self.pieces {
+            for buffer in piece.buffers() {
+                state.push(super::readback::read_buffer(
+                    &self.ctx,
+                    buffer,
+                    buffer.size(),
+                )?);
+            }
+        }
+        Ok(state)
+    }
+
+    /// Puts back a state [`Renderer::film_state`] read from a renderer of the same scene
+    /// and settings; the film then holds whole passes (a state is taken between them).
+    pub fn restore_film_state(&mut self, state: &[Vec<u8>]) -> Result<(), RenderError> {
+        let buffers: Vec<&wgpu::Buffer> = self.pieces.iter().flat_map(|p| p.buffers()).collect();
+        let fits = buffers.len() == state.len()
+            && buffers
+                .iter()
+                .zip(state)
+                .all(|(b, s)| b.size() == s.len() as u64);
+        if !fits {
+            return Err(RenderError::Scene(
+                "the saved film does not fit this render's film (another size or other layers)"
+                    .into(),
+            ));
+        }
+        for (buffer, bytes) in buffers.into_iter().zip(state) {
+            self.ctx.queue.write_buffer(buffer, 0, bytes);
+        }
+        self.ctx.queue.submit([]);
+        self.film_has_whole_pass = true;
+        self.all_converged = false;
+        Ok(())
     }
 
     /// Each pixel's noise estimate, from the top-left (see

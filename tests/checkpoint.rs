@@ -1,0 +1,150 @@
+//! Checkpoint and resume: a render continued from its film's state, in the same process or
+//! from `kiln render --resume`, is bit for bit the uninterrupted render; a checkpoint of
+//! other settings is refused; a finished render removes its checkpoint.
+
+mod common;
+
+use std::path::Path;
+use std::process::Command;
+use std::sync::Arc;
+use std::time::Instant;
+
+use common::exr::read_exr;
+use common::{gpu, settings};
+use kiln::render::{RenderControl, RenderSettings, Renderer};
+use kiln::scene::default_scene;
+
+/// The film, AOVs and noise estimate after `render` ran on a new renderer.
+fn state(r: &Renderer) -> (Vec<[f64; 4]>, Option<kiln::render::Aovs>, Option<Vec<f32>>) {
+    (
+        r.read_film().unwrap().sums,
+        r.read_aovs().unwrap(),
+        r.read_noise().unwrap(),
+    )
+}
+
+#[test]
+fn a_render_resumed_from_its_film_state_is_the_uninterrupted_one() {
+    let ctx = gpu();
+    let scene = default_scene().unwrap();
+    for (aovs, noise_threshold) in [(false, 0.0), (true, 0.3)] {
+        let s = RenderSettings {
+            aovs,
+            noise_threshold,
+            ..settings(24, 24, 40)
+        };
+        let mut whole = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
+        whole.render(0..40, RenderControl::default()).unwrap();
+
+        // Stopped at the end of its first pass by a deadline already past.
+        let mut first = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
+        let stats = first
+            .render(
+                0..40,
+                RenderControl {
+                    pass_deadline: Some(Instant::now()),
+                    ..RenderControl::default()
+                },
+            )
+            .unwrap();
+        assert!(stats.checkpoint && !stats.completed);
+        assert!(
+            (1..40).contains(&stats.next_sample),
+            "{}",
+            stats.next_sample
+        );
+        let saved = first.film_state().unwrap();
+
+        let mut resumed = Renderer::new(Arc::clone(&ctx), &scene, s).unwrap();
+        resumed.restore_film_state(&saved).unwrap();
+        let rest = resumed
+            .render(stats.next_sample..40, RenderControl::default())
+            .unwrap();
+        assert!(rest.completed && !rest.checkpoint);
+        assert_eq!(
+            state(&resumed),
+            state(&whole),
+            "AOVs {aovs}, threshold {noise_threshold}"
+        );
+
+        // A state from another film is refused, not written over this one.
+        let mut other = Renderer::new(Arc::clone(&ctx), &scene, settings(16, 16, 1)).unwrap();
+        let e = other.restore_film_state(&saved).unwrap_err().to_string();
+        assert!(e.contains("does not fit"), "{e}");
+    }
+}
+
+fn kiln(args: &[&str], output: &Path) -> (bool, String) {
+    let out = Command::new(env!("CARGO_BIN_EXE_kiln"))
+        .arg("render")
+        .args(args)
+        .args(["-q", "-o"])
+        .arg(output)
+        .output()
+        .expect("kiln runs");
+    (
+        out.status.success(),
+        String::from_utf8_lossy(&out.stderr).into_owned(),
+    )
+}
+
+#[test]
+fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
+    let dir = tempfile::tempdir().unwrap();
+    let (whole_path, stopped_path) = (dir.path().join("whole.exr"), dir.path().join("cut.exr"));
+    let args = ["--size", "48x48", "--spp", "300"];
+    let (ok, err) = kiln(&args, &whole_path);
+    assert!(ok, "{err}");
+
+    // Stopped by its time limit after a few checkpoints (300 spp at 48×48 takes ~4 s here).
+    let stop = [
+        &args[..],
+        &["--time-limit", "1", "--checkpoint-every", "0.1"],
+    ]
+    .concat();
+    let (ok, err) = kiln(&stop, &stopped_path);
+    assert!(ok, "{err}");
+    let checkpoint = dir.path().join("cut.exr.kiln-checkpoint");
+    assert!(err.contains("--resume continues"), "{err}");
+    assert!(checkpoint.exists());
+
+    // Other settings: refused, the checkpoint and the image left as they were.
+    let before = std::fs::read(&stopped_path).unwrap();
+    let other = [&args[..], &["--seed", "3", "--resume"]].concat();
+    let (ok, err) = kiln(&other, &stopped_path);
+    assert!(
+        !ok && err.contains("another scene or other settings"),
+        "{err}"
+    );
+    assert_eq!(std::fs::read(&stopped_path).unwrap(), before);
+
+    let resume = [&args[..], &["--resume"]].concat();
+    let (ok, err) = kiln(&resume, &stopped_path);
+    assert!(ok, "{err}");
+    assert!(err.contains("resuming from"), "{err}");
+    assert!(
+        !checkpoint.exists(),
+        "a finished render removes its checkpoint"
+    );
+    let (whole, resumed) = (read_exr(&whole_path), read_exr(&stopped_path));
+    for channel in [
+        "R",
+        "G",
+        "B",
+        "samples.Y",
+        "noise.Y",
+        "albedo.R",
+        "normal.X",
+    ] {
+        assert_eq!(
+            whole.channel(channel),
+            resumed.channel(channel),
+            "channel {channel} differs"
+        );
+    }
+
+    // Nothing to resume from: said, and nothing written.
+    let (ok, err) = kiln(&resume, &dir.path().join("new.exr"));
+    assert!(!ok && err.contains("cannot resume from"), "{err}");
+    assert!(!dir.path().join("new.exr").exists());
+}
