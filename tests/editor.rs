@@ -921,3 +921,46 @@ fn the_rotate_gizmo_turns_the_selection_about_the_grabbed_ring() {
     let up = |t: &glam::Affine3A| t.matrix3.y_axis.normalize();
     assert!((up(&turned) - up(&start)).length() < 1e-4);
 }
+
+#[test]
+fn a_quality_preset_sets_its_settings_in_one_undo_step() {
+    let mut harness = start(Setup {
+        size: egui::vec2(1280.0, 1100.0),
+        ..Setup::default()
+    });
+    harness.step();
+    let before = harness.state().document().scene().settings;
+    harness.get_by_label("📷 Render").click();
+    harness.step();
+    harness
+        .get_by_role_and_label(Role::ComboBox, "Quality")
+        .click();
+    harness.step();
+    harness.step();
+    harness.get_by_label("Draft").click();
+    harness.step();
+    harness.step();
+    let s = harness.state().document().scene().settings;
+    let draft = kiln::scene::Quality::Draft.settings();
+    assert_eq!(
+        kiln::scene::Quality::of(&s),
+        Some(kiln::scene::Quality::Draft)
+    );
+    assert_eq!(
+        (s.samples_per_pixel, s.max_bounces, s.clamp, s.denoiser),
+        (
+            draft.samples_per_pixel,
+            draft.max_bounces,
+            draft.clamp,
+            draft.denoiser
+        )
+    );
+    // The rest stays, and one undo takes the whole preset back.
+    assert_eq!(
+        (s.width, s.seed, s.view),
+        (before.width, before.seed, before.view)
+    );
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(harness.state().document().scene().settings, before);
+}

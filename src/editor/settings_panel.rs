@@ -8,6 +8,7 @@ use egui::{DragValue, RichText, Ui};
 use glam::Vec3;
 
 use crate::film::tonemap::Tonemap;
+use crate::scene::Quality;
 use crate::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, Sampler};
 
 use super::document::{Command, Document, GestureId};
@@ -135,6 +136,29 @@ pub fn render_tab_ui(
         }
     });
     section(ui, "Sampling", |ui| {
+        let label = ui.label("Quality").on_hover_text(
+            "Sets the samples, bounces, clamp, noise threshold and denoiser together, to \
+             values measured on Kiln's scenes (docs/BENCHMARKS.md); as kiln render \
+             --quality. Editing any of them makes it Custom.",
+        );
+        egui::ComboBox::from_id_salt("quality preset")
+            .selected_text(Quality::of(&settings).map_or("Custom", Quality::label))
+            .show_ui(ui, |ui| {
+                for q in Quality::ALL {
+                    let chosen = Quality::of(&settings) == Some(q);
+                    if ui
+                        .selectable_label(chosen, q.label())
+                        .on_hover_text(q.describe())
+                        .clicked()
+                    {
+                        q.apply(&mut settings);
+                        changed = Some(None);
+                    }
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
         let samples = DragValue::new(&mut settings.samples_per_pixel).range(1..=1 << 20);
         changed = count_row(ui, "Samples", samples, "").or(changed);
         let bounces = DragValue::new(&mut settings.max_bounces).range(0..=1024);

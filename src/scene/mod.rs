@@ -272,6 +272,24 @@ impl Quality {
         }
     }
 
+    /// The preset `settings` hold, if any.
+    pub fn of(settings: &SceneSettings) -> Option<Quality> {
+        Quality::ALL.into_iter().find(|q| {
+            let mut applied = *settings;
+            q.apply(&mut applied);
+            applied == *settings
+        })
+    }
+
+    /// The name the editor shows.
+    pub fn label(self) -> &'static str {
+        match self {
+            Quality::Draft => "Draft",
+            Quality::Preview => "Preview",
+            Quality::Final => "Final",
+        }
+    }
+
     /// Sets the preset's settings in `settings`.
     pub fn apply(self, settings: &mut SceneSettings) {
         let q = self.settings();
