@@ -800,19 +800,22 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         exposure_ev: args.exposure.unwrap_or(scene.settings.view.exposure_ev),
         tonemap: args.tonemap.unwrap_or(scene.settings.view.tonemap),
     };
+    let write = |renderer| {
+        write_output(
+            renderer,
+            &args.output,
+            plugins,
+            view,
+            denoiser,
+            &args.export_options,
+        )
+    };
     let stats = match result {
         Ok(stats) => stats,
         // Whole passes rendered before an error still make an image with a sample in
         // every pixel: write it, then report the error.
         Err(e) if renderer.has_whole_pass() => {
-            let written = write_output(
-                renderer,
-                &args.output,
-                plugins,
-                view,
-                denoiser,
-                &args.export_options,
-            );
+            let written = write(renderer);
             return Err(match written {
                 Ok(()) => anyhow::anyhow!(
                     "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
@@ -825,14 +828,7 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         }
         Err(e) => return Err(e.into()),
     };
-    write_output(
-        renderer,
-        &args.output,
-        plugins,
-        view,
-        denoiser,
-        &args.export_options,
-    )?;
+    write(renderer)?;
     if stats.completed {
         // The render is whole and written: its checkpoint has served.
         let _ = std::fs::remove_file(&checkpoint_path);

@@ -31,7 +31,8 @@ pub fn export_film(
         film.push_rows(&band, view);
         samples.extend(band.sums.iter().map(|s| s[3] as f32));
     }
-    push_layers(renderer, &mut film, samples)?;
+    let aovs = renderer.read_aovs()?;
+    push_layers(renderer, &mut film, aovs, samples)?;
     Ok(film)
 }
 
@@ -58,17 +59,19 @@ fn export_denoised(
         data: film.radiance().iter().flat_map(|c| c.to_array()).collect(),
     });
     let samples = film.sums.iter().map(|s| s[3] as f32).collect();
-    push_layers(renderer, &mut export, samples)?;
+    push_layers(renderer, &mut export, Some(aovs), samples)?;
     Ok(export)
 }
 
-/// Appends the AOVs, the noise estimate and the sample counts as layers.
+/// Appends `aovs` (the renderer's, read once), the noise estimate and the sample counts
+/// as layers.
 fn push_layers(
     renderer: &Renderer,
     film: &mut ExportFilm,
+    aovs: Option<super::Aovs>,
     samples: Vec<f32>,
 ) -> Result<(), RenderError> {
-    if let Some(aovs) = renderer.read_aovs()? {
+    if let Some(aovs) = aovs {
         for (name, channels, data) in [
             ("albedo", 3, aovs.albedo),
             ("normal", 3, aovs.normal),

@@ -304,45 +304,26 @@ pub fn read_aov_rows(
     Ok(Some(aovs))
 }
 
-/// Rows `rows` of the noise estimate (see `shaders/integrator/adaptive.wgsl`), one value
-/// per pixel; None without it.
-pub fn read_noise_rows(
+/// Rows `rows` of the noise film, one value per pixel taken from its texel
+/// (`[Σ (r + g + b)², its compensation, noise estimate, converged]`) by `value`; None
+/// without the noise film.
+pub fn read_noise_rows<T>(
     ctx: &GpuContext,
     pieces: &[FilmPiece],
     width: u32,
     rows: Range<u32>,
-) -> Result<Option<Vec<f32>>, RenderError> {
-    let mut noise = Vec::with_capacity(width as usize * rows.len());
+    value: impl Fn(&[f32; 4]) -> T,
+) -> Result<Option<Vec<T>>, RenderError> {
+    let mut values = Vec::with_capacity(width as usize * rows.len());
     for (piece, r) in overlapping(pieces, rows) {
         let Some(buffer) = &piece.noise else {
             return Ok(None);
         };
         let raw = read_piece_rows(ctx, piece, buffer, width, &r, NOISE_BYTES)?;
         let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-        noise.extend(raw.iter().map(|m| m[2]));
+        values.extend(raw.iter().map(&value));
     }
-    Ok(Some(noise))
-}
-
-/// Rows `rows` of the noise film's second moments: per pixel, the sum over its samples of
-/// (r + g + b)²; None without the noise film.
-pub fn read_second_moment_rows(
-    ctx: &GpuContext,
-    pieces: &[FilmPiece],
-    width: u32,
-    rows: Range<u32>,
-) -> Result<Option<Vec<f64>>, RenderError> {
-    let mut moments = Vec::with_capacity(width as usize * rows.len());
-    for (piece, r) in overlapping(pieces, rows) {
-        let Some(buffer) = &piece.noise else {
-            return Ok(None);
-        };
-        let raw = read_piece_rows(ctx, piece, buffer, width, &r, NOISE_BYTES)?;
-        let raw: &[[f32; 4]] = bytemuck::cast_slice(&raw);
-        // Kahan: the running sum minus the compensation.
-        moments.extend(raw.iter().map(|m| m[0] as f64 - m[1] as f64));
-    }
-    Ok(Some(moments))
+    Ok(Some(values))
 }
 
 #[cfg(test)]

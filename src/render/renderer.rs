@@ -26,7 +26,7 @@ use thiserror::Error;
 use super::context::{GpuContext, GpuError};
 use super::film_pieces::{
     AOV_BYTES, DeviceFilm, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check,
-    piece_rows, read_aov_rows, read_film_rows, read_noise_rows, read_second_moment_rows,
+    piece_rows, read_aov_rows, read_film_rows, read_noise_rows,
 };
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
@@ -1048,17 +1048,20 @@ impl Renderer {
             &self.pieces,
             self.settings.width,
             0..self.settings.height,
+            |m| m[2],
         )
     }
 
     /// Per pixel from the top-left, the sum over its samples of (r + g + b)²: with the
     /// film's sums, the samples' variance. None unless the noise is estimated.
     pub fn read_second_moments(&self) -> Result<Option<Vec<f64>>, RenderError> {
-        read_second_moment_rows(
+        // Kahan: the running sum minus its compensation.
+        read_noise_rows(
             &self.ctx,
             &self.pieces,
             self.settings.width,
             0..self.settings.height,
+            |m| m[0] as f64 - m[1] as f64,
         )
     }
 

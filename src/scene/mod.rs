@@ -181,11 +181,6 @@ impl Denoiser {
         }
     }
 
-    /// The denoiser named `key` ([`Denoiser::key`]).
-    pub fn from_key(key: &str) -> Option<Denoiser> {
-        Denoiser::ALL.into_iter().find(|d| d.key() == key)
-    }
-
     /// The name the editor shows.
     pub fn label(self) -> &'static str {
         match self {
