@@ -2,6 +2,7 @@
 //! million-triangle scene, with BVH build and kernel build times reported apart. Prints
 //! Markdown rows for `docs/BENCHMARKS.md`. Timings live here, never in tests.
 
+use std::io::Write as _;
 use std::sync::Arc;
 use std::time::{Duration, Instant};
 
@@ -69,9 +70,11 @@ pub struct BenchArgs {
     pub fetch: bool,
     /// Instead of samples/s: the speed/accuracy trade at equal time. Each scene rendered
     /// for each of --budgets seconds plainly, with adaptive sampling (--tradeoff-threshold),
-    /// denoised (à-trous), and both; the error against a reference of --reference-spp
-    /// (RMSE, and relMSE: squared error over the reference squared plus 0.01). Use a small
-    /// --size.
+    /// denoised (à-trous, and Open Image Denoise in builds with it), both, with every lobe
+    /// compiled in, at 2, 4, 8 and 16 bounces and with the presets' firefly clamp; the
+    /// error against a reference of --reference-spp, cached in target/bench-references
+    /// (RMSE, relMSE: squared error over the reference squared plus 0.01, and SSIM). Use a
+    /// small --size.
     #[arg(long)]
     pub tradeoff: bool,
     /// Seconds of rendering per --tradeoff render (the denoiser's time is added).
@@ -83,6 +86,9 @@ pub struct BenchArgs {
     /// Also write --tradeoff's rows as CSV to this file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<std::path::PathBuf>,
+    /// Also plot --tradeoff's relMSE against time (log-log) as a PNG to this file.
+    #[arg(long, value_name = "FILE")]
+    pub plot: Option<std::path::PathBuf>,
 }
 
 impl BenchArgs {
@@ -411,9 +417,173 @@ fn relative_mse(image: &[Vec3], reference: &[Vec3]) -> f64 {
     sum / (3 * image.len().max(1)) as f64
 }
 
-/// The speed/accuracy trade at equal time: each scene rendered for each budget plainly,
-/// with adaptive sampling, denoised, and both, against a reference. Every render has its
-/// own renderer, built (and its kernel compiled) before its clock starts.
+/// One way of spending a `--tradeoff` budget: render settings and a denoiser.
+struct Method {
+    name: String,
+    settings: RenderSettings,
+    denoiser: scene::Denoiser,
+}
+
+/// The levers `kiln bench --tradeoff` compares at equal time, from a scene's own settings
+/// (`base`, "plain"): adaptive sampling and each denoiser alone and together, every
+/// lobe compiled in instead of the specialised kernel, lower bounce limits, and the
+/// presets' firefly clamp.
+fn tradeoff_methods(base: RenderSettings, threshold: f32) -> Vec<Method> {
+    let method = |name: &str, settings: RenderSettings, denoiser| Method {
+        name: name.to_owned(),
+        settings: RenderSettings {
+            aovs: denoiser != scene::Denoiser::None,
+            ..settings
+        },
+        denoiser,
+    };
+    let adaptive = RenderSettings {
+        noise_threshold: threshold,
+        ..base
+    };
+    let mut methods = vec![
+        method("plain", base, scene::Denoiser::None),
+        method("adaptive", adaptive, scene::Denoiser::None),
+    ];
+    for denoiser in [scene::Denoiser::Atrous, scene::Denoiser::Oidn] {
+        if denoiser.unavailable().is_none() {
+            let key = denoiser.key();
+            methods.push(method(key, base, denoiser));
+            methods.push(method(&format!("adaptive + {key}"), adaptive, denoiser));
+        }
+    }
+    let general = RenderSettings {
+        kernel: KernelKind::General,
+        ..base
+    };
+    methods.push(method("general kernel", general, scene::Denoiser::None));
+    for max_bounces in [2, 4, 8, 16].into_iter().filter(|&b| b < base.max_bounces) {
+        let settings = RenderSettings {
+            max_bounces,
+            ..base
+        };
+        let name = format!("{max_bounces} bounces");
+        methods.push(method(&name, settings, scene::Denoiser::None));
+    }
+    let clamp = scene::Quality::Preview.settings().clamp;
+    let clamped = RenderSettings { clamp, ..base };
+    let name = format!("clamp {}", clamp.indirect);
+    methods.push(method(&name, clamped, scene::Denoiser::None));
+    methods
+}
+
+/// Where `kiln bench` keeps the references it renders, so that a second run reuses them:
+/// `KILN_BENCH_CACHE`, or the build's `target/bench-references`.
+fn reference_cache() -> std::path::PathBuf {
+    std::env::var_os("KILN_BENCH_CACHE")
+        .map(Into::into)
+        .unwrap_or_else(|| {
+            std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("target/bench-references")
+        })
+}
+
+/// [`reference_halves`], read from [`reference_cache`] when the same binary rendered it
+/// before for the same scene, settings and samples (the file is named by their hash).
+fn cached_reference(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    base: RenderSettings,
+    half: u32,
+) -> Result<(Vec<Vec3>, f64)> {
+    let key = crate::render::checkpoint::key(scene, &RenderSettings { seed: 0, ..base });
+    let path = reference_cache().join(format!("{key:016x}-{half}.bin"));
+    let pixels = (base.width * base.height) as usize;
+    if let Ok(bytes) = std::fs::read(&path)
+        && bytes.len() == 8 + 12 * pixels
+    {
+        let noise = f64::from_le_bytes(bytes[..8].try_into().expect("8 bytes"));
+        let floats: &[f32] = bytemuck::cast_slice(&bytes[8..]);
+        return Ok((
+            floats.chunks_exact(3).map(Vec3::from_slice).collect(),
+            noise,
+        ));
+    }
+    let (reference, noise) =
+        reference_halves(ctx, scene, |seed| RenderSettings { seed, ..base }, half)?;
+    std::fs::create_dir_all(reference_cache())?;
+    kiln_plugin_api::atomic::write_atomically(&path, |w| {
+        let floats: Vec<f32> = reference.iter().flat_map(|c| c.to_array()).collect();
+        w.write_all(&noise.to_le_bytes())
+            .and_then(|()| w.write_all(bytemuck::cast_slice(&floats)))
+            .map_err(|e| e.to_string())
+    })
+    .map_err(anyhow::Error::msg)?;
+    Ok((reference, noise))
+}
+
+/// The mean structural similarity (SSIM; Wang et al. 2004: 11 × 11 Gaussian windows of
+/// σ 1.5, K1 0.01, K2 0.03) of two images' luminance after the tone curve l / (1 + l),
+/// which maps any radiance into [0, 1): 1 for equal images.
+pub fn ssim(a: &[Vec3], b: &[Vec3], width: usize, height: usize) -> f64 {
+    let tone = |c: &Vec3| {
+        let l = c.dot(Vec3::new(0.2126, 0.7152, 0.0722)).max(0.0) as f64;
+        l / (1.0 + l)
+    };
+    let x: Vec<f64> = a.iter().map(tone).collect();
+    let y: Vec<f64> = b.iter().map(tone).collect();
+    let weights: Vec<f64> = (-5..=5)
+        .map(|i: i32| (-(i * i) as f64 / (2.0 * 1.5 * 1.5)).exp())
+        .collect();
+    // A separable Gaussian blur, the window renormalised where it leaves the image.
+    let blur = |image: &[f64]| {
+        let pass = |image: &[f64], horizontal: bool| {
+            let mut out = vec![0.0; image.len()];
+            for row in 0..height {
+                for col in 0..width {
+                    let (mut sum, mut total) = (0.0, 0.0);
+                    for (k, w) in weights.iter().enumerate() {
+                        let (r, c) = if horizontal {
+                            (row as i64, col as i64 + k as i64 - 5)
+                        } else {
+                            (row as i64 + k as i64 - 5, col as i64)
+                        };
+                        if (0..height as i64).contains(&r) && (0..width as i64).contains(&c) {
+                            sum += w * image[r as usize * width + c as usize];
+                            total += w;
+                        }
+                    }
+                    out[row * width + col] = sum / total;
+                }
+            }
+            out
+        };
+        pass(&pass(image, true), false)
+    };
+    let product = |p: &[f64], q: &[f64]| p.iter().zip(q).map(|(p, q)| p * q).collect::<Vec<_>>();
+    let (mx, my) = (blur(&x), blur(&y));
+    let (xx, yy, xy) = (
+        blur(&product(&x, &x)),
+        blur(&product(&y, &y)),
+        blur(&product(&x, &y)),
+    );
+    let (c1, c2) = (0.01f64.powi(2), 0.03f64.powi(2));
+    let sum: f64 = (0..x.len())
+        .map(|i| {
+            let (vx, vy) = (xx[i] - mx[i] * mx[i], yy[i] - my[i] * my[i]);
+            let cov = xy[i] - mx[i] * my[i];
+            ((2.0 * mx[i] * my[i] + c1) * (2.0 * cov + c2))
+                / ((mx[i] * mx[i] + my[i] * my[i] + c1) * (vx + vy + c2))
+        })
+        .sum();
+    sum / x.len().max(1) as f64
+}
+
+/// One measured `--tradeoff` render.
+struct TradeoffRow {
+    scene: String,
+    method: String,
+    seconds: f64,
+    rel_mse: f64,
+}
+
+/// The speed/accuracy trade at equal time: each scene rendered for each budget by each of
+/// [`tradeoff_methods`], against a cached reference. Every render has its own renderer,
+/// built (and its kernel compiled) before its clock starts; a denoiser's time counts.
 fn tradeoff(
     ctx: &Arc<GpuContext>,
     scenes: &[(String, Scene)],
@@ -424,7 +594,10 @@ fn tradeoff(
     let threshold = args.tradeoff_threshold;
     writeln!(
         out,
-        "Adapter: {}; {}x{} px, specialised kernels, each scene's settings, reference {} spp (two seeds); adaptive: --noise-threshold {threshold}; denoised: --denoise atrous.",
+        "Adapter: {}; {}x{} px, specialised kernels but where named, each scene's settings, \
+         reference {} spp (two seeds); adaptive: --noise-threshold {threshold}; relMSE: \
+         squared error over the reference squared plus 0.01; SSIM of the tone-mapped \
+         luminance.",
         ctx.describe(),
         args.size,
         args.size,
@@ -433,32 +606,28 @@ fn tradeoff(
     writeln!(out)?;
     writeln!(
         out,
-        "| scene | method | budget s | seconds | spp (mean) | RMSE | relMSE | relMSE ÷ plain's |"
+        "| scene | method | budget s | seconds | spp (mean) | Msamples/s | RMSE | relMSE | SSIM | relMSE ÷ plain's |"
     )?;
-    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|")?;
-    let mut csv = String::from("scene,method,budget_s,seconds,spp,rmse,rel_mse\n");
+    writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
+    let mut csv =
+        String::from("scene,method,budget_s,seconds,spp,msamples_per_s,rmse,rel_mse,ssim\n");
+    let mut rows = Vec::new();
     let mut headlines = Vec::new();
-    let methods = [
-        ("plain", 0.0, scene::Denoiser::None),
-        ("adaptive", threshold, scene::Denoiser::None),
-        ("denoised", 0.0, scene::Denoiser::Atrous),
-        ("adaptive + denoised", threshold, scene::Denoiser::Atrous),
-    ];
     for (name, scene) in scenes {
-        let base = args.settings(scene, KernelKind::Specialized);
-        let (reference, reference_noise) =
-            reference_halves(ctx, scene, |seed| RenderSettings { seed, ..base }, half)?;
-        let pixels = (args.size * args.size) as f64;
+        let base = RenderSettings {
+            seed: 1,
+            ..args.settings(scene, KernelKind::Specialized)
+        };
+        let (reference, reference_noise) = cached_reference(ctx, scene, base, half)?;
+        let size = args.size as usize;
+        let pixels = (size * size) as f64;
         for &budget in &args.budgets {
             let mut plain = None;
-            for (method, noise_threshold, denoiser) in methods {
-                let settings = RenderSettings {
-                    seed: 1,
-                    noise_threshold,
-                    aovs: denoiser != scene::Denoiser::None,
-                    ..base
-                };
-                let mut r = Renderer::new(Arc::clone(ctx), scene, settings)?;
+            for method in tradeoff_methods(base, threshold) {
+                let mut r = Renderer::new(Arc::clone(ctx), scene, method.settings)?;
+                // The driver compiles a kernel at its first dispatch: not the budget's.
+                r.render(0..1, RenderControl::default())?;
+                r.clear_film();
                 let deadline = Instant::now() + Duration::from_secs_f64(budget);
                 let stats = r.render(
                     0..u32::MAX,
@@ -470,53 +639,163 @@ fn tradeoff(
                 let start = Instant::now();
                 let film = r.read_film()?;
                 let image = match (r.read_aovs()?, r.read_second_moments()?) {
-                    (Some(aovs), Some(moments)) if denoiser != scene::Denoiser::None => {
-                        crate::render::denoise::denoise_film(ctx, &film, &aovs, &moments, denoiser)?
+                    (Some(aovs), Some(moments)) if method.denoiser != scene::Denoiser::None => {
+                        crate::render::denoise::denoise_film(
+                            ctx,
+                            &film,
+                            &aovs,
+                            &moments,
+                            method.denoiser,
+                        )?
                     }
                     _ => film,
                 }
                 .radiance();
-                let seconds = stats.elapsed.as_secs_f64()
-                    + if denoiser == scene::Denoiser::None {
-                        0.0
-                    } else {
-                        start.elapsed().as_secs_f64()
-                    };
+                let denoise_seconds = if method.denoiser == scene::Denoiser::None {
+                    0.0
+                } else {
+                    start.elapsed().as_secs_f64()
+                };
+                let seconds = stats.elapsed.as_secs_f64() + denoise_seconds;
                 let rmse = (mean_square_difference(&image, &reference) - reference_noise)
                     .max(0.0)
                     .sqrt();
                 let rel = relative_mse(&image, &reference);
+                let similarity = ssim(&image, &reference, size, size);
                 let plain_rel = *plain.get_or_insert(rel);
                 let spp = stats.pixel_samples as f64 / pixels;
+                let rate = stats.pixel_samples as f64 / stats.elapsed.as_secs_f64() / 1e6;
+                let method_name = &method.name;
                 writeln!(
                     out,
-                    "| {name} | {method} | {budget} | {seconds:.2} | {spp:.1} | {rmse:.5} | {rel:.5} | {:.2} |",
+                    "| {name} | {method_name} | {budget} | {seconds:.2} | {spp:.1} | {rate:.3} | {rmse:.5} | {rel:.5} | {similarity:.4} | {:.2} |",
                     rel / plain_rel
                 )?;
                 csv.push_str(&format!(
-                    "{name},{method},{budget},{seconds:.3},{spp:.2},{rmse:.6},{rel:.6}\n"
+                    "{name},{method_name},{budget},{seconds:.3},{spp:.2},{rate:.4},{rmse:.6},{rel:.6},{similarity:.5}\n"
                 ));
-                if method == "adaptive + denoised" {
+                if *method_name == "adaptive + atrous" {
                     headlines.push(format!(
-                        "{name}: at {budget} s, adaptive + denoised has {:.1}× lower relMSE than plain",
+                        "{name}: at {budget} s, adaptive + atrous has {:.1}× lower relMSE than plain",
                         plain_rel / rel.max(1e-30)
                     ));
                 }
+                rows.push(TradeoffRow {
+                    scene: name.clone(),
+                    method: method.name,
+                    seconds,
+                    rel_mse: rel,
+                });
             }
+        }
+        // Written after each scene, so a long run stopped part way keeps what it measured.
+        if let Some(path) = &args.csv {
+            kiln_plugin_api::atomic::write_atomically(path, |w| {
+                w.write_all(csv.as_bytes()).map_err(|e| e.to_string())
+            })
+            .map_err(anyhow::Error::msg)?;
+        }
+        if let Some(path) = &args.plot {
+            plot_tradeoff(path, &rows)?;
         }
     }
     writeln!(out)?;
     for line in headlines {
         writeln!(out, "{line}")?;
     }
-    if let Some(path) = &args.csv {
-        use std::io::Write as _;
-        kiln_plugin_api::atomic::write_atomically(path, |w| {
-            w.write_all(csv.as_bytes()).map_err(|e| e.to_string())
-        })
-        .map_err(anyhow::Error::msg)?;
-    }
     Ok(())
+}
+
+/// `--tradeoff`'s relMSE against seconds, log-log, a panel per scene and a line per
+/// method, as a PNG written atomically to `path`.
+fn plot_tradeoff(path: &std::path::Path, rows: &[TradeoffRow]) -> Result<()> {
+    use plotters::prelude::*;
+
+    // Plotters draws text with a font it is given: egui's own, already in the binary.
+    plotters::style::register_font(
+        "sans-serif",
+        FontStyle::Normal,
+        epaint_default_fonts::UBUNTU_LIGHT,
+    )
+    .map_err(|_| anyhow::anyhow!("the plot's font does not load"))?;
+    let mut scenes: Vec<&str> = rows.iter().map(|r| r.scene.as_str()).collect();
+    scenes.dedup();
+    let mut methods: Vec<&str> = Vec::new();
+    for r in rows {
+        if !methods.contains(&r.method.as_str()) {
+            methods.push(&r.method);
+        }
+    }
+    let (panel_w, panel_h) = (720u32, 520u32);
+    let (width, height) = (panel_w, panel_h * scenes.len() as u32);
+    let mut pixels = vec![0u8; (width * height * 3) as usize];
+    {
+        let root = BitMapBackend::with_buffer(&mut pixels, (width, height)).into_drawing_area();
+        root.fill(&WHITE)?;
+        for (panel, scene) in root.split_evenly((scenes.len(), 1)).iter().zip(&scenes) {
+            let of_scene: Vec<&TradeoffRow> = rows.iter().filter(|r| r.scene == *scene).collect();
+            let range = |f: fn(&TradeoffRow) -> f64| {
+                let values = of_scene.iter().map(|r| f(r)).filter(|v| *v > 0.0);
+                let lo = values.clone().fold(f64::INFINITY, f64::min);
+                let hi = values.fold(0.0, f64::max);
+                (lo * 0.8)..(hi * 1.25)
+            };
+            let mut chart = ChartBuilder::on(panel)
+                .caption(
+                    format!("{scene}: relMSE against time (log-log)"),
+                    ("sans-serif", 22),
+                )
+                .margin(12)
+                .x_label_area_size(40)
+                .y_label_area_size(70)
+                .build_cartesian_2d(
+                    range(|r| r.seconds).log_scale(),
+                    range(|r| r.rel_mse).log_scale(),
+                )?;
+            chart
+                .configure_mesh()
+                .x_desc("seconds")
+                .y_desc("relMSE")
+                .label_style(("sans-serif", 14))
+                .draw()?;
+            for (i, method) in methods.iter().enumerate() {
+                let colour = Palette99::pick(i).to_rgba();
+                let points: Vec<(f64, f64)> = of_scene
+                    .iter()
+                    .filter(|r| r.method == *method && r.rel_mse > 0.0)
+                    .map(|r| (r.seconds, r.rel_mse))
+                    .collect();
+                if points.is_empty() {
+                    continue;
+                }
+                chart
+                    .draw_series(LineSeries::new(points.clone(), colour.stroke_width(2)))?
+                    .label(*method)
+                    .legend(move |(x, y)| {
+                        PathElement::new(vec![(x, y), (x + 18, y)], colour.stroke_width(2))
+                    });
+                chart.draw_series(points.iter().map(|&p| Circle::new(p, 3, colour.filled())))?;
+            }
+            chart
+                .configure_series_labels()
+                .position(SeriesLabelPosition::UpperRight)
+                .background_style(WHITE.mix(0.85))
+                .border_style(BLACK)
+                .label_font(("sans-serif", 13))
+                .draw()?;
+        }
+        root.present()?;
+    }
+    let image = image::RgbImage::from_raw(width, height, pixels)
+        .ok_or_else(|| anyhow::anyhow!("the plot's buffer has the wrong size"))?;
+    kiln_plugin_api::atomic::write_atomically(path, |w| {
+        let mut png = Vec::new();
+        image
+            .write_to(&mut std::io::Cursor::new(&mut png), image::ImageFormat::Png)
+            .map_err(|e| e.to_string())?;
+        w.write_all(&png).map_err(|e| e.to_string())
+    })
+    .map_err(anyhow::Error::msg)
 }
 
 /// The (direct, indirect) limits `kiln bench --clamp` measures; the first is off.
@@ -1070,4 +1349,73 @@ pub fn measure_import(triangles: u32) -> Result<(Duration, Option<u64>, u64)> {
         _ => None,
     };
     Ok((elapsed, extra, imported.scene.triangle_count()))
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    /// A smooth image with structure: a gradient and a bright disc.
+    fn picture(width: usize, height: usize) -> Vec<Vec3> {
+        (0..width * height)
+            .map(|i| {
+                let (x, y) = ((i % width) as f32, (i / width) as f32);
+                let disc = if (x - 20.0).hypot(y - 12.0) < 6.0 {
+                    4.0
+                } else {
+                    0.0
+                };
+                Vec3::new(x / width as f32 + disc, y / height as f32, 0.3)
+            })
+            .collect()
+    }
+
+    #[test]
+    fn ssim_is_one_for_equal_images_and_falls_with_noise_and_lost_structure() {
+        let (w, h) = (40, 24);
+        let a = picture(w, h);
+        assert!((ssim(&a, &a, w, h) - 1.0).abs() < 1e-9);
+        // Deterministic noise of two amplitudes: more noise, lower similarity.
+        let noisy = |amplitude: f32| -> Vec<Vec3> {
+            a.iter()
+                .enumerate()
+                .map(|(i, c)| {
+                    let n = ((i as u32).wrapping_mul(2_654_435_761) >> 8) as f32 / 16_777_216.0;
+                    (*c + Vec3::splat(amplitude * (n - 0.5))).max(Vec3::ZERO)
+                })
+                .collect()
+        };
+        let (slight, strong) = (ssim(&noisy(0.05), &a, w, h), ssim(&noisy(0.5), &a, w, h));
+        assert!(slight < 1.0 && strong < slight, "{slight} {strong}");
+        assert!(strong > 0.0, "{strong}");
+        // A uniform image of the same mean keeps the luminance term but loses structure.
+        let mean = a.iter().copied().sum::<Vec3>() / a.len() as f32;
+        let flat = vec![mean; a.len()];
+        assert!(ssim(&flat, &a, w, h) < 0.5);
+    }
+
+    #[test]
+    fn the_tradeoff_plot_is_a_png_of_a_panel_per_scene() {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("plot.png");
+        let row = |scene: &str, method: &str, seconds, rel_mse| TradeoffRow {
+            scene: scene.into(),
+            method: method.into(),
+            seconds,
+            rel_mse,
+        };
+        let rows = [
+            row("a", "plain", 0.5, 0.02),
+            row("a", "plain", 1.0, 0.01),
+            row("a", "atrous", 0.5, 0.008),
+            row("a", "atrous", 1.0, 0.005),
+            row("b", "plain", 0.5, 0.3),
+            row("b", "plain", 1.0, 0.1),
+        ];
+        plot_tradeoff(&path, &rows).unwrap();
+        let image = image::open(&path).unwrap().to_rgb8();
+        assert_eq!(image.dimensions(), (720, 2 * 520));
+        // Something was drawn: not all white.
+        assert!(image.pixels().any(|p| p.0 != [255, 255, 255]));
+    }
 }

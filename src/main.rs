@@ -3,6 +3,7 @@
 //! (2 for usage errors, 1 for everything else), never as a panic.
 
 use std::cell::Cell;
+use std::io::Write as _;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
 use std::sync::Arc;
@@ -14,7 +15,7 @@ use clap::builder::TypedValueParser as _;
 use clap::{Parser, Subcommand, ValueEnum};
 use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
-use kiln::plugin::{ExportFilm, PluginHost, PluginKind};
+use kiln::plugin::{ExportFilm, Isolation, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
@@ -35,6 +36,13 @@ struct Cli {
     /// folder of the executable); may be given several times.
     #[arg(long = "plugin-dir", global = true, value_name = "DIR")]
     plugin_dirs: Vec<PathBuf>,
+    /// Run importer plugins in a separate process, so that one that crashes or hangs fails
+    /// its import instead of taking Kiln down (the editor always does).
+    #[arg(long, global = true)]
+    isolate_importers: bool,
+    /// Seconds an isolated import may take before it is stopped.
+    #[arg(long, global = true, default_value_t = 600.0, value_name = "SECS")]
+    import_timeout: f64,
     #[command(subcommand)]
     command: Command,
 }
@@ -116,6 +124,10 @@ enum Command {
         #[arg(short, long)]
         output: PathBuf,
     },
+    /// The worker of an isolated import: imports FILE in this process and writes the
+    /// calls the importer made to standard output, for the Kiln that started it.
+    #[command(hide = true)]
+    ImportWorker { file: PathBuf },
     /// Check material graphs (.kmat) and show the WGSL they compile to.
     #[command(subcommand)]
     Material(MaterialCommand),
@@ -401,16 +413,48 @@ fn main() -> ExitCode {
         .init();
     let cli = Cli::parse();
     let backend = cli.backend.map(Backend::from);
-    let plugins = || PluginHost::discover(&cli.plugin_dirs);
+    if !(cli.import_timeout.is_finite() && cli.import_timeout > 0.0) {
+        eprintln!(
+            "error: --import-timeout must be a positive number of seconds, got {}",
+            cli.import_timeout
+        );
+        return ExitCode::FAILURE;
+    }
+    let isolated_plugins = || {
+        let mut host = PluginHost::discover(&cli.plugin_dirs);
+        match std::env::current_exe() {
+            Ok(exe) => host.isolate_importers(Isolation {
+                exe,
+                plugin_dirs: cli.plugin_dirs.clone(),
+                timeout: Duration::from_secs_f64(cli.import_timeout),
+            }),
+            Err(e) => eprintln!("warning: importers run in this process: {e}"),
+        }
+        host
+    };
+    let plugins = || {
+        if cli.isolate_importers {
+            isolated_plugins()
+        } else {
+            PluginHost::discover(&cli.plugin_dirs)
+        }
+    };
     let result = match cli.command {
         Command::Render(args) => render(args, backend, &plugins()),
         Command::Edit {
             file,
             samples,
             quit_when_done,
-        } => edit(file, samples, quit_when_done, plugins()),
+        } => edit(file, samples, quit_when_done, isolated_plugins()),
         Command::Plugins => list_plugins(&plugins()),
         Command::Import { file, output } => import(&plugins(), &file, &output),
+        Command::ImportWorker { file } => {
+            let stream = PluginHost::discover(&cli.plugin_dirs).import_recorded(&file);
+            std::io::stdout()
+                .lock()
+                .write_all(&stream)
+                .context("cannot send the import to Kiln")
+        }
         Command::Info => info(backend),
         Command::Bench(args) => kiln::bench::run(&args, backend, &mut std::io::stdout()),
         Command::Material(command) => material(command),
@@ -610,6 +654,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,
     // which is the plugin's code).
     let denoiser = args.denoise.unwrap_or(scene.settings.denoiser);
+    if let Some(why) = denoiser.unavailable() {
+        bail!("cannot denoise with {}: {why}", denoiser.key());
+    }
     settings.aovs = denoiser != Denoiser::None
         || args
             .output

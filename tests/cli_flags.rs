@@ -674,6 +674,25 @@ fn denoise_flag_writes_the_denoised_image_and_keeps_the_noisy_one() {
     assert!(stderr(&result).contains("atrous"), "{}", stderr(&result));
 }
 
+/// A build without Open Image Denoise refuses `--denoise oidn` before it renders (no
+/// adapter is even opened), saying how to get it.
+#[cfg(not(feature = "oidn"))]
+#[test]
+fn denoise_oidn_without_the_library_is_refused_before_rendering() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("x.png");
+    let result = kiln()
+        .args(["render", "--denoise", "oidn", "-o"])
+        .arg(&out)
+        .output()
+        .unwrap();
+    let err = stderr(&result);
+    assert!(!result.status.success());
+    assert!(err.contains("--features oidn"), "{err}");
+    assert!(!err.contains("adapter:"), "it rendered first:\n{err}");
+    assert!(!out.exists());
+}
+
 #[test]
 fn quality_presets_are_described_in_the_help_and_flags_beside_them_win() {
     let help = kiln().args(["render", "--help"]).output().unwrap();

@@ -1,5 +1,5 @@
-//! The à-trous denoiser (`--denoise atrous`): it keeps the image's energy, never makes a
-//! NaN, leaves a converged image as it was, lowers the error against a reference, and
+//! The denoisers (`--denoise atrous`, and `oidn` in builds with the `oidn` feature): each
+//! keeps the image's energy, never makes a NaN, leaves a converged image as it was, lowers the error against a reference, and
 //! keeps the edges of the albedo (a checker texture) and of the normals (the Cornell
 //! box's corners). The emission the camera sees directly is passed through unfiltered,
 //! so the light's own pixels and its rim keep their noise and are left out of the error.
@@ -23,7 +23,12 @@ struct Denoised {
     denoised: Film,
 }
 
-fn render_and_denoise(ctx: &Arc<GpuContext>, scene: &Scene, s: RenderSettings) -> Denoised {
+fn render_and_denoise(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    s: RenderSettings,
+    denoiser: Denoiser,
+) -> Denoised {
     let s = RenderSettings { aovs: true, ..s };
     let mut r = Renderer::new(Arc::clone(ctx), scene, s).expect("renderer");
     let stats = r
@@ -33,7 +38,7 @@ fn render_and_denoise(ctx: &Arc<GpuContext>, scene: &Scene, s: RenderSettings) -
     let noisy = r.read_film().unwrap();
     let aovs = r.read_aovs().unwrap().expect("AOVs");
     let moments = r.read_second_moments().unwrap().expect("second moments");
-    let denoised = denoise_film(ctx, &noisy, &aovs, &moments, Denoiser::Atrous).unwrap();
+    let denoised = denoise_film(ctx, &noisy, &aovs, &moments, denoiser).unwrap();
     assert_eq!(
         denoised.sums.iter().map(|s| s[3]).collect::<Vec<_>>(),
         noisy.sums.iter().map(|s| s[3]).collect::<Vec<_>>(),
@@ -78,19 +83,20 @@ fn vec3s(flat: &[f32]) -> Vec<Vec3> {
     flat.chunks_exact(3).map(Vec3::from_slice).collect()
 }
 
-#[test]
-fn the_cornell_box_denoised_keeps_its_energy_and_corners_and_is_closer_to_the_reference() {
+fn the_cornell_box_denoised_keeps_its_energy_and_corners_and_is_closer_to_the_reference(
+    denoiser: Denoiser,
+) {
     let ctx = gpu();
     let scene = default_scene().unwrap();
     let (w, h) = (48, 48);
-    let reference = render_and_denoise(&ctx, &scene, settings(w, h, 1024));
+    let reference = render_and_denoise(&ctx, &scene, settings(w, h, 1024), denoiser);
     // The light and the pixels its edge crosses (through the pixel filter's tails), which
     // the denoiser passes through unfiltered: their emission seen directly is exact.
     let dark: Vec<usize> = (0..(w * h) as usize)
         .filter(|&p| reference.aovs.emission[3 * p..3 * p + 3] == [0.0; 3])
         .collect();
     let reference = reference.noisy.radiance();
-    let d = render_and_denoise(&ctx, &scene, settings(w, h, 16));
+    let d = render_and_denoise(&ctx, &scene, settings(w, h, 16), denoiser);
     let (noisy, denoised) = (d.noisy.radiance(), d.denoised.radiance());
     assert!(
         denoised
@@ -137,12 +143,11 @@ fn the_cornell_box_denoised_keeps_its_energy_and_corners_and_is_closer_to_the_re
 /// A converged image (4096 samples) changes by less than 1 % of its mean per pixel in
 /// RMS, and nowhere by more than 10 % of the pixel's value plus 0.01: where the noise is
 /// gone the luminance weight stops the filter.
-#[test]
-fn a_converged_image_is_left_as_it_was() {
+fn a_converged_image_is_left_as_it_was(denoiser: Denoiser) {
     let ctx = gpu();
     let scene = default_scene().unwrap();
     let (w, h) = (24, 24);
-    let d = render_and_denoise(&ctx, &scene, settings(w, h, 4096));
+    let d = render_and_denoise(&ctx, &scene, settings(w, h, 4096), denoiser);
     let (noisy, denoised) = (d.noisy.radiance(), d.denoised.radiance());
     let level = mean(&noisy).length() as f64;
     let change = rmse(&noisy, &denoised, 0..(w * h) as usize);
@@ -161,8 +166,7 @@ fn a_converged_image_is_left_as_it_was() {
 /// A checker floor (albedo 0.8 and 0.05) lit by a small light: after denoising the
 /// squares' edges are as sharp as in the reference, since the filter runs on the image
 /// divided by the albedo and stops at albedo changes.
-#[test]
-fn the_edges_of_a_checker_texture_survive() {
+fn the_edges_of_a_checker_texture_survive(denoiser: Denoiser) {
     let ctx = gpu();
     let text = r#"(
         version: 1,
@@ -194,7 +198,7 @@ fn the_edges_of_a_checker_texture_survive() {
     );
     let (w, h) = (64, 48);
     let reference = common::render(&ctx, &scene, settings(w, h, 1024)).radiance();
-    let d = render_and_denoise(&ctx, &scene, settings(w, h, 8));
+    let d = render_and_denoise(&ctx, &scene, settings(w, h, 8), denoiser);
     let (noisy, denoised) = (d.noisy.radiance(), d.denoised.radiance());
     let squares = edges(w as usize, h as usize, &vec3s(&d.aovs.albedo), 0.3);
     assert!(squares.len() > 200, "{} edge pixels", squares.len());
@@ -210,8 +214,7 @@ fn the_edges_of_a_checker_texture_survive() {
 
 /// Black surfaces (albedo 0), one sample per pixel, a light seen directly, the sky seen
 /// through the box's open side: every pixel stays finite and non-negative.
-#[test]
-fn extremes_make_no_nan() {
+fn extremes_make_no_nan(denoiser: Denoiser) {
     let ctx = gpu();
     let mut scene = default_scene().unwrap();
     for m in &mut scene.materials {
@@ -221,7 +224,7 @@ fn extremes_make_no_nan() {
     }
     scene.environment = Vec3::splat(1.0e4);
     for spp in [1, 2] {
-        let d = render_and_denoise(&ctx, &scene, settings(24, 24, spp));
+        let d = render_and_denoise(&ctx, &scene, settings(24, 24, spp), denoiser);
         for (p, c) in d.denoised.radiance().iter().enumerate() {
             assert!(
                 c.is_finite() && c.min_element() >= 0.0,
@@ -230,3 +233,29 @@ fn extremes_make_no_nan() {
         }
     }
 }
+
+/// Each check, for each denoiser this build has.
+macro_rules! for_each_denoiser {
+    ($($check:ident),* $(,)?) => {
+        mod atrous {
+            $(#[test]
+            fn $check() {
+                super::$check(kiln::scene::Denoiser::Atrous);
+            })*
+        }
+        #[cfg(feature = "oidn")]
+        mod oidn {
+            $(#[test]
+            fn $check() {
+                super::$check(kiln::scene::Denoiser::Oidn);
+            })*
+        }
+    };
+}
+
+for_each_denoiser!(
+    the_cornell_box_denoised_keeps_its_energy_and_corners_and_is_closer_to_the_reference,
+    a_converged_image_is_left_as_it_was,
+    the_edges_of_a_checker_texture_survive,
+    extremes_make_no_nan,
+);

@@ -189,6 +189,58 @@ fn quad_glb(dir: &Path) -> PathBuf {
     path
 }
 
+/// An import run out of process (`--isolate-importers`, the editor's way) gives what the
+/// same import gives in process: the same scene, warnings and images, or the same error;
+/// on every third corpus file (valid and broken ones, with embedded and external
+/// textures, lights and cameras).
+#[test]
+fn isolated_imports_equal_imports_in_process() {
+    let Some(dir) = resource::require(Path::new(CORPUS), "the glTF-Validator corpus") else {
+        return;
+    };
+    let mut files =
+        resource::files_with_extensions(&dir, &["gltf", "glb"]).unwrap_or_else(|e| panic!("{e}"));
+    files.sort();
+    let in_process = host();
+    let mut isolated = host();
+    isolated.isolate_importers(kiln::plugin::Isolation {
+        exe: assert_cmd::cargo::cargo_bin("kiln"),
+        plugin_dirs: Vec::new(),
+        timeout: HANG_GUARD,
+    });
+    let (mut imported, mut refused) = (0, 0);
+    for file in files.iter().step_by(3) {
+        match (in_process.import(file), isolated.import(file)) {
+            (Ok(a), Ok(b)) => {
+                assert!(a.scene == b.scene, "{}: the scenes differ", file.display());
+                assert_eq!(a.warnings, b.warnings, "{}", file.display());
+                assert_eq!(a.images, b.images, "{}", file.display());
+                assert_eq!(
+                    (a.has_camera, a.has_lights),
+                    (b.has_camera, b.has_lights),
+                    "{}",
+                    file.display()
+                );
+                imported += 1;
+            }
+            (Err(a), Err(b)) => {
+                assert_eq!(a.to_string(), b.to_string());
+                refused += 1;
+            }
+            (a, b) => panic!(
+                "{}: in process {:?}, isolated {:?}",
+                file.display(),
+                a.map(|i| i.warnings),
+                b.map(|i| i.warnings)
+            ),
+        }
+    }
+    assert!(
+        imported > 40 && refused > 10,
+        "{imported} imported, {refused} refused"
+    );
+}
+
 #[test]
 fn hostile_gltf_inputs_are_refused_with_a_message() {
     let host = host();

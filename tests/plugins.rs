@@ -1,12 +1,14 @@
 //! The plugin host against purpose-built plugins: the C example exporter (proving the
 //! header works from C), and broken ones — wrong ABI version, no descriptor, not a
-//! library, an importer that fails, one that panics. Kiln reports each and keeps going.
+//! library, an importer that fails, one that panics, and run out of process one that
+//! crashes and one that hangs. Kiln reports each and keeps going.
 
 use std::path::{Path, PathBuf};
 use std::process::Command;
+use std::time::{Duration, Instant};
 
 use assert_cmd::cargo::CommandCargoExt;
-use kiln::plugin::{PluginHost, PluginKind};
+use kiln::plugin::{Isolation, PluginHost, PluginKind};
 
 const API_DIR: &str = concat!(env!("CARGO_MANIFEST_DIR"), "/plugins/api");
 
@@ -245,4 +247,131 @@ fn the_c_example_exporter_writes_a_ppm() {
         h
     };
     assert!(host.handles(PluginKind::Exporter, Path::new("x.PPM")));
+}
+
+/// A C importer that dereferences a null pointer.
+const CRASHING_IMPORTER: &str = r#"
+#include "kiln_plugin.h"
+static int32_t import(const char *path, const KilnSceneBuilder *b, KilnErrorBuffer *e) {
+    (void)path; (void)e;
+    b->warn(b->ctx, "about to crash");
+    volatile int *p = 0;
+    return *p;
+}
+static const KilnPluginDescriptor D = { KILN_ABI_VERSION, KILN_KIND_IMPORTER, "crashing", "1", "crash", import, 0 };
+const KilnPluginDescriptor *kiln_plugin_descriptor(void) { return &D; }
+"#;
+
+/// A C importer that never returns.
+const HANGING_IMPORTER: &str = r#"
+#include "kiln_plugin.h"
+static int32_t import(const char *path, const KilnSceneBuilder *b, KilnErrorBuffer *e) {
+    (void)path; (void)b; (void)e;
+    volatile unsigned long spin = 0;
+    for (;;) spin++;
+    return KILN_STATUS_OK;
+}
+static const KilnPluginDescriptor D = { KILN_ABI_VERSION, KILN_KIND_IMPORTER, "hanging", "1", "hang", import, 0 };
+const KilnPluginDescriptor *kiln_plugin_descriptor(void) { return &D; }
+"#;
+
+/// A host whose importers run in the `kiln` worker, with the plugins of `dir`.
+fn isolated_host(dir: &Path, timeout: Duration) -> PluginHost {
+    let mut host = PluginHost::discover(&[dir.to_owned()]);
+    host.isolate_importers(Isolation {
+        exe: assert_cmd::cargo::cargo_bin("kiln"),
+        plugin_dirs: vec![dir.to_owned()],
+        timeout,
+    });
+    host
+}
+
+/// Isolated, an importer that segfaults or hangs fails its import with a message that
+/// says so (the hang within its time limit), the host keeps running, and a good importer
+/// still works after them, its refusals reported as in process.
+#[test]
+fn isolated_importers_that_crash_or_hang_fail_their_import_and_kiln_keeps_running() {
+    let dir = tempfile::tempdir().unwrap();
+    compile_c(dir.path(), "crashing", CRASHING_IMPORTER);
+    compile_c(dir.path(), "hanging", HANGING_IMPORTER);
+    compile_c(dir.path(), "failing", FAILING_IMPORTER);
+    compile_c(dir.path(), "triangle", TRIANGLE_IMPORTER);
+    let host = isolated_host(dir.path(), Duration::from_secs(3));
+    let error = |file: &str| {
+        host.import(Path::new(file))
+            .map(|_| ())
+            .unwrap_err()
+            .to_string()
+    };
+    let e = error("model.crash");
+    assert!(
+        e.contains("crashing failed on model.crash: it crashed (SIGSEGV, signal 11)"),
+        "{e}"
+    );
+    let start = Instant::now();
+    let e = error("model.hang");
+    assert!(
+        e.contains("hanging failed on model.hang: it did not finish within 3 s"),
+        "{e}"
+    );
+    // The worker was stopped at its limit, not waited for (a generous guard for a loaded
+    // machine, not a timing).
+    assert!(start.elapsed() < Duration::from_secs(30));
+    // The plugin's own error comes through as it would in process.
+    let e = error("model.fail");
+    assert!(
+        e.contains("failing failed on model.fail: cannot make sense of model.fail"),
+        "{e}"
+    );
+    let imported = host.import(Path::new("anything.tri")).unwrap();
+    let mut in_process = PluginHost::default();
+    in_process.load_dir(dir.path(), false);
+    let expected = in_process.import(Path::new("anything.tri")).unwrap();
+    assert_eq!(imported.scene, expected.scene);
+    assert_eq!(imported.warnings, expected.warnings);
+    assert!(
+        imported
+            .warnings
+            .iter()
+            .any(|w| w.contains("index 7 is out of range for 3 vertices")),
+        "{:?}",
+        imported.warnings
+    );
+
+    // Through the CLI: a message and exit code 1, however the plugin ends.
+    for (file, says) in [
+        ("model.crash", "it crashed (SIGSEGV"),
+        ("model.hang", "did not finish within 1 s"),
+    ] {
+        let (code, _, err) = kiln(&[
+            "render",
+            file,
+            "-q",
+            "--isolate-importers",
+            "--import-timeout",
+            "1",
+            "--plugin-dir",
+            dir.path().to_str().unwrap(),
+        ]);
+        assert_eq!(code, 1, "{err}");
+        assert!(err.contains(says), "{err}");
+    }
+}
+
+/// Plugins load only from the documented places: a library in the current folder is
+/// never loaded, even one a scene sits beside.
+#[test]
+fn a_plugin_in_the_current_folder_is_not_loaded() {
+    let dir = tempfile::tempdir().unwrap();
+    compile_c(dir.path(), "crashing", CRASHING_IMPORTER);
+    let out = Command::cargo_bin("kiln")
+        .unwrap()
+        .arg("plugins")
+        .current_dir(dir.path())
+        .output()
+        .unwrap();
+    let listed = String::from_utf8_lossy(&out.stdout);
+    assert!(out.status.success());
+    assert!(!listed.contains("crashing"), "{listed}");
+    assert!(listed.contains("(importer; .gltf, .glb)"), "{listed}");
 }

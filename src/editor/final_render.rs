@@ -117,6 +117,9 @@ fn render(
     set: &impl Fn(RenderState),
 ) -> Result<RenderResult, String> {
     let denoiser = scene.settings.denoiser;
+    if let Some(why) = denoiser.unavailable() {
+        return Err(why.to_owned());
+    }
     let settings = RenderSettings {
         // The denoiser's guides.
         aovs: denoiser != crate::scene::Denoiser::None,

@@ -71,6 +71,20 @@ fn choice_row<T: Copy + PartialEq>(
     all: &[T],
     label_of: fn(T) -> &'static str,
 ) -> bool {
+    choice_row_with(ui, label, tooltip, value, all, label_of, |_| None)
+}
+
+/// [`choice_row`] whose choices `unavailable` names a reason for are shown greyed out,
+/// with the reason as their tooltip.
+fn choice_row_with<T: Copy + PartialEq>(
+    ui: &mut Ui,
+    label: &str,
+    tooltip: &str,
+    value: &mut T,
+    all: &[T],
+    label_of: fn(T) -> &'static str,
+    unavailable: fn(T) -> Option<&'static str>,
+) -> bool {
     let label = ui.label(label);
     let label = if tooltip.is_empty() {
         label
@@ -82,9 +96,19 @@ fn choice_row<T: Copy + PartialEq>(
         .selected_text(label_of(*value))
         .show_ui(ui, |ui| {
             for &choice in all {
-                clicked |= ui
-                    .selectable_value(value, choice, label_of(choice))
-                    .clicked();
+                let why_not = unavailable(choice);
+                let option = ui.add_enabled(
+                    why_not.is_none(),
+                    egui::Button::selectable(*value == choice, label_of(choice)),
+                );
+                let option = match why_not {
+                    Some(why) => option.on_disabled_hover_text(why),
+                    None => option,
+                };
+                if option.clicked() {
+                    *value = choice;
+                    clicked = true;
+                }
             }
         })
         .response
@@ -183,14 +207,16 @@ pub fn render_tab_ui(
         let tooltip = "What a final render's image goes through before it is shown and \
                        saved. À-trous: an edge-avoiding filter guided by the albedo, normals \
                        and depth and by each pixel's noise; the image as rendered is kept as \
-                       the EXR's noisy layer. The viewport is never denoised.";
-        if choice_row(
+                       the EXR's noisy layer. Open Image Denoise: Intel's neural denoiser, \
+                       in builds with it. The viewport is never denoised.";
+        if choice_row_with(
             ui,
             "Denoise",
             tooltip,
             &mut settings.denoiser,
             &crate::scene::Denoiser::ALL,
             crate::scene::Denoiser::label,
+            crate::scene::Denoiser::unavailable,
         ) {
             changed = Some(None);
         }

@@ -39,7 +39,7 @@ pub(super) struct ImportState {
     file: PathBuf,
     scene: Scene,
     has_camera: bool,
-    warnings: Vec<String>,
+    pub(super) warnings: Vec<String>,
     images: Vec<(String, Arc<Vec<u8>>)>,
     image_bytes: usize,
     vertices: usize,
@@ -349,7 +349,7 @@ impl ImportState {
     }
 }
 
-unsafe extern "C" fn add_mesh(ctx: *mut c_void, mesh: *const api::MeshData) -> u32 {
+pub(super) unsafe extern "C" fn add_mesh(ctx: *mut c_void, mesh: *const api::MeshData) -> u32 {
     guard(ctx, u32::MAX, |s| {
         if mesh.is_null() {
             return s.refuse("null mesh".into());
@@ -358,7 +358,7 @@ unsafe extern "C" fn add_mesh(ctx: *mut c_void, mesh: *const api::MeshData) -> u
     })
 }
 
-unsafe extern "C" fn add_material(
+pub(super) unsafe extern "C" fn add_material(
     ctx: *mut c_void,
     name: *const c_char,
     kmat: *const c_char,
@@ -369,7 +369,7 @@ unsafe extern "C" fn add_material(
     })
 }
 
-unsafe extern "C" fn add_image(
+pub(super) unsafe extern "C" fn add_image(
     ctx: *mut c_void,
     name: *const c_char,
     bytes: *const u8,
@@ -392,7 +392,7 @@ unsafe extern "C" fn add_image(
     })
 }
 
-unsafe extern "C" fn add_instance(
+pub(super) unsafe extern "C" fn add_instance(
     ctx: *mut c_void,
     mesh: u32,
     material: u32,
@@ -406,7 +406,7 @@ unsafe extern "C" fn add_instance(
     })
 }
 
-unsafe extern "C" fn set_camera(ctx: *mut c_void, camera: *const api::CameraData) {
+pub(super) unsafe extern "C" fn set_camera(ctx: *mut c_void, camera: *const api::CameraData) {
     guard(ctx, (), |s| {
         if !camera.is_null() {
             s.camera(unsafe { &*camera });
@@ -414,7 +414,7 @@ unsafe extern "C" fn set_camera(ctx: *mut c_void, camera: *const api::CameraData
     })
 }
 
-unsafe extern "C" fn add_light(ctx: *mut c_void, light: *const api::LightData) -> u32 {
+pub(super) unsafe extern "C" fn add_light(ctx: *mut c_void, light: *const api::LightData) -> u32 {
     guard(ctx, u32::MAX, |s| {
         if light.is_null() {
             return s.refuse("null light".into());
@@ -423,7 +423,7 @@ unsafe extern "C" fn add_light(ctx: *mut c_void, light: *const api::LightData) -
     })
 }
 
-unsafe extern "C" fn warn(ctx: *mut c_void, message: *const c_char) {
+pub(super) unsafe extern "C" fn warn(ctx: *mut c_void, message: *const c_char) {
     guard(ctx, (), |s| {
         if let Some(m) = unsafe { text(message) } {
             s.warnings.push(m);

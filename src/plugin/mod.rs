@@ -8,6 +8,7 @@
 //! files named `libkiln_*`/`kiln_*` are considered). The first plugin of a name wins.
 
 mod builder;
+mod isolate;
 
 use std::ffi::{CStr, CString, c_char};
 use std::path::{Path, PathBuf};
@@ -16,6 +17,7 @@ use kiln_plugin_api as api;
 use thiserror::Error;
 
 pub use builder::Imported;
+pub use isolate::Isolation;
 // The film layer's: it writes the same film itself when no plugin handles the format.
 pub use crate::film::output::{ExportFilm, ExportLayer};
 
@@ -76,6 +78,8 @@ struct Loaded {
 pub struct PluginHost {
     loaded: Vec<Loaded>,
     pub rejected: Vec<Rejected>,
+    /// Where set, importers run in a worker process ([`Isolation`]).
+    isolation: Option<Isolation>,
 }
 
 fn is_library(path: &Path) -> bool {
@@ -237,17 +241,45 @@ impl PluginHost {
         self.find(kind, path).is_ok()
     }
 
-    /// Imports `path` with the importer for its extension.
+    /// From now on runs importers out of process, as `isolation` says.
+    pub fn isolate_importers(&mut self, isolation: Isolation) {
+        self.isolation = Some(isolation);
+    }
+
+    /// Imports `path` with the importer for its extension: in this process, or in a
+    /// worker when [`PluginHost::isolate_importers`] was called.
     pub fn import(&self, path: &Path) -> Result<Imported, PluginError> {
         let plugin = self.find(PluginKind::Importer, path)?;
-        let import = plugin.import.expect("importers have an import function");
-        let c_path = c_path(path)?;
-        let mut state = builder::ImportState::new(path);
-        let raw = state.raw_builder();
-        plugin.call(path, |error| unsafe {
-            import(c_path.as_ptr(), &raw, error)
-        })?;
-        Ok(state.finish())
+        let Some(isolation) = &self.isolation else {
+            let mut state = builder::ImportState::new(path);
+            let raw = state.raw_builder();
+            plugin.run_import(path, &raw)?;
+            return Ok(state.finish());
+        };
+        let failed = |message| PluginError::Failed {
+            plugin: plugin.info.name.clone(),
+            path: path.display().to_string(),
+            message,
+        };
+        isolate::import(isolation, path)
+            .map_err(failed)?
+            .map_err(failed)
+    }
+
+    /// The worker's side of an isolated import ([`PluginHost::import`]): imports `path`
+    /// in this process and returns the stream of the calls the importer made, ended by
+    /// its outcome, for the host to replay.
+    pub fn import_recorded(&self, path: &Path) -> Vec<u8> {
+        let mut recorder = isolate::Recorder::new(path);
+        let raw = recorder.raw_builder();
+        let outcome = self
+            .find(PluginKind::Importer, path)
+            .and_then(|plugin| plugin.run_import(path, &raw))
+            .map_err(|e| match e {
+                PluginError::Failed { message, .. } => message,
+                e => e.to_string(),
+            });
+        recorder.finish(outcome)
     }
 
     /// Writes `film` to `path` with the exporter plugin for its extension, or else with
@@ -328,6 +360,15 @@ fn c_path(path: &Path) -> Result<CString, PluginError> {
 }
 
 impl Loaded {
+    /// Runs the importer on `path` with `builder`.
+    fn run_import(&self, path: &Path, builder: &api::SceneBuilder) -> Result<(), PluginError> {
+        let import = self.import.expect("importers have an import function");
+        let c_path = c_path(path)?;
+        self.call(path, |error| unsafe {
+            import(c_path.as_ptr(), builder, error)
+        })
+    }
+
     /// Runs a plugin function with an error buffer; its status and message as a result.
     fn call(
         &self,

@@ -66,7 +66,59 @@ pub fn denoise_film(
     match denoiser {
         Denoiser::None => Ok(film.clone()),
         Denoiser::Atrous => atrous(ctx, film, aovs, second_moments),
+        Denoiser::Oidn => oidn(film, aovs),
     }
+}
+
+/// `film` through Open Image Denoise's ray-tracing filter (HDR, on the CPU), guided by
+/// the albedo (clamped to [0, 1], as OIDN expects) and the normal AOV (zero where the
+/// camera saw the sky: OIDN's "no surface").
+#[cfg(feature = "oidn")]
+fn oidn(film: &Film, aovs: &Aovs) -> Result<Film, RenderError> {
+    let pixels = film.sums.len();
+    if aovs.albedo.len() != 3 * pixels || aovs.normal.len() != 3 * pixels {
+        return Err(RenderError::Denoise(
+            "the film's AOVs do not match it".into(),
+        ));
+    }
+    let colour: Vec<f32> = film
+        .sums
+        .iter()
+        .flat_map(|s| {
+            let n = s[3].max(1.0);
+            [(s[0] / n) as f32, (s[1] / n) as f32, (s[2] / n) as f32]
+        })
+        .collect();
+    let albedo: Vec<f32> = aovs.albedo.iter().map(|a| a.clamp(0.0, 1.0)).collect();
+    let device = oidn::Device::new();
+    let mut filtered = vec![0.0f32; 3 * pixels];
+    oidn::RayTracing::new(&device)
+        .hdr(true)
+        .image_dimensions(film.width as usize, film.height as usize)
+        .albedo_normal(&albedo, &aovs.normal)
+        .filter(&colour, &mut filtered)
+        .map_err(|e| RenderError::Denoise(format!("Open Image Denoise: {e:?}")))?;
+    if let Err((_, message)) = device.get_error() {
+        return Err(RenderError::Denoise(format!(
+            "Open Image Denoise: {message}"
+        )));
+    }
+    let mut out = film.clone();
+    for (sum, c) in out.sums.iter_mut().zip(filtered.chunks_exact(3)) {
+        let n = sum[3];
+        *sum = [c[0] as f64 * n, c[1] as f64 * n, c[2] as f64 * n, n];
+    }
+    Ok(out)
+}
+
+#[cfg(not(feature = "oidn"))]
+fn oidn(_: &Film, _: &Aovs) -> Result<Film, RenderError> {
+    Err(RenderError::Denoise(
+        Denoiser::Oidn
+            .unavailable()
+            .unwrap_or("Open Image Denoise is not linked")
+            .into(),
+    ))
 }
 
 /// Per pixel what the albedo is divided out by: its channels (at least [`MIN_ALBEDO`])

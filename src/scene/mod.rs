@@ -168,16 +168,21 @@ pub enum Denoiser {
     /// An edge-avoiding à-trous wavelet filter guided by the albedo, normal and depth AOVs
     /// and by each pixel's noise, on the GPU (`shaders/denoise/atrous.wgsl`).
     Atrous,
+    /// Intel Open Image Denoise's ray-tracing filter (a neural network, on the CPU),
+    /// guided by the albedo and normal AOVs: in builds with the `oidn` feature only
+    /// ([`Denoiser::unavailable`]).
+    Oidn,
 }
 
 impl Denoiser {
-    pub const ALL: [Denoiser; 2] = [Denoiser::None, Denoiser::Atrous];
+    pub const ALL: [Denoiser; 3] = [Denoiser::None, Denoiser::Atrous, Denoiser::Oidn];
 
     /// The name in scene files and on the command line (`--denoise`).
     pub fn key(self) -> &'static str {
         match self {
             Denoiser::None => "none",
             Denoiser::Atrous => "atrous",
+            Denoiser::Oidn => "oidn",
         }
     }
 
@@ -186,6 +191,22 @@ impl Denoiser {
         match self {
             Denoiser::None => "None",
             Denoiser::Atrous => "À-trous (albedo, normal, depth)",
+            Denoiser::Oidn => "Open Image Denoise (albedo, normal)",
+        }
+    }
+
+    /// Why this build of Kiln cannot run the denoiser, if it cannot: Open Image Denoise
+    /// is a system library that Kiln links only when built with `--features oidn` (and
+    /// `OIDN_DIR` naming an OIDN 1.4 install; docs/BENCHMARKS.md says where one comes
+    /// from). A scene asking for it still loads and saves unchanged.
+    pub fn unavailable(self) -> Option<&'static str> {
+        match self {
+            Denoiser::Oidn if !cfg!(feature = "oidn") => Some(
+                "this build of Kiln has no Intel Open Image Denoise: build it with \
+                 `--features oidn` and OIDN_DIR set to an OIDN 1.4 install (README), or \
+                 use --denoise atrous",
+            ),
+            _ => None,
         }
     }
 }
