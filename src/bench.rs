@@ -89,6 +89,10 @@ pub struct BenchArgs {
     /// Also plot --tradeoff's relMSE against time (log-log) as a PNG to this file.
     #[arg(long, value_name = "FILE")]
     pub plot: Option<std::path::PathBuf>,
+    /// With --tradeoff --plot: plot the rows of an earlier run's --csv instead of
+    /// measuring again.
+    #[arg(long, value_name = "CSV", requires = "plot")]
+    pub replot: Option<std::path::PathBuf>,
 }
 
 impl BenchArgs {
@@ -218,6 +222,9 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     }
     if args.fetch {
         return fetch(&*GpuContext::new(backend)?, out);
+    }
+    if let (Some(csv), Some(plot)) = (&args.replot, &args.plot) {
+        return plot_tradeoff(plot, &read_tradeoff_csv(csv)?);
     }
     if args.tradeoff {
         let ctx = GpuContext::new(backend)?;
@@ -706,6 +713,49 @@ fn tradeoff(
     Ok(())
 }
 
+/// The rows of a `--tradeoff --csv` file, for `--replot`.
+fn read_tradeoff_csv(path: &std::path::Path) -> Result<Vec<TradeoffRow>> {
+    let text = std::fs::read_to_string(path)
+        .map_err(|e| anyhow::anyhow!("cannot read {}: {e}", path.display()))?;
+    let mut lines = text.lines();
+    let header: Vec<&str> = lines.next().unwrap_or("").split(',').collect();
+    let column = |name: &str| {
+        header
+            .iter()
+            .position(|h| *h == name)
+            .ok_or_else(|| anyhow::anyhow!("{}: no {name} column", path.display()))
+    };
+    let (scene, method, seconds, rel_mse) = (
+        column("scene")?,
+        column("method")?,
+        column("seconds")?,
+        column("rel_mse")?,
+    );
+    lines
+        .enumerate()
+        .filter(|(_, l)| !l.trim().is_empty())
+        .map(|(i, line)| {
+            let fields: Vec<&str> = line.split(',').collect();
+            let field = |c: usize| {
+                fields.get(c).copied().ok_or_else(|| {
+                    anyhow::anyhow!("{} line {}: too few fields", path.display(), i + 2)
+                })
+            };
+            let number = |c: usize| -> Result<f64> {
+                field(c)?
+                    .parse()
+                    .map_err(|_| anyhow::anyhow!("{} line {}: not a number", path.display(), i + 2))
+            };
+            Ok(TradeoffRow {
+                scene: field(scene)?.to_owned(),
+                method: field(method)?.to_owned(),
+                seconds: number(seconds)?,
+                rel_mse: number(rel_mse)?,
+            })
+        })
+        .collect()
+}
+
 /// `--tradeoff`'s relMSE against seconds, log-log, a panel per scene and a line per
 /// method, as a PNG written atomically to `path`.
 fn plot_tradeoff(path: &std::path::Path, rows: &[TradeoffRow]) -> Result<()> {
@@ -756,6 +806,10 @@ fn plot_tradeoff(path: &std::path::Path, rows: &[TradeoffRow]) -> Result<()> {
                 .configure_mesh()
                 .x_desc("seconds")
                 .y_desc("relMSE")
+                .x_labels(8)
+                .y_labels(8)
+                .x_label_formatter(&|v| format!("{v:.2}"))
+                .y_label_formatter(&|v| format!("{v:.0e}"))
                 .label_style(("sans-serif", 14))
                 .draw()?;
             for (i, method) in methods.iter().enumerate() {
