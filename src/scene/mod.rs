@@ -197,14 +197,14 @@ impl Denoiser {
 
     /// Why this build of Kiln cannot run the denoiser, if it cannot: Open Image Denoise
     /// is a system library that Kiln links only when built with `--features oidn` (and
-    /// `OIDN_DIR` naming an OIDN 1.4 install; docs/BENCHMARKS.md says where one comes
+    /// `OIDN_DIR` naming an OIDN 1.4 install; the README says where one comes
     /// from). A scene asking for it still loads and saves unchanged.
     pub fn unavailable(self) -> Option<&'static str> {
         match self {
             Denoiser::Oidn if !cfg!(feature = "oidn") => Some(
                 "this build of Kiln has no Intel Open Image Denoise: build it with \
                  `--features oidn` and OIDN_DIR set to an OIDN 1.4 install (README), or \
-                 use --denoise atrous",
+                 use the à-trous denoiser",
             ),
             _ => None,
         }
