@@ -110,6 +110,10 @@ enum Command {
         /// rendered (smoke tests, scripted screenshots); fails if the viewport failed.
         #[arg(long)]
         quit_when_done: bool,
+        /// Screen pixels per viewport pixel along each axis (1, 2, 4 or 8): 2 renders a
+        /// quarter of the pixels, for slow adapters; also in the Render tab.
+        #[arg(long, default_value_t = 1, value_parser = parse_pixel_size)]
+        pixel_size: u32,
     },
     /// List the GPU adapters and the one Kiln would use.
     Info,
@@ -354,14 +358,29 @@ fn ensure_runtime_dir() {
     }
 }
 
+/// `kiln edit`'s viewport options.
+struct EditView {
+    samples: u32,
+    pixel_size: u32,
+    quit_when_done: bool,
+}
+
+/// One of [`kiln::editor::PIXEL_SIZES`].
+fn parse_pixel_size(s: &str) -> std::result::Result<u32, String> {
+    s.parse()
+        .ok()
+        .filter(|n| kiln::editor::PIXEL_SIZES.contains(n))
+        .ok_or_else(|| format!("the pixel size is one of {:?}", kiln::editor::PIXEL_SIZES))
+}
+
 /// Opens the editor's window; returns when it is closed. The editor picks its adapter as
 /// wgpu does for a window (`WGPU_BACKEND` chooses the API).
-fn edit(
-    file: Option<PathBuf>,
-    samples: u32,
-    quit_when_done: bool,
-    plugins: PluginHost,
-) -> Result<()> {
+fn edit(file: Option<PathBuf>, view: EditView, plugins: PluginHost) -> Result<()> {
+    let EditView {
+        samples,
+        pixel_size,
+        quit_when_done,
+    } = view;
     let import_extensions = plugins
         .plugins()
         .filter(|p| p.kind == PluginKind::Importer)
@@ -377,6 +396,7 @@ fn edit(
         quit_when_done,
         thumbnails: true,
         graph_kernels: kiln::editor::GRAPH_KERNELS,
+        pixel_size,
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
     if let Some(error) = report.error {
@@ -445,7 +465,16 @@ fn main() -> ExitCode {
             file,
             samples,
             quit_when_done,
-        } => edit(file, samples, quit_when_done, isolated_plugins()),
+            pixel_size,
+        } => edit(
+            file,
+            EditView {
+                samples,
+                pixel_size,
+                quit_when_done,
+            },
+            isolated_plugins(),
+        ),
         Command::Plugins => list_plugins(&plugins()),
         Command::Import { file, output } => import(&plugins(), &file, &output),
         Command::ImportWorker { file } => {

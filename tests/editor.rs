@@ -20,7 +20,9 @@ use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 #[path = "common/editor_harness.rs"]
 mod editor_harness;
 
-use editor_harness::{SAMPLE_LIMIT, Setup, bundled_plugins, quad_glb, start, step_until};
+use editor_harness::{
+    PIXEL_SIZE, SAMPLE_LIMIT, Setup, bundled_plugins, quad_glb, start, step_until,
+};
 
 fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
     start(Setup {
@@ -708,7 +710,11 @@ const SNAPSHOT_FAILED_PIXELS: usize = 0;
 
 #[test]
 fn the_main_window_matches_its_snapshot() {
-    let mut harness = harness(ScriptedDialogs::default());
+    // The viewport as a user first sees it: a pixel per pixel.
+    let mut harness = start(Setup {
+        pixel_size: 1,
+        ..Setup::default()
+    });
     harness.get_by_label("block").click();
     step_until(&mut harness, "the first samples", samples_done);
     // Let the node editor's framing and the last texture update settle.
@@ -963,4 +969,38 @@ fn a_quality_preset_sets_its_settings_in_one_undo_step() {
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     harness.step();
     assert_eq!(harness.state().document().scene().settings, before);
+}
+
+#[test]
+fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
+    // Tall enough that the Render tab's last section, the viewport's, is on screen.
+    let mut harness = start(Setup {
+        size: egui::vec2(1280.0, 1600.0),
+        ..Setup::default()
+    });
+    step_until(&mut harness, "the first samples", samples_done);
+    let ppp = harness.ctx.pixels_per_point();
+    let expected = |app: &EditorApp, pixel_size: f32| {
+        let rect = app.viewport_rect().unwrap();
+        [rect.width(), rect.height()].map(|v| (v * ppp / pixel_size).round() as u32)
+    };
+    let status = harness.state().viewport_status().unwrap();
+    assert_eq!(status.size, expected(harness.state(), PIXEL_SIZE as f32));
+    let revision = harness.state().document().revision();
+
+    harness.get_by_label("📷 Render").click();
+    harness.step();
+    harness
+        .get_by_role_and_label(Role::ComboBox, "Pixel Size")
+        .click();
+    harness.step();
+    harness.step();
+    harness.get_by_label("2×").click();
+    step_until(&mut harness, "the image at 2× pixels", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.size == expected(app, 2.0) && s.samples >= SAMPLE_LIMIT)
+    });
+    // A view option: the document does not change.
+    assert_eq!(harness.state().document().revision(), revision);
+    assert!(!harness.state().document().is_dirty());
 }

@@ -59,7 +59,13 @@ pub struct EditorOptions {
     /// graph edit shows at once) and compiles them once the scene is still
     /// ([`GRAPH_KERNELS`]); tests that count builds keep them interpreted.
     pub graph_kernels: GraphKernels,
+    /// Screen pixels per viewport pixel along each axis ([`PIXEL_SIZES`]): 2 renders a
+    /// quarter of the pixels (Blender's Preferences ▸ Viewport ▸ Pixel Size).
+    pub pixel_size: u32,
 }
+
+/// The viewport's pixel sizes the Render tab offers.
+pub const PIXEL_SIZES: [u32; 4] = [1, 2, 4, 8];
 
 /// The editor's viewport: graphs interpreted, compiled once the scene has been still for
 /// 1.5 s.
@@ -292,6 +298,7 @@ impl EditorApp {
                 viewport_samples: options.sample_limit.max(1),
                 export_options: String::new(),
                 graph_kernels: options.graph_kernels,
+                pixel_size: options.pixel_size.max(1),
             },
             tab: Tab::Object,
             final_render: None,
@@ -1093,10 +1100,10 @@ impl EditorApp {
         let rect = ui.available_rect_before_wrap();
         self.viewport_rect = Some(rect);
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
-        let ppp = ui.ctx().pixels_per_point();
+        let scale = ui.ctx().pixels_per_point() / self.options.pixel_size as f32;
         let size = [
-            ((rect.width() * ppp).round() as u32).max(1),
-            ((rect.height() * ppp).round() as u32).max(1),
+            ((rect.width() * scale).round() as u32).max(1),
+            ((rect.height() * scale).round() as u32).max(1),
         ];
         // A material dropped from the node editor's material list onto an object.
         if let (Some(dragged), Some(pos)) = (

@@ -38,7 +38,8 @@ pub mod viewport;
 pub mod viewport_preview;
 
 pub use app::{
-    AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, GRAPH_KERNELS, RunReport,
+    AUTOSAVE_EVERY, DEFAULT_SAMPLE_LIMIT, EditorApp, EditorOptions, GRAPH_KERNELS, PIXEL_SIZES,
+    RunReport,
 };
 pub use document::{Command, Document, Selection};
 pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};

@@ -11,6 +11,7 @@ use crate::film::tonemap::Tonemap;
 use crate::scene::Quality;
 use crate::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, Sampler};
 
+use super::app::PIXEL_SIZES;
 use super::document::{Command, Document, GestureId};
 use super::final_render::RenderState;
 use super::inspector::{Edit, float_row, gesture, section};
@@ -32,6 +33,8 @@ pub struct ViewOptions {
     pub export_options: String,
     /// How the viewport's kernels hold graph materials.
     pub graph_kernels: super::viewport::GraphKernels,
+    /// Screen pixels per viewport pixel along each axis (one of [`PIXEL_SIZES`]).
+    pub pixel_size: u32,
 }
 
 /// What the Render tab asks of the app.
@@ -322,7 +325,34 @@ pub fn render_tab_ui(
     }
     ui.add_space(8.0);
     render_controls(ui, options, render, &mut actions);
+    viewport_section(ui, options);
     actions
+}
+
+/// The viewport's own settings (the editor's, not the document's): where it stops
+/// sampling and how coarse its pixels are.
+fn viewport_section(ui: &mut Ui, options: &mut ViewOptions) {
+    section(ui, "Viewport", |ui| {
+        let samples = DragValue::new(&mut options.viewport_samples).range(1..=1 << 20);
+        let tooltip = "Samples per pixel after which the viewport rests.";
+        count_row(ui, "Max Samples", samples, tooltip);
+        let label = ui.label("Pixel Size").on_hover_text(
+            "Screen pixels per viewport pixel along each axis: 2× renders a quarter of \
+             the pixels, so the image comes and clears 4 times sooner, blurrier. For slow \
+             adapters (a software driver) and large windows. Final renders are not \
+             affected.",
+        );
+        egui::ComboBox::from_id_salt("viewport pixel size")
+            .selected_text(format!("{}×", options.pixel_size))
+            .show_ui(ui, |ui| {
+                for size in PIXEL_SIZES {
+                    ui.selectable_value(&mut options.pixel_size, size, format!("{size}×"));
+                }
+            })
+            .response
+            .labelled_by(label.id);
+        ui.end_row();
+    });
 }
 
 fn render_controls(

@@ -15,6 +15,10 @@ use kiln::plugin::PluginHost;
 
 /// Samples per pixel the viewport stops at: tests wait for it, then the app rests.
 pub const SAMPLE_LIMIT: u32 = 2;
+/// The viewport renders one pixel per 4×4 of the window's: what the tests look at (which
+/// object is where, a colour at the centre) survives it, and an image of a 1920×1000
+/// window's viewport on lavapipe comes in seconds rather than minutes.
+pub const PIXEL_SIZE: u32 = 4;
 /// Building the viewport's kernel on lavapipe takes seconds on a busy machine.
 pub const WAIT: Duration = Duration::from_secs(300);
 
@@ -36,6 +40,8 @@ pub struct Setup {
     pub graph_kernels: GraphKernels,
     /// Samples per pixel the viewport stops at.
     pub sample_limit: u32,
+    /// Screen pixels per viewport pixel ([`PIXEL_SIZE`]).
+    pub pixel_size: u32,
 }
 
 impl Default for Setup {
@@ -50,6 +56,7 @@ impl Default for Setup {
             file: None,
             graph_kernels: GraphKernels::Interpreted,
             sample_limit: SAMPLE_LIMIT,
+            pixel_size: PIXEL_SIZE,
         }
     }
 }
@@ -70,6 +77,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         file,
         graph_kernels,
         sample_limit,
+        pixel_size,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -87,6 +95,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     quit_when_done: false,
                     thumbnails,
                     graph_kernels,
+                    pixel_size,
                 },
             )
         })
