@@ -103,17 +103,18 @@ enum Command {
         /// A .kiln scene or a file an importer reads (.gltf, .glb, .obj, …).
         file: Option<PathBuf>,
         /// Samples per pixel the viewport accumulates before it rests.
-        #[arg(long, default_value_t = kiln::editor::DEFAULT_SAMPLE_LIMIT,
-              value_parser = clap::value_parser!(u32).range(1..))]
-        samples: u32,
+        /// [default: the last one chosen in the Render tab, else 1024]
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        samples: Option<u32>,
         /// Close the window once the viewport holds --samples samples and print what it
         /// rendered (smoke tests, scripted screenshots); fails if the viewport failed.
         #[arg(long)]
         quit_when_done: bool,
         /// Screen pixels per viewport pixel along each axis (1, 2, 4 or 8): 2 renders a
-        /// quarter of the pixels, for slow adapters; also in the Render tab.
-        #[arg(long, default_value_t = 1, value_parser = parse_pixel_size)]
-        pixel_size: u32,
+        /// quarter of the pixels, for slow adapters; also in the Render tab. [default: the
+        /// last one chosen there, else 1]
+        #[arg(long, value_parser = parse_pixel_size)]
+        pixel_size: Option<u32>,
     },
     /// List the GPU adapters and the one Kiln would use.
     Info,
@@ -360,8 +361,8 @@ fn ensure_runtime_dir() {
 
 /// `kiln edit`'s viewport options.
 struct EditView {
-    samples: u32,
-    pixel_size: u32,
+    samples: Option<u32>,
+    pixel_size: Option<u32>,
     quit_when_done: bool,
 }
 

@@ -11,7 +11,7 @@ use egui_kittest::Harness;
 use egui_kittest::kittest::{NodeT, Queryable};
 use glam::Vec3;
 use kiln::editor::final_render::RenderState;
-use kiln::editor::session::SessionStore;
+use kiln::editor::session::{SessionStore, ViewportPreferences};
 use kiln::editor::{EditorApp, ScriptedDialogs, Selection};
 use kiln::film::tonemap::Tonemap;
 use kiln::plugin::PluginHost;
@@ -974,8 +974,10 @@ fn a_quality_preset_sets_its_settings_in_one_undo_step() {
 #[test]
 fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
     // Tall enough that the Render tab's last section, the viewport's, is on screen.
+    let state = tempfile::tempdir().unwrap();
     let mut harness = start(Setup {
         size: egui::vec2(1280.0, 1600.0),
+        state_dir: Some(state.path().to_owned()),
         ..Setup::default()
     });
     step_until(&mut harness, "the first samples", samples_done);
@@ -1003,4 +1005,17 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
     // A view option: the document does not change.
     assert_eq!(harness.state().document().revision(), revision);
     assert!(!harness.state().document().is_dirty());
+    // A preference: the next editor starts with it.
+    let defaults = ViewportPreferences {
+        pixel_size: 1,
+        max_samples: 1024,
+    };
+    let kept = SessionStore::new(state.path().to_owned()).viewport_preferences(defaults);
+    assert_eq!(
+        kept,
+        ViewportPreferences {
+            pixel_size: 2,
+            max_samples: SAMPLE_LIMIT
+        }
+    );
 }

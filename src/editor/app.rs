@@ -25,7 +25,7 @@ use super::node_editor::MaterialDrag;
 use super::node_previews::NodePreviews;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
-use super::session::{Recovery, SessionStore};
+use super::session::{Recovery, SessionStore, ViewportPreferences};
 use super::settings_panel::{RenderAction, ViewOptions, WorldAction, render_tab_ui, world_tab_ui};
 use super::thumbnails::Thumbnails;
 use super::viewport::{GraphKernels, Target, ViewportRenderer, ViewportStatus};
@@ -42,8 +42,9 @@ pub struct EditorOptions {
     pub dialogs: Box<dyn FileDialogs>,
     pub plugins: PluginHost,
     /// Samples per pixel after which the viewport stops accumulating (and stops asking
-    /// for repaints): tests set a small number.
-    pub sample_limit: u32,
+    /// for repaints): tests set a small number. None: the user's last choice (the state
+    /// folder's viewport preferences), else [`DEFAULT_SAMPLE_LIMIT`].
+    pub sample_limit: Option<u32>,
     /// The folder for recent files and autosaves ([`SessionStore::default_dir`]); None
     /// keeps neither (tests that do not test them).
     pub state_dir: Option<PathBuf>,
@@ -60,8 +61,9 @@ pub struct EditorOptions {
     /// ([`GRAPH_KERNELS`]); tests that count builds keep them interpreted.
     pub graph_kernels: GraphKernels,
     /// Screen pixels per viewport pixel along each axis ([`PIXEL_SIZES`]): 2 renders a
-    /// quarter of the pixels (Blender's Preferences ▸ Viewport ▸ Pixel Size).
-    pub pixel_size: u32,
+    /// quarter of the pixels (Blender's Preferences ▸ Viewport ▸ Pixel Size). None: the
+    /// user's last choice, else 1.
+    pub pixel_size: Option<u32>,
 }
 
 /// The viewport's pixel sizes the Render tab offers.
@@ -270,6 +272,20 @@ impl EditorApp {
         });
         let view = document.scene().camera;
         let session = options.state_dir.clone().map(SessionStore::new);
+        let defaults = ViewportPreferences {
+            pixel_size: 1,
+            max_samples: DEFAULT_SAMPLE_LIMIT,
+        };
+        let remembered = session
+            .as_ref()
+            .map_or(defaults, |s| s.viewport_preferences(defaults));
+        let preferences = ViewportPreferences {
+            pixel_size: options.pixel_size.unwrap_or(remembered.pixel_size).max(1),
+            max_samples: options
+                .sample_limit
+                .unwrap_or(remembered.max_samples)
+                .max(1),
+        };
         if let (Some(store), Some(path)) = (&session, document.path()) {
             if let Err(e) = store.add_recent(path) {
                 tracing::warn!("cannot record the recent file: {e}");
@@ -295,10 +311,10 @@ impl EditorApp {
             viewport_preview_error: None,
             node_previews,
             options: ViewOptions {
-                viewport_samples: options.sample_limit.max(1),
+                viewport_samples: preferences.max_samples,
                 export_options: String::new(),
                 graph_kernels: options.graph_kernels,
-                pixel_size: options.pixel_size.max(1),
+                pixel_size: preferences.pixel_size,
             },
             tab: Tab::Object,
             final_render: None,
@@ -991,12 +1007,20 @@ impl EditorApp {
 
     fn render_tab(&mut self, ui: &mut Ui) {
         let state = self.render_state();
+        let before = self.viewport_preferences();
         let actions = egui::ScrollArea::vertical()
             .auto_shrink([false, false])
             .show(ui, |ui| {
                 render_tab_ui(ui, &self.document, &mut self.options, state)
             })
             .inner;
+        let after = self.viewport_preferences();
+        if after != before
+            && let Some(store) = &self.session
+            && let Err(e) = store.save_viewport_preferences(after)
+        {
+            tracing::warn!("cannot keep the viewport's preferences: {e}");
+        }
         for action in actions {
             match action {
                 RenderAction::Edit(edit) => self.apply(edit.command, edit.gesture),
@@ -1094,6 +1118,13 @@ impl EditorApp {
             });
         });
         self.status_rect = Some(panel.response.rect);
+    }
+
+    fn viewport_preferences(&self) -> ViewportPreferences {
+        ViewportPreferences {
+            pixel_size: self.options.pixel_size,
+            max_samples: self.options.viewport_samples,
+        }
     }
 
     fn viewport_ui(&mut self, ui: &mut Ui) {

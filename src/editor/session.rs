@@ -1,5 +1,6 @@
 //! What the editor keeps between runs in its state folder (`$XDG_STATE_HOME/kiln`): the
-//! recent files, and the autosave that brings work back after a crash.
+//! recent files, the viewport's preferences, and the autosave that brings work back after
+//! a crash.
 //!
 //! Each running editor autosaves into a folder of its own, `recovery/<pid>/`, and removes
 //! it when it closes normally; a folder left by a process that is no longer running is
@@ -30,6 +31,42 @@ pub struct Recovery {
     /// The file the work came from, if it had one.
     pub source: Option<PathBuf>,
     pub saved_at: SystemTime,
+}
+
+/// The viewport's settings that are the user's rather than a document's (Blender keeps
+/// them in its preferences): kept in `viewport.txt` as `key=value` lines.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub struct ViewportPreferences {
+    /// Screen pixels per viewport pixel along each axis.
+    pub pixel_size: u32,
+    /// Samples per pixel after which the viewport rests.
+    pub max_samples: u32,
+}
+
+impl ViewportPreferences {
+    fn to_text(self) -> String {
+        format!(
+            "pixel_size={}\nmax_samples={}\n",
+            self.pixel_size, self.max_samples
+        )
+    }
+
+    /// Reads what `to_text` wrote over `defaults`: a line that is not a known key with a
+    /// valid value keeps the default (a file from another version still opens).
+    fn from_text(text: &str, defaults: Self) -> Self {
+        let mut p = defaults;
+        for (key, value) in text.lines().filter_map(|l| l.split_once('=')) {
+            let Ok(value) = value.trim().parse::<u32>() else {
+                continue;
+            };
+            match key.trim() {
+                "pixel_size" if super::app::PIXEL_SIZES.contains(&value) => p.pixel_size = value,
+                "max_samples" if value >= 1 => p.max_samples = value,
+                _ => {}
+            }
+        }
+        p
+    }
 }
 
 const AUTOSAVE_NAME: &str = "autosave.kiln";
@@ -79,6 +116,21 @@ impl SessionStore {
             .map(|p| format!("{}\n", p.display()))
             .collect();
         write_atomically(&self.recent_file(), text.as_bytes())
+    }
+
+    fn preferences_file(&self) -> PathBuf {
+        self.dir.join("viewport.txt")
+    }
+
+    /// The viewport's preferences as last saved, `defaults` where none were.
+    pub fn viewport_preferences(&self, defaults: ViewportPreferences) -> ViewportPreferences {
+        std::fs::read_to_string(self.preferences_file()).map_or(defaults, |text| {
+            ViewportPreferences::from_text(&text, defaults)
+        })
+    }
+
+    pub fn save_viewport_preferences(&self, p: ViewportPreferences) -> Result<(), String> {
+        write_atomically(&self.preferences_file(), p.to_text().as_bytes())
     }
 
     fn recovery_dir(&self, pid: u32) -> PathBuf {
@@ -160,6 +212,29 @@ fn write_atomically(path: &Path, bytes: &[u8]) -> Result<(), String> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn viewport_preferences_round_trip_and_bad_lines_keep_the_defaults() {
+        let dir = tempfile::tempdir().unwrap();
+        let store = SessionStore::new(dir.path().join("state"));
+        let defaults = ViewportPreferences {
+            pixel_size: 1,
+            max_samples: 1024,
+        };
+        assert_eq!(store.viewport_preferences(defaults), defaults);
+        let chosen = ViewportPreferences {
+            pixel_size: 4,
+            max_samples: 64,
+        };
+        store.save_viewport_preferences(chosen).unwrap();
+        assert_eq!(store.viewport_preferences(defaults), chosen);
+        std::fs::write(
+            store.preferences_file(),
+            "pixel_size=3\nmax_samples=0\nwhat=1\nno equals sign\n",
+        )
+        .unwrap();
+        assert_eq!(store.viewport_preferences(defaults), defaults);
+    }
 
     #[test]
     fn recent_files_are_most_recent_first_without_repeats() {

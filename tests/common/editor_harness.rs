@@ -89,13 +89,13 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     file,
                     dialogs: Box::new(dialogs),
                     plugins,
-                    sample_limit,
+                    sample_limit: Some(sample_limit),
                     state_dir,
                     autosave_every,
                     quit_when_done: false,
                     thumbnails,
                     graph_kernels,
-                    pixel_size,
+                    pixel_size: Some(pixel_size),
                 },
             )
         })
