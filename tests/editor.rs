@@ -928,6 +928,17 @@ fn the_rotate_gizmo_turns_the_selection_about_the_grabbed_ring() {
     assert!((up(&turned) - up(&start)).length() < 1e-4);
 }
 
+/// Opens the Render tab and picks `choice` from the menu labelled `menu`.
+fn choose_in_render_tab(harness: &mut Harness<'_, EditorApp>, menu: &str, choice: &str) {
+    harness.get_by_label("📷 Render").click();
+    harness.step();
+    harness.get_by_role_and_label(Role::ComboBox, menu).click();
+    harness.step();
+    harness.step();
+    harness.get_by_label(choice).click();
+    harness.step();
+}
+
 #[test]
 fn a_quality_preset_sets_its_settings_in_one_undo_step() {
     let mut harness = start(Setup {
@@ -936,15 +947,7 @@ fn a_quality_preset_sets_its_settings_in_one_undo_step() {
     });
     harness.step();
     let before = harness.state().document().scene().settings;
-    harness.get_by_label("📷 Render").click();
-    harness.step();
-    harness
-        .get_by_role_and_label(Role::ComboBox, "Quality")
-        .click();
-    harness.step();
-    harness.step();
-    harness.get_by_label("Draft").click();
-    harness.step();
+    choose_in_render_tab(&mut harness, "Quality", "Draft");
     harness.step();
     let s = harness.state().document().scene().settings;
     let draft = kiln::scene::Quality::Draft.settings();
@@ -990,14 +993,7 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
     assert_eq!(status.size, expected(harness.state(), PIXEL_SIZE as f32));
     let revision = harness.state().document().revision();
 
-    harness.get_by_label("📷 Render").click();
-    harness.step();
-    harness
-        .get_by_role_and_label(Role::ComboBox, "Pixel Size")
-        .click();
-    harness.step();
-    harness.step();
-    harness.get_by_label("2×").click();
+    choose_in_render_tab(&mut harness, "Pixel Size", "2×");
     step_until(&mut harness, "the image at 2× pixels", |app| {
         app.viewport_status()
             .is_some_and(|s| s.size == expected(app, 2.0) && s.samples >= SAMPLE_LIMIT)
