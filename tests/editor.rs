@@ -998,6 +998,11 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
         app.viewport_status()
             .is_some_and(|s| s.size == expected(app, 2.0) && s.samples >= SAMPLE_LIMIT)
     });
+    harness.step();
+    assert!(
+        harness.query_by_label_contains("at 2× pixels").is_some(),
+        "the status line says the pixel size"
+    );
     // A view option: the document does not change.
     assert_eq!(harness.state().document().revision(), revision);
     assert!(!harness.state().document().is_dirty());

@@ -1086,8 +1086,12 @@ impl EditorApp {
                         format!("{:.0} k", rate / 1e3)
                     };
                     let t = status.elapsed.as_secs_f32();
+                    let pixel_size = match self.options.pixel_size {
+                        1 => String::new(),
+                        n => format!(" at {n}× pixels"),
+                    };
                     ui.label(format!(
-                        "Samples {}/{}  ·  {rate} samples/s  ·  {:02}:{:05.2}  ·  {}×{}",
+                        "Samples {}/{}  ·  {rate} samples/s  ·  {:02}:{:05.2}  ·  {}×{}{pixel_size}",
                         status.samples,
                         self.options.viewport_samples,
                         (t / 60.0) as u32,
