@@ -359,13 +359,6 @@ fn ensure_runtime_dir() {
     }
 }
 
-/// `kiln edit`'s viewport options.
-struct EditView {
-    samples: Option<u32>,
-    pixel_size: Option<u32>,
-    quit_when_done: bool,
-}
-
 /// One of [`kiln::editor::PIXEL_SIZES`].
 fn parse_pixel_size(s: &str) -> std::result::Result<u32, String> {
     s.parse()
@@ -376,12 +369,13 @@ fn parse_pixel_size(s: &str) -> std::result::Result<u32, String> {
 
 /// Opens the editor's window; returns when it is closed. The editor picks its adapter as
 /// wgpu does for a window (`WGPU_BACKEND` chooses the API).
-fn edit(file: Option<PathBuf>, view: EditView, plugins: PluginHost) -> Result<()> {
-    let EditView {
-        samples,
-        pixel_size,
-        quit_when_done,
-    } = view;
+fn edit(
+    file: Option<PathBuf>,
+    samples: Option<u32>,
+    pixel_size: Option<u32>,
+    quit_when_done: bool,
+    plugins: PluginHost,
+) -> Result<()> {
     let import_extensions = plugins
         .plugins()
         .filter(|p| p.kind == PluginKind::Importer)
@@ -469,11 +463,9 @@ fn main() -> ExitCode {
             pixel_size,
         } => edit(
             file,
-            EditView {
-                samples,
-                pixel_size,
-                quit_when_done,
-            },
+            samples,
+            pixel_size,
+            quit_when_done,
             isolated_plugins(),
         ),
         Command::Plugins => list_plugins(&plugins()),

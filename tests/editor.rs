@@ -1007,11 +1007,7 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
     assert_eq!(harness.state().document().revision(), revision);
     assert!(!harness.state().document().is_dirty());
     // A preference: the next editor starts with it.
-    let defaults = ViewportPreferences {
-        pixel_size: 1,
-        max_samples: 1024,
-    };
-    let kept = SessionStore::new(state.path().to_owned()).viewport_preferences(defaults);
+    let kept = SessionStore::new(state.path().to_owned()).viewport_preferences();
     assert_eq!(
         kept,
         ViewportPreferences {

@@ -182,6 +182,8 @@ pub struct EditorApp {
     render_window: bool,
     render_texture: Option<(usize, egui::TextureHandle)>,
     session: Option<SessionStore>,
+    /// The viewport's preferences as the state folder has them (or as they started).
+    saved_viewport: ViewportPreferences,
     recent: Vec<PathBuf>,
     autosave_every: Duration,
     last_autosave: Instant,
@@ -272,14 +274,11 @@ impl EditorApp {
         });
         let view = document.scene().camera;
         let session = options.state_dir.clone().map(SessionStore::new);
-        let defaults = ViewportPreferences {
-            pixel_size: 1,
-            max_samples: DEFAULT_SAMPLE_LIMIT,
-        };
-        let remembered = session
-            .as_ref()
-            .map_or(defaults, |s| s.viewport_preferences(defaults));
-        let preferences = ViewportPreferences {
+        let remembered = session.as_ref().map_or_else(
+            ViewportPreferences::default,
+            SessionStore::viewport_preferences,
+        );
+        let viewport_preferences = ViewportPreferences {
             pixel_size: options.pixel_size.unwrap_or(remembered.pixel_size).max(1),
             max_samples: options
                 .sample_limit
@@ -311,10 +310,9 @@ impl EditorApp {
             viewport_preview_error: None,
             node_previews,
             options: ViewOptions {
-                viewport_samples: preferences.max_samples,
+                viewport: viewport_preferences,
                 export_options: String::new(),
                 graph_kernels: options.graph_kernels,
-                pixel_size: preferences.pixel_size,
             },
             tab: Tab::Object,
             final_render: None,
@@ -325,6 +323,7 @@ impl EditorApp {
                 .map(SessionStore::recent)
                 .unwrap_or_default(),
             recovery: session.as_ref().and_then(SessionStore::recovery),
+            saved_viewport: viewport_preferences,
             session,
             autosave_every: options.autosave_every,
             last_autosave: Instant::now(),
@@ -1007,19 +1006,21 @@ impl EditorApp {
 
     fn render_tab(&mut self, ui: &mut Ui) {
         let state = self.render_state();
-        let before = self.viewport_preferences();
         let actions = egui::ScrollArea::vertical()
             .auto_shrink([false, false])
             .show(ui, |ui| {
                 render_tab_ui(ui, &self.document, &mut self.options, state)
             })
             .inner;
-        let after = self.viewport_preferences();
-        if after != before
-            && let Some(store) = &self.session
-            && let Err(e) = store.save_viewport_preferences(after)
-        {
-            tracing::warn!("cannot keep the viewport's preferences: {e}");
+        // Written once a change is done, not on every frame of a drag of Max Samples.
+        let chosen = self.options.viewport;
+        if chosen != self.saved_viewport && !ui.input(|i| i.pointer.any_down()) {
+            self.saved_viewport = chosen;
+            if let Some(store) = &self.session
+                && let Err(e) = store.save_viewport_preferences(chosen)
+            {
+                tracing::warn!("cannot keep the viewport's preferences: {e}");
+            }
         }
         for action in actions {
             match action {
@@ -1086,14 +1087,14 @@ impl EditorApp {
                         format!("{:.0} k", rate / 1e3)
                     };
                     let t = status.elapsed.as_secs_f32();
-                    let pixel_size = match self.options.pixel_size {
+                    let pixel_size = match self.options.viewport.pixel_size {
                         1 => String::new(),
                         n => format!(" at {n}× pixels"),
                     };
                     ui.label(format!(
                         "Samples {}/{}  ·  {rate} samples/s  ·  {:02}:{:05.2}  ·  {}×{}{pixel_size}",
                         status.samples,
-                        self.options.viewport_samples,
+                        self.options.viewport.max_samples,
                         (t / 60.0) as u32,
                         t % 60.0,
                         status.size[0],
@@ -1124,18 +1125,11 @@ impl EditorApp {
         self.status_rect = Some(panel.response.rect);
     }
 
-    fn viewport_preferences(&self) -> ViewportPreferences {
-        ViewportPreferences {
-            pixel_size: self.options.pixel_size,
-            max_samples: self.options.viewport_samples,
-        }
-    }
-
     fn viewport_ui(&mut self, ui: &mut Ui) {
         let rect = ui.available_rect_before_wrap();
         self.viewport_rect = Some(rect);
         let response = ui.allocate_rect(rect, Sense::click_and_drag());
-        let scale = ui.ctx().pixels_per_point() / self.options.pixel_size as f32;
+        let scale = ui.ctx().pixels_per_point() / self.options.viewport.pixel_size as f32;
         let size = [
             ((rect.width() * scale).round() as u32).max(1),
             ((rect.height() * scale).round() as u32).max(1),
@@ -1161,7 +1155,7 @@ impl EditorApp {
             scene_revision,
             camera: self.view,
             size,
-            sample_limit: self.options.viewport_samples,
+            sample_limit: self.options.viewport.max_samples,
             view: self.document.scene().settings.view,
             graphs: self.options.graph_kernels,
         };
@@ -2075,8 +2069,9 @@ impl EditorApp {
         self.autosave();
         if self.quit_when_done {
             let status = self.viewport_status();
-            let done = status
-                .is_none_or(|s| s.error.is_some() || s.samples >= self.options.viewport_samples);
+            let done = status.is_none_or(|s| {
+                s.error.is_some() || s.samples >= self.options.viewport.max_samples
+            });
             if done && !self.document.is_dirty() {
                 self.allow_close = true;
                 ctx.send_viewport_cmd(egui::ViewportCommand::Close);

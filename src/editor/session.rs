@@ -43,6 +43,16 @@ pub struct ViewportPreferences {
     pub max_samples: u32,
 }
 
+impl Default for ViewportPreferences {
+    /// A pixel per pixel, and [`DEFAULT_SAMPLE_LIMIT`](super::DEFAULT_SAMPLE_LIMIT).
+    fn default() -> Self {
+        Self {
+            pixel_size: 1,
+            max_samples: super::DEFAULT_SAMPLE_LIMIT,
+        }
+    }
+}
+
 impl ViewportPreferences {
     fn to_text(self) -> String {
         format!(
@@ -51,10 +61,10 @@ impl ViewportPreferences {
         )
     }
 
-    /// Reads what `to_text` wrote over `defaults`: a line that is not a known key with a
-    /// valid value keeps the default (a file from another version still opens).
-    fn from_text(text: &str, defaults: Self) -> Self {
-        let mut p = defaults;
+    /// Reads what `to_text` wrote: a line that is not a known key with a valid value keeps
+    /// the default (a file from another version still opens).
+    fn from_text(text: &str) -> Self {
+        let mut p = Self::default();
         for (key, value) in text.lines().filter_map(|l| l.split_once('=')) {
             let Ok(value) = value.trim().parse::<u32>() else {
                 continue;
@@ -122,11 +132,12 @@ impl SessionStore {
         self.dir.join("viewport.txt")
     }
 
-    /// The viewport's preferences as last saved, `defaults` where none were.
-    pub fn viewport_preferences(&self, defaults: ViewportPreferences) -> ViewportPreferences {
-        std::fs::read_to_string(self.preferences_file()).map_or(defaults, |text| {
-            ViewportPreferences::from_text(&text, defaults)
-        })
+    /// The viewport's preferences as last saved, the defaults where none were.
+    pub fn viewport_preferences(&self) -> ViewportPreferences {
+        std::fs::read_to_string(self.preferences_file()).map_or_else(
+            |_| ViewportPreferences::default(),
+            |text| ViewportPreferences::from_text(&text),
+        )
     }
 
     pub fn save_viewport_preferences(&self, p: ViewportPreferences) -> Result<(), String> {
@@ -217,23 +228,20 @@ mod tests {
     fn viewport_preferences_round_trip_and_bad_lines_keep_the_defaults() {
         let dir = tempfile::tempdir().unwrap();
         let store = SessionStore::new(dir.path().join("state"));
-        let defaults = ViewportPreferences {
-            pixel_size: 1,
-            max_samples: 1024,
-        };
-        assert_eq!(store.viewport_preferences(defaults), defaults);
+        let defaults = ViewportPreferences::default();
+        assert_eq!(store.viewport_preferences(), defaults);
         let chosen = ViewportPreferences {
             pixel_size: 4,
             max_samples: 64,
         };
         store.save_viewport_preferences(chosen).unwrap();
-        assert_eq!(store.viewport_preferences(defaults), chosen);
+        assert_eq!(store.viewport_preferences(), chosen);
         std::fs::write(
             store.preferences_file(),
             "pixel_size=3\nmax_samples=0\nwhat=1\nno equals sign\n",
         )
         .unwrap();
-        assert_eq!(store.viewport_preferences(defaults), defaults);
+        assert_eq!(store.viewport_preferences(), defaults);
     }
 
     #[test]

@@ -15,6 +15,7 @@ use super::app::PIXEL_SIZES;
 use super::document::{Command, Document, GestureId};
 use super::final_render::RenderState;
 use super::inspector::{Edit, float_row, gesture, section};
+use super::session::ViewportPreferences;
 
 /// Resolution presets (Blender's Format presets, in the order of the issue's list).
 pub const RESOLUTION_PRESETS: [(&str, u32, u32); 5] = [
@@ -27,14 +28,12 @@ pub const RESOLUTION_PRESETS: [(&str, u32, u32); 5] = [
 
 /// The editor's settings that are not part of the document.
 pub struct ViewOptions {
-    /// Samples per pixel after which the viewport stops accumulating.
-    pub viewport_samples: u32,
+    /// The viewport's pixel size and sample limit (kept between sessions).
+    pub viewport: ViewportPreferences,
     /// Options for the image writer on export (`bits=16`, `quality=90`, …).
     pub export_options: String,
     /// How the viewport's kernels hold graph materials.
     pub graph_kernels: super::viewport::GraphKernels,
-    /// Screen pixels per viewport pixel along each axis (one of [`PIXEL_SIZES`]).
-    pub pixel_size: u32,
 }
 
 /// What the Render tab asks of the app.
@@ -333,7 +332,7 @@ pub fn render_tab_ui(
 /// sampling and how coarse its pixels are.
 fn viewport_section(ui: &mut Ui, options: &mut ViewOptions) {
     section(ui, "Viewport", |ui| {
-        let samples = DragValue::new(&mut options.viewport_samples).range(1..=1 << 20);
+        let samples = DragValue::new(&mut options.viewport.max_samples).range(1..=1 << 20);
         let tooltip = "Samples per pixel after which the viewport rests.";
         count_row(ui, "Max Samples", samples, tooltip);
         let label = ui.label("Pixel Size").on_hover_text(
@@ -343,10 +342,10 @@ fn viewport_section(ui: &mut Ui, options: &mut ViewOptions) {
              affected.",
         );
         egui::ComboBox::from_id_salt("viewport pixel size")
-            .selected_text(format!("{}×", options.pixel_size))
+            .selected_text(format!("{}×", options.viewport.pixel_size))
             .show_ui(ui, |ui| {
                 for size in PIXEL_SIZES {
-                    ui.selectable_value(&mut options.pixel_size, size, format!("{size}×"));
+                    ui.selectable_value(&mut options.viewport.pixel_size, size, format!("{size}×"));
                 }
             })
             .response
