@@ -102,6 +102,41 @@ fn per_vertex<const N: usize>(
         .collect()
 }
 
+/// The colour statements of MTL text (`Ka`, `Kd`, `Ks`, `Ke`) as tobj can read them: it
+/// panics on fewer than three numbers. One number is the grey the MTL specification makes
+/// of it (`Kd 0.5` is `Kd 0.5 0.5 0.5`); none or two are dropped with a warning naming
+/// the line. Lines are split as tobj splits them (at `\n`, each checked as UTF-8 on its
+/// own: tobj reads the lines before one that is not, then fails), and the others are
+/// passed on unchanged.
+fn colours_tobj_reads(bytes: &[u8], library: &Path, warnings: &mut Vec<String>) -> Vec<u8> {
+    let mut fixed = Vec::with_capacity(bytes.len());
+    for (number, line) in bytes.split(|&b| b == b'\n').enumerate() {
+        if number > 0 {
+            fixed.push(b'\n');
+        }
+        let Ok(text) = std::str::from_utf8(line) else {
+            fixed.extend_from_slice(line);
+            continue;
+        };
+        let mut words = text.split_whitespace();
+        let keyword = words.next();
+        let values: Vec<&str> = words.take(3).collect();
+        match (keyword, values.as_slice()) {
+            (Some(k @ ("Ka" | "Kd" | "Ks" | "Ke")), [grey]) => {
+                fixed.extend_from_slice(format!("{k} {grey} {grey} {grey}").as_bytes());
+            }
+            (Some("Ka" | "Kd" | "Ks" | "Ke"), [] | [_, _]) => warnings.push(format!(
+                "material library {} line {}: \"{}\" needs one number or three (r g b); ignored",
+                library.display(),
+                number + 1,
+                text.trim(),
+            )),
+            _ => fixed.extend_from_slice(line),
+        }
+    }
+    fixed
+}
+
 /// Any OBJ text, through tobj; `dir` is where its MTL libraries are looked for.
 fn read_with_tobj(bytes: &[u8], dir: &Path) -> Result<ObjFile, String> {
     // tobj's optional features add fields; another crate of the build may turn them on.
@@ -117,11 +152,14 @@ fn read_with_tobj(bytes: &[u8], dir: &Path) -> Result<ObjFile, String> {
     let library_warnings = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut &bytes[..], &options, |library| {
         let full = dir.join(library);
-        tobj::load_mtl(&full).or_else(|e| {
-            let reason = match std::fs::metadata(&full) {
-                Err(io) => io.to_string(),
-                Ok(_) => e.to_string(),
-            };
+        let loaded = std::fs::read(&full)
+            .map_err(|e| e.to_string())
+            .and_then(|bytes| {
+                let mut warnings = library_warnings.borrow_mut();
+                let text = colours_tobj_reads(&bytes, &full, &mut warnings);
+                tobj::load_mtl_buf(&mut text.as_slice()).map_err(|e| e.to_string())
+            });
+        loaded.or_else(|reason| {
             library_warnings.borrow_mut().push(format!(
                 "material library {} not loaded ({reason}); its materials are grey",
                 full.display()
@@ -376,6 +414,52 @@ mod tests {
         assert_eq!(file.meshes.len(), 1);
         assert!(file.warnings.is_empty(), "{:?}", file.warnings);
         file.meshes.remove(0)
+    }
+
+    /// Found by fuzzing (fuzz/regressions/obj/): tobj panicked on a colour statement with
+    /// fewer than three numbers.
+    #[test]
+    fn mtl_colours_with_one_number_are_grey_and_with_two_are_dropped_with_a_warning() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(
+            dir.path().join("m.mtl"),
+            b"newmtl grey\nKd 0.25\nnewmtl odd\nKd 0.5 0.5\nKs\nKe 1 2 3\n",
+        )
+        .unwrap();
+        let obj = "mtllib m.mtl\nusemtl odd\nv 0 0 0\nv 1 0 0\nv 0 1 0\nf 1 2 3\n";
+        let file = read_with_tobj(obj.as_bytes(), dir.path()).unwrap();
+        let [grey, odd] = file.materials.as_slice() else {
+            panic!("two materials: {:?}", file.materials);
+        };
+        assert_eq!(grey.diffuse, Some([0.25; 3]));
+        assert_eq!((odd.diffuse, odd.specular), (None, None));
+        assert_eq!(odd.emissive, Some([1.0, 2.0, 3.0]));
+        assert_eq!(file.warnings.len(), 2, "{:?}", file.warnings);
+        assert!(
+            file.warnings[0].contains("line 4: \"Kd 0.5 0.5\" needs one number or three"),
+            "{}",
+            file.warnings[0]
+        );
+        assert!(
+            file.warnings[1].contains("line 5: \"Ks\""),
+            "{}",
+            file.warnings[1]
+        );
+    }
+
+    /// Found by fuzzing too: a line that is not UTF-8 after the bad colour. tobj parses
+    /// the lines before it, then refuses the library.
+    #[test]
+    fn a_bad_colour_before_a_line_that_is_not_utf8_does_not_panic() {
+        let dir = tempfile::tempdir().unwrap();
+        std::fs::write(dir.path().join("m.mtl"), b"newmtl a\nKd 0.5 0.5\n\xff\n").unwrap();
+        let file = read_with_tobj(b"mtllib m.mtl\nv 0 0 0\n", dir.path()).unwrap();
+        assert!(file.materials.is_empty());
+        assert!(
+            file.warnings.iter().any(|w| w.contains("not loaded")),
+            "{:?}",
+            file.warnings
+        );
     }
 
     #[test]
