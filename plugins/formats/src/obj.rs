@@ -137,8 +137,69 @@ fn colours_tobj_reads(bytes: &[u8], library: &Path, warnings: &mut Vec<String>) 
     fixed
 }
 
+/// Checks every vertex index of the faces, lines and points against the vertices, texture
+/// coordinates and normals that exist, before tobj sees them: it turns a relative index
+/// reaching before the first element, or an absolute one past the last, into an index
+/// whose arithmetic overflows. Errors name the line, as tobj's do not. Lines that are not
+/// UTF-8 or whose indices are not numbers are left to tobj, which refuses them.
+fn check_indices(bytes: &[u8]) -> Result<(), String> {
+    const KINDS: [(&str, &str); 3] = [
+        ("v", "vertex"),
+        ("vt", "texture coordinate"),
+        ("vn", "normal"),
+    ];
+    let lines = || {
+        bytes
+            .split(|&b| b == b'\n')
+            .enumerate()
+            .filter_map(|(n, line)| Some((n + 1, std::str::from_utf8(line).ok()?)))
+    };
+    let count = |line: &str, totals: &mut [usize; 3]| {
+        let keyword = line.split_whitespace().next();
+        if let Some(kind) = KINDS.iter().position(|(k, _)| Some(*k) == keyword) {
+            totals[kind] += 1;
+        }
+    };
+    let mut totals = [0; 3];
+    for (_, line) in lines() {
+        count(line, &mut totals);
+    }
+    let mut so_far = [0; 3];
+    for (number, line) in lines() {
+        count(line, &mut so_far);
+        let mut words = line.split_whitespace();
+        if !matches!(words.next(), Some("f" | "l" | "p")) {
+            continue;
+        }
+        for corner in words {
+            for (kind, index) in corner.split('/').enumerate().take(3) {
+                let Ok(index) = index.parse::<isize>() else {
+                    continue;
+                };
+                let (available, reachable) = if index < 0 {
+                    (so_far[kind], index.unsigned_abs() <= so_far[kind])
+                } else {
+                    (
+                        totals[kind],
+                        index != 0 && index.unsigned_abs() <= totals[kind],
+                    )
+                };
+                if !reachable {
+                    return Err(format!(
+                        "line {number}: index {index} refers to no {} (the file has {available}{})",
+                        KINDS[kind].1,
+                        if index < 0 { " before this line" } else { "" },
+                    ));
+                }
+            }
+        }
+    }
+    Ok(())
+}
+
 /// Any OBJ text, through tobj; `dir` is where its MTL libraries are looked for.
 fn read_with_tobj(bytes: &[u8], dir: &Path) -> Result<ObjFile, String> {
+    check_indices(bytes)?;
     // tobj's optional features add fields; another crate of the build may turn them on.
     #[allow(clippy::needless_update)]
     let options = tobj::LoadOptions {
@@ -460,6 +521,32 @@ mod tests {
             "{:?}",
             file.warnings
         );
+    }
+
+    /// Found by fuzzing (fuzz/regressions/obj/): a relative index before the first texture
+    /// coordinate overflowed tobj's index arithmetic.
+    #[test]
+    fn face_indices_that_reach_no_element_are_refused_naming_the_line() {
+        let dir = tempfile::tempdir().unwrap();
+        let refused = |obj: &str| read_with_tobj(obj.as_bytes(), dir.path()).unwrap_err();
+        let v = "v 0 0 0\nv 1 0 0\nv 0 1 0\nvt 0 0\n";
+        assert_eq!(
+            refused(&format!("{v}f 1/-3 2/1 3/1\n")),
+            "line 5: index -3 refers to no texture coordinate (the file has 1 before this line)"
+        );
+        assert_eq!(
+            refused(&format!("{v}f 1 2 4\n")),
+            "line 5: index 4 refers to no vertex (the file has 3)"
+        );
+        assert!(refused(&format!("{v}f 0 1 2\n")).contains("index 0 refers to no vertex"));
+        assert!(refused(&format!("{v}f 1//9223372036854775807 2 3\n")).contains("no normal"));
+        // Relative and forward absolute indices that exist are read.
+        let file = read_with_tobj(
+            b"v 0 0 0\nv 1 0 0\nv 0 1 0\nf -3 -2 -1\nf 1 2 4\nv 1 1 0\n",
+            dir.path(),
+        )
+        .unwrap();
+        assert_eq!(file.meshes[0].indices.len(), 2);
     }
 
     #[test]
