@@ -47,7 +47,7 @@ pub struct GpuContext {
     /// Compiled pipelines by kernel source and entry point (`KernelSource::create_pipeline`):
     /// a scene rendered again with the same features and materials, or a restarted
     /// render, skips naga and the driver's compile.
-    pub(crate) pipelines: std::sync::Mutex<std::collections::HashMap<u64, wgpu::ComputePipeline>>,
+    pub(crate) pipelines: std::sync::Mutex<PipelineCache<wgpu::ComputePipeline>>,
     /// Pipelines compiled on this context (cache misses), so the cache can be checked.
     pub(crate) pipelines_compiled: std::sync::atomic::AtomicUsize,
 }
@@ -192,7 +192,106 @@ impl GpuContext {
             .load(std::sync::atomic::Ordering::Relaxed)
     }
 
+    /// How many compiled pipelines the cache holds now (at most
+    /// [`PIPELINE_CACHE_CAPACITY`]).
+    pub fn pipelines_cached(&self) -> usize {
+        self.pipelines.lock().map_or(0, |p| p.len())
+    }
+
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
+    }
+}
+
+/// Pipelines a context keeps compiled. Each holds the driver's machine code for a whole
+/// kernel (megabytes on lavapipe), and an editor session compiles one for every change of
+/// a graph's structure: the least recently used are dropped beyond this many. A scene
+/// uses a few at a time (its kernel's entry points, the editor's previews).
+pub const PIPELINE_CACHE_CAPACITY: usize = 32;
+
+/// A cache of at most `capacity` values by key that drops the least recently used first.
+#[derive(Debug)]
+pub(crate) struct PipelineCache<V> {
+    entries: std::collections::HashMap<u64, (V, u64)>,
+    capacity: usize,
+    /// Incremented on every use; an entry's stamp is its last use.
+    clock: u64,
+}
+
+impl<V> Default for PipelineCache<V> {
+    fn default() -> Self {
+        Self::with_capacity(PIPELINE_CACHE_CAPACITY)
+    }
+}
+
+impl<V> PipelineCache<V> {
+    pub(crate) fn with_capacity(capacity: usize) -> Self {
+        Self {
+            entries: Default::default(),
+            capacity: capacity.max(1),
+            clock: 0,
+        }
+    }
+
+    pub(crate) fn len(&self) -> usize {
+        self.entries.len()
+    }
+
+    pub(crate) fn contains(&self, key: u64) -> bool {
+        self.entries.contains_key(&key)
+    }
+}
+
+impl<V: Clone> PipelineCache<V> {
+    /// The value of `key`, which becomes the most recently used.
+    pub(crate) fn get(&mut self, key: u64) -> Option<V> {
+        self.clock += 1;
+        let entry = self.entries.get_mut(&key)?;
+        entry.1 = self.clock;
+        Some(entry.0.clone())
+    }
+
+    /// Adds `value` as the most recently used, dropping the least recently used when full.
+    pub(crate) fn insert(&mut self, key: u64, value: V) {
+        self.clock += 1;
+        if !self.entries.contains_key(&key) && self.entries.len() >= self.capacity {
+            let oldest = self
+                .entries
+                .iter()
+                .min_by_key(|(_, (_, used))| *used)
+                .map(|(&k, _)| k);
+            if let Some(oldest) = oldest {
+                self.entries.remove(&oldest);
+            }
+        }
+        self.entries.insert(key, (value, self.clock));
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::PipelineCache;
+
+    #[test]
+    fn the_pipeline_cache_drops_the_least_recently_used_beyond_its_capacity() {
+        let mut cache = PipelineCache::with_capacity(3);
+        for key in 0..3 {
+            cache.insert(key, key * 10);
+        }
+        // 0 used again: 1 is now the least recently used.
+        assert_eq!(cache.get(0), Some(0));
+        cache.insert(3, 30);
+        assert_eq!(cache.len(), 3);
+        assert!(!cache.contains(1), "the least recently used is dropped");
+        assert!(cache.contains(0) && cache.contains(2) && cache.contains(3));
+        // Replacing a value that is there drops nothing.
+        cache.insert(2, 21);
+        assert_eq!((cache.len(), cache.get(2)), (3, Some(21)));
+        // A thousand kernels later it still holds three.
+        for key in 100..1100 {
+            cache.insert(key, key);
+        }
+        assert_eq!(cache.len(), 3);
+        assert!(cache.contains(1099) && cache.contains(1098) && cache.contains(1097));
     }
 }

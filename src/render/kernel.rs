@@ -140,7 +140,7 @@ impl KernelSource {
     /// pipeline cache (and so compile nothing).
     pub fn is_cached(&self, ctx: &GpuContext, layouts: usize, entry_point: &str) -> bool {
         let key = self.cache_key(layouts, entry_point);
-        ctx.pipelines.lock().is_ok_and(|p| p.contains_key(&key))
+        ctx.pipelines.lock().is_ok_and(|p| p.contains(key))
     }
 
     /// Validates, then creates the compute pipeline for `entry_point`.
@@ -151,7 +151,7 @@ impl KernelSource {
         entry_point: &str,
     ) -> Result<wgpu::ComputePipeline, KernelError> {
         let key = self.cache_key(layouts.len(), entry_point);
-        let cached = ctx.pipelines.lock().ok().and_then(|p| p.get(&key).cloned());
+        let cached = ctx.pipelines.lock().ok().and_then(|mut p| p.get(key));
         if let Some(pipeline) = cached {
             return Ok(pipeline);
         }
