@@ -9,6 +9,8 @@ use std::time::{Duration, Instant};
 use anyhow::Result;
 use glam::{Affine3A, Vec3};
 
+mod soak;
+
 use crate::accel::build_scene_accel;
 use crate::render::gpu_scene::texel_table;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
@@ -93,6 +95,11 @@ pub struct BenchArgs {
     /// measuring again.
     #[arg(long, value_name = "CSV", requires = "plot")]
     pub replot: Option<std::path::PathBuf>,
+    /// Instead of samples/s: this many back-to-back small renders with varying material
+    /// graphs in one process, printing resident memory and the pipeline cache every 100
+    /// (what a long editor session would accumulate; docs/RELIABILITY.md).
+    #[arg(long, value_name = "RENDERS")]
+    pub soak: Option<u32>,
 }
 
 impl BenchArgs {
@@ -229,6 +236,9 @@ pub fn run(args: &BenchArgs, backend: Option<Backend>, out: &mut dyn std::io::Wr
     if args.tradeoff {
         let ctx = GpuContext::new(backend)?;
         return tradeoff(&ctx, &bench_scenes(args)?, args, out);
+    }
+    if let Some(renders) = args.soak {
+        return soak::soak(&GpuContext::new(backend)?, renders, out);
     }
     // The import first, so the memory it measures is not hidden under the renders' peak.
     let import = measure_import(args.triangles);
