@@ -187,6 +187,61 @@ fn identical_nodes_are_merged() {
     assert_eq!(code.matches("node_noise(").count(), 1, "{code}");
 }
 
+/// `depth` groups, each using the next four times: 4^(depth - 1) noise nodes from a file of
+/// a few kilobytes.
+fn group_bomb(depth: usize) -> String {
+    let groups: Vec<String> = (0..depth)
+        .map(|d| {
+            let (nodes, out) = if d + 1 == depth {
+                (r#""n": (type: "noise_texture")"#.to_owned(), "n.color")
+            } else {
+                let uses: Vec<String> = (0..4)
+                    .map(|i| format!(r#""c{i}": (type: "group", params: {{ "group": "g{}" }})"#, d + 1))
+                    .collect();
+                (uses.join(", "), "c0.out")
+            };
+            format!(
+                r#""g{d}": (outputs: [(name: "out", type: color)], nodes: {{ {nodes} }}, links: {{ "out": "{out}" }})"#
+            )
+        })
+        .collect();
+    format!(
+        r#"(
+            version: 1,
+            name: "bomb",
+            groups: {{ {} }},
+            nodes: {{
+                "g": (type: "group", params: {{ "group": "g0" }}),
+                "surface": (type: "principled_bsdf", inputs: {{ "base_color": "g.out" }}),
+                "out": (type: "material_output", inputs: {{ "surface": "surface.bsdf" }}),
+            }},
+        )"#,
+        groups.join(", ")
+    )
+}
+
+#[test]
+fn a_graph_expanding_past_the_node_limit_is_refused_before_it_exhausts_memory() {
+    // 4^6 = 4096 noise nodes (and the groups around them) expand and compile.
+    let (_, small) = parse_material(&group_bomb(7), "bomb.kmat").unwrap();
+    compile("bomb", &small, "m").expect("a graph under the limit compiles");
+    // 4^13 would take tens of gigabytes: refused after the first MAX_EXPANDED_NODES.
+    let text = group_bomb(14);
+    assert!(text.len() < 5000, "a small file: {} bytes", text.len());
+    let (_, bomb) = parse_material(&text, "bomb.kmat").unwrap();
+    let start = std::time::Instant::now();
+    let e = compile("bomb", &bomb, "m").unwrap_err().to_string();
+    assert!(
+        e.contains(&format!(
+            "expands to more than {} nodes",
+            kiln::material::compile::MAX_EXPANDED_NODES
+        )),
+        "{e}"
+    );
+    assert!(e.starts_with("material \"bomb\", node \"g/"), "{e}");
+    eprintln!("refused in {:?}: {e}", start.elapsed());
+}
+
 #[test]
 fn groups_expand_and_check_their_sockets() {
     let text = r#"(

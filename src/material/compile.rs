@@ -364,6 +364,8 @@ struct Flattener<'a> {
     graph: &'a Graph,
     nodes: Vec<FlatNode>,
     index: HashMap<String, usize>,
+    /// Nodes met so far, group instances counted with what they contain.
+    visited: usize,
 }
 
 /// A scope: the nodes of the material or of one group instance.
@@ -378,6 +380,12 @@ struct Scope<'a> {
 
 const MAX_GROUP_DEPTH: usize = 16;
 
+/// The most nodes a material may expand to, every instance of a group counted with its
+/// nodes. A group used four times inside a group used four times … multiplies: a 4 KB file
+/// of 14 such groups expanded to 4^13 nodes and exhausted memory (docs/RELIABILITY.md).
+/// Hand-made graphs are hundreds of nodes; the kernel's code grows with the count.
+pub const MAX_EXPANDED_NODES: usize = 10_000;
+
 impl<'a> Flattener<'a> {
     fn new(ctx: &'a Ctx<'a>, graph: &'a Graph) -> Self {
         Self {
@@ -385,6 +393,7 @@ impl<'a> Flattener<'a> {
             graph,
             nodes: Vec::new(),
             index: HashMap::new(),
+            visited: 0,
         }
     }
 
@@ -427,6 +436,17 @@ impl<'a> Flattener<'a> {
     fn create(&mut self, scope: &Scope<'a>) -> Result<(), GraphError> {
         for (id, node) in scope.nodes {
             let full = format!("{}{id}", scope.prefix);
+            self.visited += 1;
+            if self.visited > MAX_EXPANDED_NODES {
+                return Err(self.ctx.err(
+                    Some(&full),
+                    None,
+                    format!(
+                        "the graph expands to more than {MAX_EXPANDED_NODES} nodes (each use of a \
+                         group counts its nodes, so groups used inside groups multiply)"
+                    ),
+                ));
+            }
             match node.kind.as_str() {
                 GROUP => {
                     if scope.depth >= MAX_GROUP_DEPTH {
