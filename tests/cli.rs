@@ -65,6 +65,21 @@ fn missing_scene_file_names_the_file() {
     }
 }
 
+/// A device never ends and a FIFO blocks whoever opens it: neither is read.
+#[test]
+fn a_scene_or_material_that_is_not_a_regular_file_is_refused_not_read() {
+    let (code, err) = run(&["render", "/dev/zero", "-o", "x.png"]);
+    assert_clean_error(code, &err, 1, "/dev/zero: not a regular file");
+    let (code, err) = run(&["material", "check", "/dev/zero"]);
+    assert_clean_error(code, &err, 1, "/dev/zero: not a regular file");
+    let dir = tempfile::tempdir().unwrap();
+    let fifo = dir.path().join("scene.kiln");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", fifo.display());
+    let (code, err) = run(&["render", fifo.to_str().unwrap(), "-o", "x.png"]);
+    assert_clean_error(code, &err, 1, "not a regular file");
+}
+
 #[test]
 fn malformed_scene_names_line_and_column() {
     let dir = tempfile::tempdir().unwrap();

@@ -14,6 +14,7 @@ pub mod texture;
 use std::collections::BTreeSet;
 use std::path::Path;
 
+use kiln_plugin_api::read::{MAX_FILE_BYTES, read_text_bounded};
 use serde::{Deserialize, Serialize};
 use thiserror::Error;
 
@@ -173,7 +174,7 @@ pub fn save_material(path: &Path, name: &str, graph: &Graph) -> Result<(), Mater
 }
 
 pub fn load_material(path: &Path) -> Result<(String, Graph), MaterialFileError> {
-    let text = std::fs::read_to_string(path).map_err(|cause| MaterialFileError::Io {
+    let text = read_text_bounded(path, MAX_FILE_BYTES).map_err(|cause| MaterialFileError::Io {
         path: path.display().to_string(),
         cause,
     })?;

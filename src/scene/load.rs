@@ -9,6 +9,7 @@ use std::collections::BTreeMap;
 use std::path::Path;
 
 use glam::{Affine3A, EulerRot, Mat4, Vec2, Vec3, Vec4};
+use kiln_plugin_api::read::{MAX_FILE_BYTES, read_text_bounded};
 use serde::Deserialize;
 
 use super::file::{SCENE_FORMAT_VERSION, SceneError};
@@ -139,7 +140,7 @@ impl TransformDesc {
 
 /// Reads and validates a scene file.
 pub fn load_scene(path: &Path) -> Result<Scene, SceneError> {
-    let text = std::fs::read_to_string(path).map_err(|cause| SceneError::Io {
+    let text = read_text_bounded(path, MAX_FILE_BYTES).map_err(|cause| SceneError::Io {
         path: path.to_owned(),
         cause,
     })?;

@@ -13,6 +13,7 @@
 
 pub mod atomic;
 pub mod kmat;
+pub mod read;
 pub mod recording;
 
 use std::ffi::{CStr, CString, c_char, c_void};

@@ -23,6 +23,8 @@
 use std::cell::RefCell;
 use std::path::Path;
 
+use kiln_plugin_api::read::{MAX_FILE_BYTES, read_bounded};
+
 /// An MTL material, as tobj parses it.
 pub use tobj::Material;
 
@@ -65,7 +67,7 @@ pub struct ObjFile {
 /// `path`.
 pub fn read_obj(path: &Path) -> Result<ObjFile, String> {
     let fail = |message: String| format!("cannot read {}: {message}", path.display());
-    let bytes = std::fs::read(path).map_err(|e| fail(e.to_string()))?;
+    let bytes = read_bounded(path, MAX_FILE_BYTES).map_err(|e| fail(e.to_string()))?;
     let file = match std::str::from_utf8(&bytes).ok().and_then(read_aligned) {
         Some(mesh) => ObjFile {
             meshes: vec![mesh],
@@ -213,7 +215,7 @@ fn read_with_tobj(bytes: &[u8], dir: &Path) -> Result<ObjFile, String> {
     let library_warnings = RefCell::new(Vec::new());
     let (models, materials) = tobj::load_obj_buf(&mut &bytes[..], &options, |library| {
         let full = dir.join(library);
-        let loaded = std::fs::read(&full)
+        let loaded = read_bounded(&full, MAX_FILE_BYTES)
             .map_err(|e| e.to_string())
             .and_then(|bytes| {
                 let mut warnings = library_warnings.borrow_mut();

@@ -14,8 +14,9 @@ use std::path::Path;
 use gltf::json;
 use gltf::json::validation::{Checked, Validate};
 
-/// Files (and external buffers) larger than this are refused before they are read.
-pub const MAX_FILE_BYTES: u64 = 1 << 31;
+/// Files (and external buffers) larger than this are refused.
+pub use kiln_plugin_api::read::MAX_FILE_BYTES;
+use kiln_plugin_api::read::read_bounded;
 
 /// A parsed file: the JSON document and the GLB binary chunk, if any.
 pub struct Document {
@@ -40,17 +41,9 @@ pub fn read(path: &Path) -> Result<Document, String> {
     parse(&bytes)
 }
 
-/// Reads a whole file after checking its size against [`MAX_FILE_BYTES`].
+/// Reads a whole regular file of at most [`MAX_FILE_BYTES`].
 pub fn read_file(path: &Path) -> Result<Vec<u8>, String> {
-    let fail = |e: std::io::Error| format!("cannot read {}: {e}", path.display());
-    let size = std::fs::metadata(path).map_err(fail)?.len();
-    if size > MAX_FILE_BYTES {
-        return Err(format!(
-            "{} is {size} bytes, more than the {MAX_FILE_BYTES} this importer reads",
-            path.display()
-        ));
-    }
-    std::fs::read(path).map_err(fail)
+    read_bounded(path, MAX_FILE_BYTES).map_err(|e| format!("cannot read {}: {e}", path.display()))
 }
 
 /// Parses the bytes of a `.gltf` or `.glb` file.
