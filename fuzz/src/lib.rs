@@ -10,7 +10,7 @@ use std::collections::HashSet;
 use std::path::{Path, PathBuf};
 use std::sync::OnceLock;
 
-use kiln::material::{compile, materials_wgsl, parse_material};
+use kiln::material::{compile, material_text, materials_wgsl, parse_material};
 use kiln::render::kernel::path_tracing_kernel;
 use kiln::scene::{Scene, load_scene, parse_scene, save_scene};
 use kiln::shader::KernelFeatures;
@@ -100,10 +100,10 @@ pub fn input_file(name: &str, data: &[u8]) -> PathBuf {
 /// again is the same (compared as text, where a NaN the parser took equals itself).
 pub fn check_material(name: &str, kmat: &str) -> Result<(), String> {
     let (parsed_name, graph) = parse_material(kmat, "fuzz.kmat").map_err(|e| e.to_string())?;
-    let text = kiln::material::material_text(&parsed_name, &graph).map_err(|e| e.to_string())?;
+    let text = material_text(&parsed_name, &graph).map_err(|e| e.to_string())?;
     let again = parse_material(&text, "rewritten.kmat")
         .unwrap_or_else(|e| panic!("a written material does not parse: {e}\n{text}"));
-    let rewritten = kiln::material::material_text(&again.0, &again.1).map_err(|e| e.to_string())?;
+    let rewritten = material_text(&again.0, &again.1).map_err(|e| e.to_string())?;
     assert_eq!(rewritten, text, "a written material reads back different");
     let compiled = compile(name, &graph, "material_0").map_err(|e| e.to_string())?;
     let wgsl = materials_wgsl(&[(0, &compiled)]);

@@ -22,13 +22,6 @@ const SAMPLES: u32 = 2;
 /// Cells along each side of the grid a heterogeneous volume is baked into.
 const VOLUME_RESOLUTION: u32 = 16;
 
-/// Resident memory of this process in bytes, where the system says (Linux).
-fn resident_bytes() -> Option<u64> {
-    let statm = std::fs::read_to_string("/proc/self/statm").ok()?;
-    let pages: u64 = statm.split_whitespace().nth(1)?.parse().ok()?;
-    Some(pages * 4096)
-}
-
 /// The bundled materials (assets/materials), when run from the source tree.
 fn bundled_materials() -> Result<Vec<Material>> {
     let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
@@ -100,7 +93,7 @@ pub fn soak(ctx: &Arc<GpuContext>, renders: u32, out: &mut dyn std::io::Write) -
         }
         let done = render + 1;
         if done % ROW_EVERY == 0 || done == renders {
-            let resident = resident_bytes().unwrap_or(0);
+            let resident = super::memory().map_or(0, |(now, _)| now);
             first_row.get_or_insert(resident);
             last_row = resident;
             let per_render = since.0.elapsed().as_secs_f64() * 1e3 / (done - since.1) as f64;
