@@ -41,10 +41,11 @@ struct Params {
     // x: tan(fov_y / 2), y: aspect (w / h), z: aperture radius, w: focus distance
     cam_lens: vec4<f32>,
     // rgb: uniform environment radiance; w: probability of picking the environment in NEE
+    // among the lights at infinity
     environment: vec4<f32>,
     // Total power of the emissive triangles (sum of luminance * area).
     light_power: f32,
-    // Probability of picking an emissive triangle in NEE.
+    // Probability of picking an emissive triangle in NEE among the local lights.
     triangle_pick: f32,
     analytic_light_count: u32,
     // Index of the first pixel of the film piece bound to this dispatch: the film is split
@@ -68,6 +69,12 @@ struct Params {
     clamp_direct: f32,
     clamp_indirect: f32,
     noise_threshold: f32,
+    // Where next-event estimation splits its samples between the lights at infinity (the
+    // environment, distant lights) and the local ones (infinite_light_pick): x the
+    // irradiance at infinity, y the local lights' summed intensity (luminance); the local
+    // lights' bounding sphere (centre, squared radius).
+    light_split: vec4<f32>,
+    local_lights: vec4<f32>,
     // The pixel filter's quantile function at FILTER_TABLE_SIZE evenly spaced
     // probabilities, in pixels, four to a vector (shaders/sampling.wgsl).
     filter_quantiles: array<vec4<f32>, 32>,

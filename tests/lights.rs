@@ -6,6 +6,7 @@ mod common;
 
 use common::{gpu, mean, render, settings};
 use glam::{Affine3A, Vec3};
+use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Light, Material, Scene, shapes};
 
 const ALBEDO: f32 = 0.5;
@@ -169,6 +170,136 @@ fn area_lights_are_found_by_bsdf_rays_too() {
             bsdf_only,
             want,
             0.045,
+        );
+    }
+}
+
+#[test]
+fn light_samples_split_between_sky_sun_and_lamps_keep_the_image() {
+    // Next-event estimation splits its samples at each shading point between the lights
+    // at infinity and the local ones (src/render/light_distribution.rs): under a sky, a
+    // wide sun disk and an emissive quad off to the side, NEE + MIS must converge to what
+    // BSDF sampling alone finds. The split picks the quad for about half the samples here,
+    // the sun and the sky by their irradiance for the rest.
+    let scene = |light_sampling| {
+        let mut scene = Scene::empty(Camera {
+            up: Vec3::Z,
+            ..Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, 2.0)
+        });
+        scene.environment = Vec3::splat(0.2);
+        let matte = scene.add_material(Material::diffuse("matte", Vec3::splat(ALBEDO)));
+        let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(20.0)));
+        let quad = scene.add_mesh(shapes::quad());
+        scene.add_instance(quad, matte, Affine3A::from_scale(Vec3::splat(100.0)));
+        // Facing down, 25°-48° off the vertical seen from the origin: clear of the sun.
+        scene.add_instance(
+            quad,
+            lamp,
+            Affine3A::from_translation(Vec3::new(1.2, 1.5, 0.0))
+                * Affine3A::from_rotation_x(std::f32::consts::PI),
+        );
+        scene.add_light(Light::Distant {
+            direction: -Vec3::Y,
+            irradiance: Vec3::splat(3.0),
+            angular_diameter: 30.0,
+        });
+        let mut s = settings(8, 8, if light_sampling { 1024 } else { 16384 });
+        s.max_bounces = 1;
+        s.light_sampling = light_sampling;
+        mean(&render(&gpu(), &scene, s).radiance()).x
+    };
+    let mis = scene(true);
+    let bsdf_only = scene(false);
+    // The sky alone gives 0.2 π, the sun 3: the lamp adds to both.
+    assert!(mis > expected(0.2 * std::f32::consts::PI + 3.0), "{mis}");
+    assert_close("NEE + MIS against BSDF sampling", mis, bsdf_only, 0.015);
+}
+
+#[test]
+fn a_light_sample_has_the_density_mis_weighs_that_light_by() {
+    // Every kind of light at once, at shading points spread from beside the lamps to
+    // far below them, so that the split between the sky and sun and the local lights
+    // varies: the density of each light sample must be the one the integrator gives a
+    // BSDF ray that reaches the same light, or MIS would be biased.
+    let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+    scene.environment = Vec3::new(0.3, 0.4, 0.5);
+    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(5.0)));
+    let quad = scene.add_mesh(shapes::quad());
+    scene.add_instance(
+        quad,
+        lamp,
+        Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0))
+            * Affine3A::from_rotation_x(std::f32::consts::PI)
+            * Affine3A::from_scale(Vec3::splat(2.0)),
+    );
+    scene.lights = [
+        Light::Point {
+            // Off the sun's side: a BSDF ray toward the sun that met the sphere would end on
+            // it (sphere lights are opaque to rays, but cast no shadow).
+            position: Vec3::new(-3.0, 1.5, 0.0),
+            intensity: Vec3::splat(10.0),
+            radius: 0.4,
+        },
+        Light::Point {
+            position: Vec3::new(3.0, 2.0, 1.0),
+            intensity: Vec3::splat(4.0),
+            radius: 0.0,
+        },
+        Light::Distant {
+            direction: Vec3::new(-0.3, -1.0, -0.2),
+            irradiance: Vec3::splat(2.0),
+            angular_diameter: 10.0,
+        },
+    ]
+    .map(Into::into)
+    .to_vec();
+    let samples = 1u32 << 14;
+    let corner = |v: Vec3| {
+        let [x, y, z] = v.to_array().map(f32::to_bits);
+        [x, y, z, 0]
+    };
+    let input = [
+        [samples, 11, 0, 0],
+        corner(Vec3::new(-2.0, -6.0, -2.0)),
+        corner(Vec3::new(2.0, 1.0, 2.0)),
+    ];
+    let out = run_probe(
+        &gpu(),
+        &scene,
+        &settings(1, 1, 1),
+        &Probe {
+            name: "light_probe",
+            parts: &[(
+                "shaders/tests/light_probe.wgsl",
+                include_str!("../shaders/tests/light_probe.wgsl"),
+            )],
+            entry: "light_probe",
+            input: bytemuck::cast_slice(&input),
+            output_bytes: 16 * samples as u64,
+            invocations: samples,
+            material_params: &[],
+        },
+    )
+    .unwrap_or_else(|e| panic!("{e}"));
+    let rows: &[[u32; 4]] = bytemuck::cast_slice(&out);
+    let mut per_kind = [0u32; 3];
+    for (i, &[kind, sampled, weighed, _]) in rows.iter().enumerate() {
+        if kind == u32::MAX {
+            // The point light: a delta, which no BSDF ray reaches.
+            continue;
+        }
+        per_kind[kind as usize] += 1;
+        let (sampled, weighed) = (f32::from_bits(sampled), f32::from_bits(weighed));
+        assert!(
+            (sampled - weighed).abs() <= 1e-3 * sampled,
+            "sample {i} of kind {kind}: sampled with density {sampled}, weighed by {weighed}"
+        );
+    }
+    // The environment, the quad and the sphere light and sun disk each get their share.
+    for (kind, count) in per_kind.iter().enumerate() {
+        assert!(
+            *count > samples / 20,
+            "light kind {kind} sampled {count} times of {samples}: {per_kind:?}"
         );
     }
 }

@@ -21,22 +21,36 @@ fn spot_falloff(cos_axis: f32, cos_outer: f32, cos_inner: f32) -> f32 {
     return smoothstep(cos_outer, cos_inner, cos_axis);
 }
 
-// The light picked by u in [0, 1) among the analytic lights (u counts from where the
-// environment's and the triangles' pick probabilities end).
-fn pick_analytic_light(u: f32) -> u32 {
+// The light picked by u in [0, 1) among the analytic lights at infinity (distant lights)
+// or the local ones; u counts from where the environment's or the triangles' pick
+// probability ends. NO_LIGHT where that side has none.
+fn pick_analytic_light(u: f32, at_infinity: bool) -> u32 {
     let count = params.analytic_light_count;
+    var last = NO_LIGHT;
     for (var i = 0u; i < count; i++) {
-        if (u < analytic_lights[i].shape.w) {
+        let l = analytic_lights[i];
+        if ((l.kind == LIGHT_DISTANT) != at_infinity || l.intensity.w <= 0.0) {
+            continue;
+        }
+        last = i;
+        if (u < l.shape.w) {
             return i;
         }
     }
-    return count - 1u;
+    return last;
 }
 
+const NO_LIGHT: u32 = 0xffffffffu;
+
+// A sample of analytic light `index` (NO_LIGHT: none); its pdf has the light's pick
+// probability among its side's lights in it.
 fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample {
+    let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, false);
+    if (index == NO_LIGHT) {
+        return none;
+    }
     let l = analytic_lights[index];
     let pick = l.intensity.w;
-    let none = LightSample(vec3<f32>(0.0, 0.0, 1.0), 0.0, vec3<f32>(0.0), 0.0, false);
     if (l.kind == LIGHT_DISTANT) {
         let to_light = -normalize(l.position);
         let one_minus_cos = l.axis.w;
@@ -80,7 +94,8 @@ fn sample_analytic_light(index: u32, p: vec3<f32>, u: vec2<f32>) -> LightSample 
 // What a ray from `o` along unit `d` sees of the analytic lights before `t_max`: the
 // nearest sphere light, or where the ray escapes (t_max = 3e38), the sun disks it points
 // into. `pdf` is next-event estimation's solid-angle density for that direction (pick
-// probability included), for the MIS weight.
+// probability included: `p_infinite` is infinite_light_pick's at the ray's vertex), for
+// the MIS weight.
 struct AnalyticHit {
     hit: bool,
     // Distance to the sphere hit; 3e38 for sun disks, which block nothing.
@@ -89,12 +104,12 @@ struct AnalyticHit {
     pdf: f32,
 };
 
-fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32) -> AnalyticHit {
+fn analytic_light_hit(o: vec3<f32>, d: vec3<f32>, t_max: f32, p_infinite: f32) -> AnalyticHit {
     var result = AnalyticHit(false, t_max, vec3<f32>(0.0), 0.0);
     let count = params.analytic_light_count;
     for (var i = 0u; i < count; i++) {
         let l = analytic_lights[i];
-        let pick = l.intensity.w;
+        let pick = l.intensity.w * select(1.0 - p_infinite, p_infinite, l.kind == LIGHT_DISTANT);
         if (l.kind == LIGHT_DISTANT) {
             let one_minus_cos = l.axis.w;
             if (one_minus_cos <= 0.0 || result.t < 3.0e38) {

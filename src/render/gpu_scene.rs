@@ -92,17 +92,20 @@ pub struct GpuScene {
     /// zeros unless the renderer compiles its materials with live constants).
     pub material_params: wgpu::Buffer,
     pub texture_count: u32,
-    /// Probability that next-event estimation samples an emissive triangle.
+    /// Probability that next-event estimation samples an emissive triangle among the
+    /// local lights.
     pub triangle_pick: f32,
     pub instance_count: u32,
     pub light_count: u32,
     /// Sum over emissive triangles of luminance × area.
     pub light_power: f32,
-    /// Probability that next-event estimation samples the environment.
+    /// Probability that next-event estimation samples the environment among the lights
+    /// at infinity.
     pub environment_pick: f32,
+    /// `Params.light_split` and `Params.local_lights` ([`LightSelection`]).
+    pub light_split: [f32; 4],
+    pub local_lights: [f32; 4],
     pub bytes: u64,
-    /// The root of the top-level BVH (what light selection weighs the environment by).
-    pub tlas_root: Option<BvhNode>,
     /// Per mesh, as [`SceneArrays::blas_root`] and [`SceneArrays::mesh_flags`].
     pub blas_root: Vec<u32>,
     pub mesh_flags: Vec<u32>,
@@ -132,9 +135,12 @@ pub struct SceneArrays {
     pub analytic_lights: Vec<GpuAnalyticLight>,
     /// `env_data` of shaders/lights/environment.wgsl (empty without a map).
     pub environment_data: Vec<[f32; 4]>,
-    /// Pick probabilities of the environment and of the emissive triangles.
+    /// Pick probabilities of the environment and of the emissive triangles, and where
+    /// each shading point splits its light samples ([`LightSelection`]).
     pub environment_pick: f32,
     pub triangle_pick: f32,
+    pub light_split: [f32; 4],
+    pub local_lights: [f32; 4],
     /// Per mesh: the index of its BLAS root in `blas_nodes` (0 for meshes no instance
     /// uses), and its `INSTANCE_HAS_*` flags. Kept so instances can be packed again
     /// without the meshes.
@@ -155,13 +161,14 @@ pub struct LightArrays {
     pub analytic_lights: Vec<GpuAnalyticLight>,
     pub environment_pick: f32,
     pub triangle_pick: f32,
+    pub light_split: [f32; 4],
+    pub local_lights: [f32; 4],
 }
 
-/// The lights of `scene`, whose top-level BVH has root `scene_root` (the environment and
-/// distant lights are weighed by its bounding sphere).
-pub fn light_arrays(scene: &Scene, scene_root: Option<&BvhNode>) -> LightArrays {
+/// The lights of `scene`.
+pub fn light_arrays(scene: &Scene) -> LightArrays {
     let emissive = emissive_triangles(scene);
-    let selection = light_selection(scene, scene_root, emissive.power);
+    let selection = light_selection(scene, &emissive);
     LightArrays {
         light_triangles: emissive.triangles,
         light_cdf: emissive.cdf,
@@ -169,6 +176,8 @@ pub fn light_arrays(scene: &Scene, scene_root: Option<&BvhNode>) -> LightArrays 
         analytic_lights: selection.analytic_lights,
         environment_pick: selection.environment_pick,
         triangle_pick: selection.triangle_pick,
+        light_split: selection.split,
+        local_lights: selection.local_bounds,
     }
 }
 
@@ -330,13 +339,15 @@ impl SceneArrays {
 
         a.materials = scene.materials.iter().map(pack_material).collect();
 
-        let lights = light_arrays(scene, a.tlas_nodes.first());
+        let lights = light_arrays(scene);
         a.light_triangles = lights.light_triangles;
         a.light_cdf = lights.light_cdf;
         a.light_power = lights.light_power;
         a.analytic_lights = lights.analytic_lights;
         a.environment_pick = lights.environment_pick;
         a.triangle_pick = lights.triangle_pick;
+        a.light_split = lights.light_split;
+        a.local_lights = lights.local_lights;
         if let Some(map) = &scene.environment_map {
             a.environment_data = environment_data(map);
         }
@@ -627,8 +638,9 @@ impl GpuScene {
             light_count: a.light_triangles.len() as u32,
             light_power: a.light_power,
             environment_pick: a.environment_pick,
+            light_split: a.light_split,
+            local_lights: a.local_lights,
             bytes,
-            tlas_root: a.tlas_nodes.first().copied(),
             blas_root: a.blas_root,
             mesh_flags: a.mesh_flags,
             volume_grid,

@@ -458,6 +458,8 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
         environment: scene.environment.extend(gpu.environment_pick).into(),
         light_power: gpu.light_power,
         triangle_pick: gpu.triangle_pick,
+        light_split: gpu.light_split,
+        local_lights: gpu.local_lights,
         analytic_light_count: gpu.analytic_light_count,
         // Set per dispatch, for the piece it renders into.
         film_piece_start: 0,

@@ -138,11 +138,7 @@ impl Renderer {
         } else {
             None
         };
-        let root = match &placed {
-            Some((tlas, _)) => tlas.as_ref().map(|t| t.nodes[0]),
-            None => self.gpu_scene.tlas_root,
-        };
-        let light_data = light_arrays(new, root.as_ref());
+        let light_data = light_arrays(new);
         self.check_lights(&light_data)?;
         let resolution_edited = old.settings.volume_resolution != new.settings.volume_resolution;
         let resolution = if resolution_edited {
@@ -216,7 +212,7 @@ impl Renderer {
     pub fn update_instances(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         self.check_features(scene)?;
         let (tlas, packed) = self.place_instances(scene)?;
-        let lights = light_arrays(scene, tlas.as_ref().map(|t| &t.nodes[0]));
+        let lights = light_arrays(scene);
         self.check_lights(&lights)?;
         self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_instances(tlas.as_ref(), &packed)?;
@@ -289,7 +285,6 @@ impl Renderer {
         let queue = &self.ctx.queue;
         write_texels(queue, &self.gpu_scene.tlas_texels, NODE_TEXELS, nodes);
         write_texels(queue, &self.gpu_scene.instances, INSTANCE_TEXELS, packed);
-        self.gpu_scene.tlas_root = nodes.first().copied();
         Ok(())
     }
 
@@ -297,7 +292,7 @@ impl Renderer {
     /// the light distribution. `scene` must have the renderer's light count.
     pub fn update_lights(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         self.check_features(scene)?;
-        let lights = light_arrays(scene, self.gpu_scene.tlas_root.as_ref());
+        let lights = light_arrays(scene);
         self.check_lights(&lights)?;
         self.write_lights(scene, &lights)
     }
@@ -396,7 +391,7 @@ impl Renderer {
     /// Refuses an edit after which the scene would need a kernel with other features
     /// (a lobe, a light type the kernel left out).
     fn check_features(&self, scene: &Scene) -> Result<(), UpdateError> {
-        let lights = light_arrays(scene, self.gpu_scene.tlas_root.as_ref());
+        let lights = light_arrays(scene);
         let needed = kernel_features(
             KernelFeatures {
                 lobes: instanced_lobes(scene),
@@ -461,11 +456,15 @@ impl Renderer {
         g.light_power = lights.light_power;
         g.triangle_pick = lights.triangle_pick;
         g.environment_pick = lights.environment_pick;
+        g.light_split = lights.light_split;
+        g.local_lights = lights.local_lights;
         let p = &mut self.base_params;
         p.light_count = g.light_count;
         p.light_power = g.light_power;
         p.triangle_pick = g.triangle_pick;
         p.environment = scene.environment.extend(g.environment_pick).into();
+        p.light_split = g.light_split;
+        p.local_lights = g.local_lights;
         Ok(())
     }
 

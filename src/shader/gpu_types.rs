@@ -91,6 +91,12 @@ pub struct GpuParams {
     /// Adaptive sampling's noise threshold (`adaptive_converge`): a pixel whose estimated
     /// error is below it takes no more samples; 0 for none.
     pub noise_threshold: f32,
+    /// Where next-event estimation splits its samples between the lights at infinity and
+    /// the local ones ([`crate::render::light_distribution::LightSelection`]): x the
+    /// irradiance at infinity, y the local intensity; the local lights' bounding sphere
+    /// (centre, squared radius).
+    pub light_split: [f32; 4],
+    pub local_lights: [f32; 4],
     /// The pixel filter's quantile function at [`FILTER_TABLE_SIZE`] evenly spaced
     /// probabilities, in pixels ([`crate::shader::filter::PixelFilter::quantiles`]).
     pub filter_quantiles: [[f32; 4]; FILTER_TABLE_SIZE as usize / 4],
@@ -301,6 +307,8 @@ mod tests {
                 clamp_direct,
                 clamp_indirect,
                 noise_threshold,
+                light_split,
+                local_lights,
                 filter_quantiles,
             ]
         );

@@ -59,6 +59,7 @@ pub const LIBRARY: &[ShaderFile] = &[
     shader_file!("lights/emissive_triangle.wgsl"),
     shader_file!("lights/environment.wgsl"),
     shader_file!("lights/analytic.wgsl"),
+    shader_file!("lights/selection.wgsl"),
 ];
 
 /// The path-tracing entry point `render` and the media it tracks.
