@@ -4,9 +4,8 @@
 
 mod common;
 
-use common::{gpu, mean, render, settings};
+use common::{gpu, mean, render, run_scene_kernel, settings};
 use glam::{Affine3A, Vec3};
-use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Light, Material, Scene, shapes};
 
 const ALBEDO: f32 = 0.5;
@@ -16,6 +15,13 @@ fn lit_plane(light: Light) -> f32 {
 }
 
 fn lit_plane_with(light: Light, light_sampling: bool, spp: u32) -> f32 {
+    let mut scene = matte_plane();
+    scene.add_light(light);
+    plane_radiance(&scene, light_sampling, spp)
+}
+
+/// The matte plane seen straight down, unlit.
+fn matte_plane() -> Scene {
     let mut scene = Scene::empty(Camera {
         up: Vec3::Z,
         ..Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, 2.0)
@@ -23,11 +29,15 @@ fn lit_plane_with(light: Light, light_sampling: bool, spp: u32) -> f32 {
     let m = scene.add_material(Material::diffuse("matte", Vec3::splat(ALBEDO)));
     let quad = scene.add_mesh(shapes::quad());
     scene.add_instance(quad, m, Affine3A::from_scale(Vec3::splat(100.0)));
-    scene.add_light(light);
+    scene
+}
+
+/// The mean radiance of `scene` (a [`matte_plane`] with lights) by direct light alone.
+fn plane_radiance(scene: &Scene, light_sampling: bool, spp: u32) -> f32 {
     let mut s = settings(8, 8, spp);
     s.max_bounces = 1;
     s.light_sampling = light_sampling;
-    mean(&render(&gpu(), &scene, s).radiance()).x
+    mean(&render(&gpu(), scene, s).radiance()).x
 }
 
 fn expected(irradiance: f32) -> f32 {
@@ -181,35 +191,24 @@ fn light_samples_split_between_sky_sun_and_lamps_keep_the_image() {
     // wide sun disk and an emissive quad off to the side, NEE + MIS must converge to what
     // BSDF sampling alone finds. The split picks the quad for about half the samples here,
     // the sun and the sky by their irradiance for the rest.
-    let scene = |light_sampling| {
-        let mut scene = Scene::empty(Camera {
-            up: Vec3::Z,
-            ..Camera::look_at(Vec3::new(0.0, 1.0, 0.0), Vec3::ZERO, 2.0)
-        });
-        scene.environment = Vec3::splat(0.2);
-        let matte = scene.add_material(Material::diffuse("matte", Vec3::splat(ALBEDO)));
-        let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(20.0)));
-        let quad = scene.add_mesh(shapes::quad());
-        scene.add_instance(quad, matte, Affine3A::from_scale(Vec3::splat(100.0)));
-        // Facing down, 25°-48° off the vertical seen from the origin: clear of the sun.
-        scene.add_instance(
-            quad,
-            lamp,
-            Affine3A::from_translation(Vec3::new(1.2, 1.5, 0.0))
-                * Affine3A::from_rotation_x(std::f32::consts::PI),
-        );
-        scene.add_light(Light::Distant {
-            direction: -Vec3::Y,
-            irradiance: Vec3::splat(3.0),
-            angular_diameter: 30.0,
-        });
-        let mut s = settings(8, 8, if light_sampling { 1024 } else { 16384 });
-        s.max_bounces = 1;
-        s.light_sampling = light_sampling;
-        mean(&render(&gpu(), &scene, s).radiance()).x
-    };
-    let mis = scene(true);
-    let bsdf_only = scene(false);
+    let mut scene = matte_plane();
+    scene.environment = Vec3::splat(0.2);
+    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(20.0)));
+    let quad = scene.add_mesh(shapes::quad());
+    // Facing down, 25°-48° off the vertical seen from the origin: clear of the sun.
+    scene.add_instance(
+        quad,
+        lamp,
+        Affine3A::from_translation(Vec3::new(1.2, 1.5, 0.0))
+            * Affine3A::from_rotation_x(std::f32::consts::PI),
+    );
+    scene.add_light(Light::Distant {
+        direction: -Vec3::Y,
+        irradiance: Vec3::splat(3.0),
+        angular_diameter: 30.0,
+    });
+    let mis = plane_radiance(&scene, true, 1024);
+    let bsdf_only = plane_radiance(&scene, false, 16384);
     // The sky alone gives 0.2 π, the sun 3: the lamp adds to both.
     assert!(mis > expected(0.2 * std::f32::consts::PI + 3.0), "{mis}");
     assert_close("NEE + MIS against BSDF sampling", mis, bsdf_only, 0.015);
@@ -263,24 +262,17 @@ fn a_light_sample_has_the_density_mis_weighs_that_light_by() {
         corner(Vec3::new(-2.0, -6.0, -2.0)),
         corner(Vec3::new(2.0, 1.0, 2.0)),
     ];
-    let out = run_probe(
-        &gpu(),
+    let out = run_scene_kernel(
         &scene,
-        &settings(1, 1, 1),
-        &Probe {
-            name: "light_probe",
-            parts: &[(
-                "shaders/tests/light_probe.wgsl",
-                include_str!("../shaders/tests/light_probe.wgsl"),
-            )],
-            entry: "light_probe",
-            input: bytemuck::cast_slice(&input),
-            output_bytes: 16 * samples as u64,
-            invocations: samples,
-            material_params: &[],
-        },
-    )
-    .unwrap_or_else(|e| panic!("{e}"));
+        (
+            "shaders/tests/light_probe.wgsl",
+            include_str!("../shaders/tests/light_probe.wgsl"),
+        ),
+        "light_probe",
+        bytemuck::cast_slice(&input),
+        16 * samples as u64,
+        samples,
+    );
     let rows: &[[u32; 4]] = bytemuck::cast_slice(&out);
     let mut per_kind = [0u32; 3];
     for (i, &[kind, sampled, weighed, _]) in rows.iter().enumerate() {

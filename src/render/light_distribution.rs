@@ -25,7 +25,7 @@ use crate::shader::gpu_types::{
 };
 
 /// Every front-facing emissive triangle in world space, with its pick distribution.
-#[derive(Clone, Debug, Default)]
+#[derive(Clone, Debug)]
 pub struct EmissiveTriangles {
     /// In instance order; `emission.w` is the triangle's pick probability.
     pub triangles: Vec<GpuLightTriangle>,
@@ -37,13 +37,22 @@ pub struct EmissiveTriangles {
     pub bounds: [Vec3; 2],
 }
 
+impl Default for EmissiveTriangles {
+    /// No triangles, and bounds that any point grows.
+    fn default() -> Self {
+        Self {
+            triangles: Vec::new(),
+            cdf: Vec::new(),
+            power: 0.0,
+            bounds: [Vec3::INFINITY, Vec3::NEG_INFINITY],
+        }
+    }
+}
+
 /// The emissive triangles of every instance with an emissive material, picked by power
 /// (luminance × area); triangles of zero or non-finite power are left out.
 pub fn emissive_triangles(scene: &Scene) -> EmissiveTriangles {
-    let mut lights = EmissiveTriangles {
-        bounds: [Vec3::INFINITY, Vec3::NEG_INFINITY],
-        ..EmissiveTriangles::default()
-    };
+    let mut lights = EmissiveTriangles::default();
     let mut powers = Vec::new();
     for inst in &scene.instances {
         let material = &scene.materials[inst.material];
@@ -129,18 +138,15 @@ pub fn light_selection(scene: &Scene, triangles: &EmissiveTriangles) -> LightSel
         .map(|object| analytic_light(&object.light))
         .collect();
     let at_infinity = |l: &AnalyticLight| l.gpu.kind == LIGHT_DISTANT;
-    let infinite_total = environment
-        + analytic
+    let analytic_power = |infinite: bool| -> f64 {
+        analytic
             .iter()
-            .filter(|l| at_infinity(l))
+            .filter(|l| at_infinity(l) == infinite)
             .map(|l| l.power)
-            .sum::<f64>();
-    let local_total = triangle_power
-        + analytic
-            .iter()
-            .filter(|l| !at_infinity(l))
-            .map(|l| l.power)
-            .sum::<f64>();
+            .sum()
+    };
+    let infinite_total = environment + analytic_power(true);
+    let local_total = triangle_power + analytic_power(false);
     let mut selection = LightSelection::default();
     if infinite_total + local_total <= 0.0 {
         return selection;
@@ -152,9 +158,6 @@ pub fn light_selection(scene: &Scene, triangles: &EmissiveTriangles) -> LightSel
         selection.triangle_pick = (triangle_power / local_total) as f32;
     }
     let mut bounds = triangles.bounds;
-    if triangles.triangles.is_empty() {
-        bounds = [Vec3::INFINITY, Vec3::NEG_INFINITY];
-    }
     let mut intensity = triangles.power as f64;
     let (mut infinite_cdf, mut local_cdf) = (environment, triangle_power);
     for light in analytic {
@@ -197,9 +200,7 @@ pub fn light_selection(scene: &Scene, triangles: &EmissiveTriangles) -> LightSel
         selection.local_bounds = centre.extend(radius2).into();
         selection.split[1] = intensity as f32;
     }
-    if infinite_total > 0.0 {
-        selection.split[0] = infinite_total as f32;
-    }
+    selection.split[0] = infinite_total as f32;
     selection
 }
 

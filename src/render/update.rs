@@ -127,9 +127,10 @@ impl Renderer {
         let materials = old.materials != new.materials;
         let instances = old.instances != new.instances;
         let lights = old.lights != new.lights || old.environment != new.environment;
-        self.check_features(new)?;
+        let light_data = light_arrays(new);
+        self.check_features(new, &light_data)?;
         let compiled = if materials {
-            Some(self.check_materials(new)?)
+            Some(self.check_materials(new, &light_data)?)
         } else {
             None
         };
@@ -138,7 +139,6 @@ impl Renderer {
         } else {
             None
         };
-        let light_data = light_arrays(new);
         self.check_lights(&light_data)?;
         let resolution_edited = old.settings.volume_resolution != new.settings.volume_resolution;
         let resolution = if resolution_edited {
@@ -210,9 +210,9 @@ impl Renderer {
     /// the meshes' existing BVHs, writes it and the instances, then the lights. `scene`
     /// must have the meshes and instance count the renderer was built with.
     pub fn update_instances(&mut self, scene: &Scene) -> Result<(), UpdateError> {
-        self.check_features(scene)?;
-        let (tlas, packed) = self.place_instances(scene)?;
         let lights = light_arrays(scene);
+        self.check_features(scene, &lights)?;
+        let (tlas, packed) = self.place_instances(scene)?;
         self.check_lights(&lights)?;
         self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_instances(tlas.as_ref(), &packed)?;
@@ -291,8 +291,8 @@ impl Renderer {
     /// A light edit (an analytic light, the environment's colour): recomputes and writes
     /// the light distribution. `scene` must have the renderer's light count.
     pub fn update_lights(&mut self, scene: &Scene) -> Result<(), UpdateError> {
-        self.check_features(scene)?;
         let lights = light_arrays(scene);
+        self.check_features(scene, &lights)?;
         self.check_lights(&lights)?;
         self.write_lights(scene, &lights)
     }
@@ -301,12 +301,14 @@ impl Renderer {
     /// have changed). Refuses a change of a graph material's code or of the lobes the
     /// kernel contains.
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
-        let compiled = self.check_materials(scene)?;
+        let lights = light_arrays(scene);
+        let compiled = self.check_materials(scene, &lights)?;
+        self.check_lights(&lights)?;
         self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_materials(scene, &compiled)?;
         self.place_enclosures(scene, None);
         self.set_camera_media();
-        self.update_lights(scene)?;
+        self.write_lights(scene, &lights)?;
         self.rebake_volume_grids(scene)
     }
 
@@ -343,10 +345,15 @@ impl Renderer {
         self.base_params.max_bounces = max_bounces;
     }
 
-    /// Checks that the scene's materials fit the kernel; returns them compiled as the
-    /// kernel has them (with their live constants, if the kernel reads those).
-    fn check_materials(&self, scene: &Scene) -> Result<SceneMaterials, UpdateError> {
-        self.check_features(scene)?;
+    /// Checks that the scene's materials (and its `lights`, [`light_arrays`]) fit the
+    /// kernel; returns them compiled as the kernel has them (with their live constants, if
+    /// the kernel reads those).
+    fn check_materials(
+        &self,
+        scene: &Scene,
+        lights: &LightArrays,
+    ) -> Result<SceneMaterials, UpdateError> {
+        self.check_features(scene, lights)?;
         if scene.materials.len() as u32 != self.gpu_scene.material_count {
             return Err(UpdateError::rebuild("the material count changed"));
         }
@@ -389,9 +396,9 @@ impl Renderer {
     }
 
     /// Refuses an edit after which the scene would need a kernel with other features
-    /// (a lobe, a light type the kernel left out).
-    fn check_features(&self, scene: &Scene) -> Result<(), UpdateError> {
-        let lights = light_arrays(scene);
+    /// (a lobe, a light type the kernel left out); `lights` are the scene's
+    /// ([`light_arrays`]), computed once per edit by the caller.
+    fn check_features(&self, scene: &Scene, lights: &LightArrays) -> Result<(), UpdateError> {
         let needed = kernel_features(
             KernelFeatures {
                 lobes: instanced_lobes(scene),

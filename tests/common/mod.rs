@@ -142,16 +142,28 @@ pub fn assert_lit_image(path: &std::path::Path, width: u32, height: u32) {
 /// scene, one invocation each of `invocations`, with `input` bound as `probe_in`; returns
 /// the `output_bytes` it wrote to `probe_out`.
 pub fn run_test_kernel(
-    (path, source): (&str, &str),
+    file: (&str, &str),
     entry: &str,
     input: &[u8],
     output_bytes: u64,
     invocations: u32,
 ) -> Vec<u8> {
     let scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+    run_scene_kernel(&scene, file, entry, input, output_bytes, invocations)
+}
+
+/// [`run_test_kernel`] over `scene`, whose lights, geometry and materials the kernel sees.
+pub fn run_scene_kernel(
+    scene: &Scene,
+    (path, source): (&str, &str),
+    entry: &str,
+    input: &[u8],
+    output_bytes: u64,
+    invocations: u32,
+) -> Vec<u8> {
     kiln::render::probe::run_probe(
         &gpu(),
-        &scene,
+        scene,
         &settings(1, 1, 1),
         &kiln::render::probe::Probe {
             name: entry,
