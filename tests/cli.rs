@@ -72,7 +72,19 @@ fn a_scene_or_material_that_is_not_a_regular_file_is_refused_not_read() {
     assert_clean_error(code, &err, 1, "/dev/zero: not a regular file");
     let (code, err) = run(&["material", "check", "/dev/zero"]);
     assert_clean_error(code, &err, 1, "/dev/zero: not a regular file");
+    // Images too: an environment map (and an image texture, read the same way), here a
+    // link to the device under the name of an HDR image.
     let dir = tempfile::tempdir().unwrap();
+    let sky = dir.path().join("sky.hdr");
+    std::os::unix::fs::symlink("/dev/zero", &sky).unwrap();
+    let (code, err) = run(&[
+        "render",
+        "--environment",
+        sky.to_str().unwrap(),
+        "-o",
+        "x.png",
+    ]);
+    assert_clean_error(code, &err, 1, "not a regular file");
     let fifo = dir.path().join("scene.kiln");
     let made = std::process::Command::new("mkfifo").arg(&fifo).status();
     assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", fifo.display());

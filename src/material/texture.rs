@@ -6,6 +6,8 @@ use std::collections::BTreeMap;
 use std::path::Path;
 use std::sync::Arc;
 
+use kiln_plugin_api::read::{MAX_FILE_BYTES, read_bounded};
+
 /// The largest width or height accepted: bigger claims are refused before decoding.
 pub const MAX_TEXTURE_SIZE: u32 = 16384;
 
@@ -19,9 +21,16 @@ pub struct TextureImage {
     pub texels: Vec<u32>,
 }
 
+/// The image file at `path`: a regular file of at most [`MAX_FILE_BYTES`] (a FIFO would
+/// block the render, a device never end), its format by extension or else by content.
 pub fn load_texture(path: &Path) -> Result<TextureImage, String> {
-    let reader = image::ImageReader::open(path)
-        .map_err(|e| format!("cannot open {}: {e}", path.display()))?
+    let bytes = read_bounded(path, MAX_FILE_BYTES)
+        .map_err(|e| format!("cannot open {}: {e}", path.display()))?;
+    let mut reader = image::ImageReader::new(std::io::Cursor::new(bytes));
+    if let Ok(format) = image::ImageFormat::from_path(path) {
+        reader.set_format(format);
+    }
+    let reader = reader
         .with_guessed_format()
         .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
     decode(reader, &path.display().to_string())

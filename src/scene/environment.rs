@@ -5,6 +5,7 @@
 use std::path::Path;
 
 use glam::Vec3;
+use kiln_plugin_api::read::{MAX_FILE_BYTES, read_bounded};
 
 #[derive(Clone, Debug, PartialEq)]
 pub struct EnvironmentMap {
@@ -18,9 +19,14 @@ pub struct EnvironmentMap {
 }
 
 impl EnvironmentMap {
-    /// Loads an equirectangular image; formats by extension (`.hdr`, `.exr`).
+    /// Loads an equirectangular image; formats by extension (`.hdr`, `.exr`). Only a
+    /// regular file of at most [`MAX_FILE_BYTES`] is read.
     pub fn load(path: &Path) -> Result<Self, String> {
-        let image = image::open(path).map_err(|e| e.to_string())?.to_rgb32f();
+        let bytes = read_bounded(path, MAX_FILE_BYTES).map_err(|e| e.to_string())?;
+        let format = image::ImageFormat::from_path(path).map_err(|e| e.to_string())?;
+        let image = image::load_from_memory_with_format(&bytes, format)
+            .map_err(|e| e.to_string())?
+            .to_rgb32f();
         let (width, height) = image.dimensions();
         let texels = image.pixels().map(|p| Vec3::from(p.0)).collect();
         let map = Self {
