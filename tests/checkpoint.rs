@@ -147,4 +147,12 @@ fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
     let (ok, err) = kiln(&resume, &dir.path().join("new.exr"));
     assert!(!ok && err.contains("cannot resume from"), "{err}");
     assert!(!dir.path().join("new.exr").exists());
+
+    // A checkpoint that is not a file (a FIFO, which would block whoever opens it):
+    // refused at once, naming it.
+    let fifo = dir.path().join("fifo.exr.kiln-checkpoint");
+    let made = Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", fifo.display());
+    let (ok, err) = kiln(&resume, &dir.path().join("fifo.exr"));
+    assert!(!ok && err.contains("not a regular file"), "{err}");
 }

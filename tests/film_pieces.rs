@@ -71,3 +71,40 @@ fn a_film_row_wider_than_a_piece_is_refused_with_the_numbers() {
         "{message}"
     );
 }
+
+#[test]
+fn a_device_lost_in_the_middle_of_a_render_fails_it_naming_the_cause_and_the_scene() {
+    // A device of its own: destroying it must not touch other tests' renders.
+    let ctx = gpu();
+    let scene = scene::default_scene().expect("bundled scene");
+    let mut r = Renderer::new(Arc::clone(&ctx), &scene, settings(64, 64, 4096)).unwrap();
+    r.render(0..1, RenderControl::default()).unwrap();
+    let device = ctx.device.clone();
+    let destroyer = std::thread::spawn(move || {
+        std::thread::sleep(std::time::Duration::from_millis(300));
+        device.destroy();
+    });
+    let started = std::time::Instant::now();
+    let error = r
+        .render(1..4096, RenderControl::default())
+        .expect_err("a render on a destroyed device cannot succeed")
+        .to_string();
+    destroyer.join().unwrap();
+    assert!(
+        started.elapsed() < std::time::Duration::from_secs(60),
+        "the render noticed the loss only after {:?}",
+        started.elapsed()
+    );
+    for part in [
+        "device",
+        "was lost",
+        "destroyed",
+        "36 triangles",
+        "64x64 image",
+    ] {
+        assert!(error.contains(part), "{part:?} missing from: {error}");
+    }
+    // Every later use of the renderer says the same, rather than reading garbage.
+    let again = r.read_film().unwrap_err().to_string();
+    assert!(again.contains("was lost"), "{again}");
+}

@@ -242,6 +242,14 @@ impl Trs {
     }
 }
 
+/// Undo steps a document keeps (Blender keeps 32 by default, Photoshop 50): an editing
+/// session of hours must not hold every state it passed through. The oldest is dropped
+/// first.
+pub const UNDO_STEPS: usize = 256;
+
+/// `saved_step` of a document whose saved state is no longer in its undo history.
+const SAVED_STATE_DROPPED: u64 = u64::MAX;
+
 /// The scene being edited with the editor's state of it and its undo history.
 pub struct Document {
     /// The objects' and lights' names and visibility live in the scene (saved with it).
@@ -511,7 +519,12 @@ impl Document {
     /// Marks the document as differing from any file (a recovered autosave): it stays
     /// dirty until saved.
     pub fn mark_unsaved(&mut self) {
-        self.saved_step = Some(u64::MAX);
+        self.saved_step = Some(SAVED_STATE_DROPPED);
+    }
+
+    /// Steps in the undo history (at most [`UNDO_STEPS`]).
+    pub fn undo_steps(&self) -> usize {
+        self.undo.len()
     }
 
     pub fn can_undo(&self) -> bool {
@@ -544,17 +557,34 @@ impl Document {
             // The step's first inverse already restores the state before the gesture; a
             // new id, since the step now holds more than when it may have been saved.
             Some(step) => step.id = id,
-            None => self.undo.push(Step {
-                id,
-                inverses: vec![inverse],
-                key,
-                gesture,
-            }),
+            None => {
+                self.undo.push(Step {
+                    id,
+                    inverses: vec![inverse],
+                    key,
+                    gesture,
+                });
+                if self.undo.len() > UNDO_STEPS {
+                    self.drop_oldest_step();
+                }
+            }
         }
         self.open_gesture = gesture;
         self.redo.clear();
         self.bump(changes_image);
         Ok(())
+    }
+
+    /// Forgets the oldest undo step. The state below the stack is then the one that step
+    /// led to: the saved state if that step was on top when saving, and otherwise a state
+    /// undo can no longer reach.
+    fn drop_oldest_step(&mut self) {
+        let dropped = self.undo.remove(0);
+        self.saved_step = match self.saved_step {
+            Some(id) if id == dropped.id => None,
+            None => Some(SAVED_STATE_DROPPED),
+            kept => kept,
+        };
     }
 
     /// Ends the open gesture: the next command starts a new undo step.
@@ -1176,6 +1206,39 @@ mod tests {
         assert!(doc.is_dirty());
         assert_eq!(doc.scene().instances[6].transform, after);
         assert!(!doc.redo(), "nothing left to redo");
+    }
+
+    #[test]
+    fn the_undo_history_keeps_its_last_steps_and_knows_the_saved_state_is_gone() {
+        let mut doc = document();
+        let start = doc.scene().instances[6].transform;
+        let edits = UNDO_STEPS + 10;
+        for step in 1..=edits {
+            doc.apply(moved(&doc, 6, step as f32), None).unwrap();
+        }
+        let mut undone = 0;
+        while doc.undo() {
+            undone += 1;
+        }
+        assert_eq!(undone, UNDO_STEPS);
+        let oldest_kept = doc.scene().instances[6].transform.translation.x;
+        assert_eq!(oldest_kept, (edits - UNDO_STEPS) as f32);
+        assert_ne!(doc.scene().instances[6].transform, start);
+        assert!(
+            doc.is_dirty(),
+            "the file's state was dropped from the history, so no undo reaches it"
+        );
+
+        // Saved after the first edit: clean again only where that state is.
+        let mut doc = document();
+        doc.apply(moved(&doc, 6, 1.0), None).unwrap();
+        doc.mark_saved(PathBuf::from("saved.kiln"));
+        for step in 2..=UNDO_STEPS + 1 {
+            doc.apply(moved(&doc, 6, step as f32), None).unwrap();
+        }
+        while doc.undo() {}
+        assert_eq!(doc.scene().instances[6].transform.translation.x, 1.0);
+        assert!(!doc.is_dirty(), "back at the saved state below the history");
     }
 
     #[test]

@@ -82,8 +82,8 @@ impl Checkpoint {
     /// Reads the checkpoint at `path`; errors name the file and what is wrong with it.
     pub fn read(path: &Path) -> Result<Self, String> {
         let fail = |why: &str| format!("cannot resume from {}: {why}", path.display());
-        let file = std::fs::File::open(path).map_err(|e| fail(&e.to_string()))?;
-        let size = file.metadata().map_err(|e| fail(&e.to_string()))?.len();
+        let (file, size) =
+            kiln_plugin_api::read::open_regular(path).map_err(|e| fail(&e.to_string()))?;
         let mut r = std::io::BufReader::new(file);
         let mut take = |n: usize| -> Result<Vec<u8>, String> {
             let mut bytes = vec![0; n];

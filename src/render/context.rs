@@ -35,6 +35,12 @@ pub enum GpuError {
     Device { adapter: String, reason: String },
     #[error("the GPU reported an error during {during}: {message}")]
     Runtime { during: String, message: String },
+    #[error("the GPU device ({adapter}) was lost during {during}: {reason}")]
+    DeviceLost {
+        adapter: String,
+        during: String,
+        reason: String,
+    },
 }
 
 /// An adapter, its device and queue. Shared (`Arc`) by every renderer and probe of a
@@ -50,6 +56,30 @@ pub struct GpuContext {
     pub(crate) pipelines: std::sync::Mutex<PipelineCache<wgpu::ComputePipeline>>,
     /// Pipelines compiled on this context (cache misses), so the cache can be checked.
     pub(crate) pipelines_compiled: std::sync::atomic::AtomicUsize,
+    /// Why the device was lost, once the driver says it was (a crash, a reset after a
+    /// dispatch ran too long, `destroy`): every later wait and read fails naming it.
+    lost: Arc<std::sync::Mutex<Option<String>>>,
+}
+
+/// Records in the returned slot why `device` is lost, when it is.
+fn watch_for_loss(device: &wgpu::Device) -> Arc<std::sync::Mutex<Option<String>>> {
+    let lost = Arc::new(std::sync::Mutex::new(None));
+    let slot = Arc::clone(&lost);
+    device.set_device_lost_callback(move |reason, message| {
+        let why = match reason {
+            wgpu::DeviceLostReason::Destroyed if message.is_empty() => {
+                "the device was destroyed".to_owned()
+            }
+            wgpu::DeviceLostReason::Destroyed => format!("the device was destroyed ({message})"),
+            wgpu::DeviceLostReason::Unknown if message.is_empty() => "no reason given".to_owned(),
+            wgpu::DeviceLostReason::Unknown => message,
+        };
+        tracing::error!("GPU device lost: {why}");
+        if let Ok(mut slot) = slot.lock() {
+            slot.get_or_insert(why);
+        }
+    });
+    lost
 }
 
 fn instance(backend: Option<Backend>) -> wgpu::Instance {
@@ -142,6 +172,7 @@ impl GpuContext {
         device.on_uncaptured_error(Arc::new(|e: wgpu::Error| {
             tracing::error!("uncaptured wgpu error: {e}");
         }));
+        let lost = watch_for_loss(&device);
         Ok(Arc::new(Self {
             adapter,
             device,
@@ -149,6 +180,7 @@ impl GpuContext {
             info,
             pipelines: Default::default(),
             pipelines_compiled: Default::default(),
+            lost,
         }))
     }
 
@@ -171,6 +203,7 @@ impl GpuContext {
                 reason: format!("{} cannot run compute shaders", describe_adapter(&info)),
             });
         }
+        let lost = watch_for_loss(&device);
         Ok(Arc::new(Self {
             adapter,
             device,
@@ -178,11 +211,29 @@ impl GpuContext {
             info,
             pipelines: Default::default(),
             pipelines_compiled: Default::default(),
+            lost,
         }))
     }
 
     pub fn describe(&self) -> String {
         describe_adapter(&self.info)
+    }
+
+    /// Why the device was lost, if it was.
+    pub fn lost(&self) -> Option<String> {
+        self.lost.lock().ok().and_then(|l| l.clone())
+    }
+
+    /// An error naming `during` if the device has been lost.
+    pub fn check_lost(&self, during: &str) -> Result<(), GpuError> {
+        match self.lost() {
+            Some(reason) => Err(GpuError::DeviceLost {
+                adapter: self.describe(),
+                during: during.into(),
+                reason,
+            }),
+            None => Ok(()),
+        }
     }
 
     /// How many compute pipelines this context has compiled; a kernel source served from

@@ -31,9 +31,15 @@ pub fn read_buffer_range(
 
 /// Maps a MAP_READ buffer after the queued work that fills it, and copies it out.
 pub fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>, GpuError> {
-    let runtime = |message: String| GpuError::Runtime {
-        during: "readback".into(),
-        message,
+    const DURING: &str = "reading results back";
+    ctx.check_lost(DURING)?;
+    // A wait or map that fails on a lost device says so, rather than how it failed.
+    let runtime = |message: String| match ctx.check_lost(DURING) {
+        Err(lost) => lost,
+        Ok(()) => GpuError::Runtime {
+            during: DURING.into(),
+            message,
+        },
     };
     let (tx, rx) = std::sync::mpsc::channel();
     staging.slice(..).map_async(wgpu::MapMode::Read, move |r| {
@@ -54,5 +60,7 @@ pub fn map_and_read(ctx: &GpuContext, staging: &wgpu::Buffer) -> Result<Vec<u8>,
         view.to_vec()
     };
     staging.unmap();
+    // A lost device may complete the map with whatever the buffer held.
+    ctx.check_lost(DURING)?;
     Ok(data)
 }

@@ -41,6 +41,7 @@ use crate::shader::{Ablation, KernelFeatures};
 
 const TILE_SIZE: u32 = 256;
 const GIB: f64 = (1u64 << 30) as f64;
+const MIB: f64 = (1u64 << 20) as f64;
 const WORKGROUP_SIZE: u32 = 8;
 /// Dispatch duration the sample batching aims for.
 const TARGET_DISPATCH: Duration = Duration::from_millis(60);
@@ -130,6 +131,29 @@ pub enum RenderError {
         width: u32,
         height: u32,
         bytes: u64,
+        message: String,
+    },
+    #[error(
+        "{lost}. On the device: {triangles} triangles and {:.1} MiB of scene and film for a {width}x{height} image; the adapter allows {:.0} MiB in one buffer. A driver crash, a dispatch the system stopped for running too long, or the device running out of memory loses it; a checkpoint already written stays valid (kiln render --resume)",
+        *.bytes as f64 / MIB,
+        *.max_buffer as f64 / MIB
+    )]
+    DeviceLost {
+        lost: GpuError,
+        triangles: u64,
+        bytes: u64,
+        width: u32,
+        height: u32,
+        max_buffer: u64,
+    },
+    #[error(
+        "the device ran out of memory uploading the scene ({triangles} triangles in {meshes} meshes; the adapter allows {:.0} MiB in one buffer): make the scene smaller or use a device with more memory ({message})",
+        *.max_buffer as f64 / MIB
+    )]
+    SceneOutOfMemory {
+        triangles: u64,
+        meshes: usize,
+        max_buffer: u64,
         message: String,
     },
     #[error("cannot denoise: {0}")]
@@ -489,13 +513,24 @@ impl Renderer {
 
         let accel = build_scene_accel(scene)?;
         let upload_start = Instant::now();
+        let scope = ctx.device.push_error_scope(wgpu::ErrorFilter::OutOfMemory);
         let gpu_scene = GpuScene::upload(
             &ctx,
             scene,
             &accel,
             settings.page_bytes,
             settings.volume_resolution,
-        )?;
+        );
+        if let Some(e) = pollster::block_on(scope.pop()) {
+            return Err(RenderError::SceneOutOfMemory {
+                triangles: scene.triangle_count(),
+                meshes: scene.meshes.len(),
+                max_buffer: ctx.device.limits().max_buffer_size,
+                message: e.to_string(),
+            });
+        }
+        ctx.check_lost("uploading the scene")?;
+        let gpu_scene = gpu_scene?;
         let upload = upload_start.elapsed();
 
         let kernel_start = Instant::now();
@@ -795,10 +830,16 @@ impl Renderer {
                 submission_index: Some(index),
                 timeout: None,
             })
-            .map_err(|e| GpuError::Runtime {
-                during: during.into(),
-                message: e.to_string(),
+            .map_err(|e| {
+                self.ctx
+                    .check_lost(during)
+                    .err()
+                    .unwrap_or(GpuError::Runtime {
+                        during: during.into(),
+                        message: e.to_string(),
+                    })
             })?;
+        self.ctx.check_lost(during)?;
         Ok(())
     }
 
@@ -831,6 +872,31 @@ impl Renderer {
     /// sample in every pixel, and its pixels' counts differ by at most one pass's batch
     /// (each pixel knows its own count).
     pub fn render(
+        &mut self,
+        samples: Range<u32>,
+        control: RenderControl,
+    ) -> Result<RenderStats, RenderError> {
+        self.render_passes(samples, control)
+            .map_err(|e| self.explain_loss(e))
+    }
+
+    /// A lost device's error with what this renderer put on it, against the adapter's
+    /// limits: what a user needs to tell a crash from a scene too large for the device.
+    fn explain_loss(&self, error: RenderError) -> RenderError {
+        match error {
+            RenderError::Gpu(lost @ GpuError::DeviceLost { .. }) => RenderError::DeviceLost {
+                lost,
+                triangles: self.build_info.triangles,
+                bytes: self.build_info.upload_bytes,
+                width: self.settings.width,
+                height: self.settings.height,
+                max_buffer: self.ctx.device.limits().max_buffer_size,
+            },
+            other => other,
+        }
+    }
+
+    fn render_passes(
         &mut self,
         samples: Range<u32>,
         mut control: RenderControl,
@@ -1001,11 +1067,10 @@ impl Renderer {
         let mut state = Vec::new();
         for piece in &self.pieces {
             for buffer in piece.buffers() {
-                state.push(super::readback::read_buffer(
-                    &self.ctx,
-                    buffer,
-                    buffer.size(),
-                )?);
+                state.push(
+                    super::readback::read_buffer(&self.ctx, buffer, buffer.size())
+                        .map_err(|e| self.explain_loss(e.into()))?,
+                );
             }
         }
         Ok(state)
@@ -1147,6 +1212,7 @@ impl Renderer {
             self.settings.width,
             self.clamp(rows),
         )
+        .map_err(|e| self.explain_loss(e))
     }
 
     fn clamp(&self, rows: Range<u32>) -> Range<u32> {

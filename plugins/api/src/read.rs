@@ -10,9 +10,10 @@ use std::path::Path;
 /// refused rather than read into memory.
 pub const MAX_FILE_BYTES: u64 = 1 << 31;
 
-/// The bytes of the regular file at `path`, refused if it holds more than `limit`.
-pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
-    // Asked before opening: opening a FIFO blocks until something writes to it.
+/// Opens `path` for reading if it is a regular file (asked before opening: opening a
+/// FIFO blocks until something writes to it), with its size. For files read in part
+/// (a header, a bounded prefix); [`read_bounded`] reads a whole one.
+pub fn open_regular(path: &Path) -> std::io::Result<(std::fs::File, u64)> {
     let metadata = std::fs::metadata(path)?;
     if !metadata.is_file() {
         return Err(std::io::Error::new(
@@ -20,8 +21,13 @@ pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
             "not a regular file",
         ));
     }
-    let file = std::fs::File::open(path)?;
-    let mut bytes = Vec::with_capacity(metadata.len().min(limit) as usize);
+    Ok((std::fs::File::open(path)?, metadata.len()))
+}
+
+/// The bytes of the regular file at `path`, refused if it holds more than `limit`.
+pub fn read_bounded(path: &Path, limit: u64) -> std::io::Result<Vec<u8>> {
+    let (file, size) = open_regular(path)?;
+    let mut bytes = Vec::with_capacity(size.min(limit) as usize);
     file.take(limit.saturating_add(1)).read_to_end(&mut bytes)?;
     if bytes.len() as u64 > limit {
         return Err(std::io::Error::new(
@@ -62,7 +68,11 @@ mod tests {
                 "{}: {e}",
                 not_a_file.display()
             );
+            let e = open_regular(not_a_file).unwrap_err();
+            assert!(e.to_string().contains("not a regular file"), "{e}");
         }
+        let (_, size) = open_regular(&path).unwrap();
+        assert_eq!(size, 5);
         std::fs::write(&path, b"\xff").unwrap();
         assert!(read_text_bounded(&path, 5).is_err());
     }

@@ -84,8 +84,8 @@ impl HostImages<'_, '_> {
             Uri::Relative(relative) => {
                 let path = self.base.join(&relative);
                 let mut head = Vec::with_capacity(16);
-                std::fs::File::open(&path)
-                    .and_then(|f| f.take(16).read_to_end(&mut head))
+                kiln_plugin_api::read::open_regular(&path)
+                    .and_then(|(f, _)| f.take(16).read_to_end(&mut head))
                     .map_err(|e| format!("cannot read {}: {e}", path.display()))?;
                 check_format(&head)?;
                 Ok(relative)

@@ -322,6 +322,26 @@ fn missing_buffer_file_fails_naming_it() {
 }
 
 #[test]
+fn an_external_image_that_is_not_a_file_is_reported_not_waited_on() {
+    // A FIFO blocks whoever opens it until something writes: the import must not hang.
+    let dir = common::scratch_dir();
+    let fifo = dir.path().join("tex.png");
+    let made = std::process::Command::new("mkfifo").arg(&fifo).status();
+    assert!(made.is_ok_and(|s| s.success()), "mkfifo {}", fifo.display());
+    let gltf = scene_gltf().replace(&format!("data:image/png;base64,{PNG_1X1}"), "tex.png");
+    let path = write(dir.path(), "fifo.gltf", &gltf);
+    let (result, recorded) = import(&path);
+    let said = match result {
+        Ok(()) => recorded.warnings.join("\n"),
+        Err(e) => e,
+    };
+    assert!(
+        said.contains("tex.png") && said.contains("not a regular file"),
+        "{said}"
+    );
+}
+
+#[test]
 fn glb_binary_chunk_feeds_the_first_buffer() {
     let positions = f32s(&[0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0, 0.0]);
     let mut json = format!(

@@ -124,8 +124,7 @@ fn jpeg_problem(bytes: &[u8], complete: bool) -> Option<String> {
 /// The first bytes of an external image (up to [`MAX_IMAGE_BYTES`], and what is left of
 /// `budget`, which it spends) and whether they are the whole file.
 fn read_head(path: &Path, budget: &mut u64) -> std::io::Result<(Vec<u8>, bool)> {
-    let file = std::fs::File::open(path)?;
-    let size = file.metadata()?.len();
+    let (file, size) = kiln_plugin_api::read::open_regular(path)?;
     let mut head = Vec::new();
     file.take(MAX_IMAGE_BYTES.min(*budget))
         .read_to_end(&mut head)?;

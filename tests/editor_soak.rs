@@ -1,0 +1,216 @@
+//! The editor left open for a long session of scripted edits (issue 14's load test; not
+//! in CI, `#[ignore]`d): the real `EditorApp` as the other editor tests drive it, with the
+//! editor's own kernel policy (interpreted, compiled in the background once the scene is
+//! still), material thumbnails and autosave on, editing `materials.kiln` (or `KILN_SOAK_SCENE`, a path under `assets/`) without pause.
+//! Every minute it prints the process's resident memory (on lavapipe the device's
+//! buffers are host memory, so a leaked GPU buffer shows there too), the pipelines the
+//! context holds and has compiled, and the viewport's counters. Run it with
+//!
+//! ```sh
+//! KILN_SOAK_SECONDS=3600 cargo test --test editor_soak -- --ignored --nocapture
+//! ```
+//!
+//! and record the table in docs/RELIABILITY.md.
+
+use std::path::{Path, PathBuf};
+use std::time::{Duration, Instant};
+
+use egui_kittest::Harness;
+
+use kiln::editor::document::{Command, UNDO_STEPS};
+use kiln::editor::{EditorApp, GRAPH_KERNELS, ScriptedDialogs};
+use kiln::scene::Material;
+
+#[path = "common/editor_harness.rs"]
+mod editor_harness;
+
+use editor_harness::{Setup, start};
+
+/// How long the soak runs unless `KILN_SOAK_SECONDS` says otherwise.
+const DEFAULT_SECONDS: u64 = 3600;
+/// Seconds between two rows of the table.
+const ROW_EVERY: Duration = Duration::from_secs(60);
+/// Resident memory may grow this much from the lowest row after the first minutes
+/// (allocator pages, driver caches filling) before the soak calls it a leak.
+const GROWTH_LIMIT_MIB: f64 = 64.0;
+
+fn bundled_materials() -> Vec<Material> {
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&folder)
+        .unwrap()
+        .filter_map(|e| e.ok().map(|e| e.path()))
+        .filter(|p| p.extension().is_some_and(|e| e == "kmat"))
+        .collect();
+    files.sort();
+    files
+        .iter()
+        .map(|file| {
+            let (name, graph) = kiln::material::load_material(file).unwrap();
+            Material::from_graph(&name, graph).unwrap()
+        })
+        .collect()
+}
+
+/// Steps frames for about `time`, as a user's edits leave the editor between them.
+fn idle(harness: &mut Harness<'_, EditorApp>, time: Duration) {
+    let start = Instant::now();
+    while start.elapsed() < time {
+        harness.step();
+        std::thread::sleep(Duration::from_millis(15));
+    }
+}
+
+/// Edit number `edit` of the script: moves, material swaps, camera orbits, deletions
+/// undone and redone, and saves, in a fixed rotation over every object and material.
+fn edit(harness: &mut Harness<'_, EditorApp>, edit: u64, materials: &[Material]) {
+    let app = harness.state();
+    let scene = app.document().scene();
+    let objects = scene.instances.len();
+    let phase = edit as f32 * 0.37;
+    match edit % 8 {
+        0 | 5 => {
+            let object = (edit / 8) as usize % objects;
+            let mut transform = scene.instances[object].transform;
+            transform.translation += glam::Vec3A::new(phase.sin(), 0.0, phase.cos()) * 0.05;
+            harness
+                .state_mut()
+                .apply_command(Command::SetTransform { object, transform });
+        }
+        1 => {
+            let targets: Vec<usize> = (0..scene.materials.len())
+                .filter(|&m| !scene.materials[m].is_emissive())
+                .collect();
+            let material = targets[(edit / 8) as usize % targets.len()];
+            let replacement = &materials[(edit / 8) as usize % materials.len()];
+            harness.state_mut().apply_command(Command::SetMaterial {
+                material,
+                value: Box::new(replacement.clone()),
+                pending: None,
+            });
+        }
+        2 | 6 => {
+            let mut camera = *app.view();
+            let offset = camera.position - camera.look_at;
+            let turn = glam::Quat::from_rotation_y(0.03 * phase.sin());
+            camera.position = camera.look_at + turn * offset;
+            harness
+                .state_mut()
+                .apply_command(Command::SetCamera(camera));
+        }
+        3 => {
+            harness.state_mut().apply_command(Command::DeleteObject {
+                object: objects - 1,
+            });
+        }
+        4 => harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z),
+        _ => {
+            if edit % 64 == 7 {
+                harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+            } else {
+                harness.key_press_modifiers(
+                    egui::Modifiers::COMMAND | egui::Modifiers::SHIFT,
+                    egui::Key::Z,
+                );
+            }
+        }
+    }
+}
+
+#[test]
+#[ignore = "a long soak (an hour by default); run by hand, see the module comment"]
+fn a_long_editing_session_keeps_memory_and_pipelines_bounded() {
+    let seconds = std::env::var("KILN_SOAK_SECONDS")
+        .ok()
+        .and_then(|s| s.parse().ok())
+        .unwrap_or(DEFAULT_SECONDS);
+    let dir = tempfile::tempdir().unwrap();
+    // The scenes and materials copied, so that saving writes beside the copies.
+    let assets = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets");
+    for folder in ["scenes", "materials"] {
+        std::fs::create_dir(dir.path().join(folder)).unwrap();
+        for entry in std::fs::read_dir(assets.join(folder)).unwrap() {
+            let path = entry.unwrap().path();
+            std::fs::copy(
+                &path,
+                dir.path().join(folder).join(path.file_name().unwrap()),
+            )
+            .unwrap();
+        }
+    }
+    let file = dir
+        .path()
+        .join(std::env::var("KILN_SOAK_SCENE").unwrap_or("scenes/materials.kiln".into()));
+    let state = dir.path().join("state");
+    let mut harness = start(Setup {
+        dialogs: ScriptedDialogs::default(),
+        state_dir: Some(state),
+        autosave_every: Duration::from_secs(30),
+        thumbnails: true,
+        file: Some(file.clone()),
+        graph_kernels: GRAPH_KERNELS,
+        sample_limit: 4,
+        ..Setup::default()
+    });
+    let materials = bundled_materials();
+    println!(
+        "{seconds} s of scripted edits of {}; adapter: {}\n",
+        file.display(),
+        harness
+            .state()
+            .gpu()
+            .map_or("none".into(), |g| g.describe())
+    );
+    println!(
+        "| minutes | edits | resident MiB | pipelines held | pipelines compiled | viewport passes | renderers built | kernels built | undo steps (at most {UNDO_STEPS}) |"
+    );
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---|");
+    let begin = Instant::now();
+    let mut next_row = ROW_EVERY;
+    let mut rows: Vec<f64> = Vec::new();
+    let mut edits = 0u64;
+    while begin.elapsed() < Duration::from_secs(seconds) {
+        edit(&mut harness, edits, &materials);
+        edits += 1;
+        // Between edits: a short pause, or long enough for the background compile.
+        let pause = match edits % 16 {
+            0 => Duration::from_millis(2500),
+            n => Duration::from_millis(100 + 40 * n),
+        };
+        idle(&mut harness, pause);
+        let app = harness.state();
+        assert_eq!(app.error(), None, "after edit {edits}");
+        if begin.elapsed() >= next_row {
+            while next_row <= begin.elapsed() {
+                next_row += ROW_EVERY;
+            }
+            let resident = kiln::bench::memory().map_or(0.0, |(now, _)| now as f64) / 1048576.0;
+            rows.push(resident);
+            let gpu = app.gpu().unwrap();
+            let status = app.viewport_status().unwrap();
+            println!(
+                "| {:.0} | {edits} | {resident:.0} | {} | {} | {} | {} | {} | {} |",
+                begin.elapsed().as_secs_f64() / 60.0,
+                gpu.pipelines_cached(),
+                gpu.pipelines_compiled(),
+                status.passes,
+                status.renderer_builds,
+                status.kernel_builds,
+                app.document().undo_steps(),
+            );
+            assert_eq!(status.error, None, "after edit {edits}");
+        }
+    }
+    // The first rows fill caches; growth after them is what a session accumulates.
+    let settled = rows.len() / 6;
+    if let Some(low) = rows[settled..].iter().copied().reduce(f64::min) {
+        let last = *rows.last().unwrap();
+        println!(
+            "\nresident memory: lowest after the first sixth {low:.0} MiB, last {last:.0} MiB"
+        );
+        assert!(
+            last - low < GROWTH_LIMIT_MIB,
+            "resident memory grew by {:.0} MiB over the session",
+            last - low
+        );
+    }
+}
