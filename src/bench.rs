@@ -11,6 +11,8 @@ use glam::{Affine3A, Vec3};
 
 mod soak;
 
+pub use soak::bundled_materials;
+
 use crate::accel::build_scene_accel;
 use crate::render::gpu_scene::texel_table;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};

@@ -12,7 +12,7 @@
 //!
 //! and record the table in docs/RELIABILITY.md.
 
-use std::path::{Path, PathBuf};
+use std::path::Path;
 use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
@@ -34,23 +34,6 @@ const ROW_EVERY: Duration = Duration::from_secs(60);
 /// pipeline was compiled (each holds a whole kernel's machine code, and the cache keeps up
 /// to `PIPELINE_CACHE_CAPACITY`), before the soak calls it a leak.
 const GROWTH_LIMIT_MIB: f64 = 64.0;
-
-fn bundled_materials() -> Vec<Material> {
-    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
-    let mut files: Vec<PathBuf> = std::fs::read_dir(&folder)
-        .unwrap()
-        .filter_map(|e| e.ok().map(|e| e.path()))
-        .filter(|p| p.extension().is_some_and(|e| e == "kmat"))
-        .collect();
-    files.sort();
-    files
-        .iter()
-        .map(|file| {
-            let (name, graph) = kiln::material::load_material(file).unwrap();
-            Material::from_graph(&name, graph).unwrap()
-        })
-        .collect()
-}
 
 /// Steps frames for about `time`, as a user's edits leave the editor between them.
 fn idle(harness: &mut Harness<'_, EditorApp>, time: Duration) {
@@ -152,7 +135,7 @@ fn a_long_editing_session_keeps_memory_and_pipelines_bounded() {
         sample_limit: 4,
         ..Setup::default()
     });
-    let materials = bundled_materials();
+    let materials = kiln::bench::bundled_materials().unwrap();
     println!(
         "{seconds} s of scripted edits of {}; adapter: {}\n",
         file.display(),

@@ -23,7 +23,7 @@ const SAMPLES: u32 = 2;
 const VOLUME_RESOLUTION: u32 = 16;
 
 /// The bundled materials (assets/materials), when run from the source tree.
-fn bundled_materials() -> Result<Vec<Material>> {
+pub fn bundled_materials() -> Result<Vec<Material>> {
     let folder = std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
     let mut files: Vec<_> = std::fs::read_dir(&folder)
         .with_context(|| format!("the soak's materials: {}", folder.display()))?
