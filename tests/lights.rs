@@ -32,6 +32,18 @@ fn matte_plane() -> Scene {
     scene
 }
 
+/// Adds a unit quad emitting `radiance`, turned to face down, at `placement` (applied
+/// after the turn).
+fn add_lamp_facing_down(scene: &mut Scene, radiance: f32, placement: Affine3A) {
+    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(radiance)));
+    let quad = scene.add_mesh(shapes::quad());
+    scene.add_instance(
+        quad,
+        lamp,
+        placement * Affine3A::from_rotation_x(std::f32::consts::PI),
+    );
+}
+
 /// The mean radiance of `scene` (a [`matte_plane`] with lights) by direct light alone.
 fn plane_radiance(scene: &Scene, light_sampling: bool, spp: u32) -> f32 {
     let mut s = settings(8, 8, spp);
@@ -193,14 +205,11 @@ fn light_samples_split_between_sky_sun_and_lamps_keep_the_image() {
     // the sun and the sky by their irradiance for the rest.
     let mut scene = matte_plane();
     scene.environment = Vec3::splat(0.2);
-    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(20.0)));
-    let quad = scene.add_mesh(shapes::quad());
-    // Facing down, 25°-48° off the vertical seen from the origin: clear of the sun.
-    scene.add_instance(
-        quad,
-        lamp,
-        Affine3A::from_translation(Vec3::new(1.2, 1.5, 0.0))
-            * Affine3A::from_rotation_x(std::f32::consts::PI),
+    // 25°-48° off the vertical seen from the origin: clear of the sun.
+    add_lamp_facing_down(
+        &mut scene,
+        20.0,
+        Affine3A::from_translation(Vec3::new(1.2, 1.5, 0.0)),
     );
     scene.add_light(Light::Distant {
         direction: -Vec3::Y,
@@ -222,13 +231,10 @@ fn a_light_sample_has_the_density_mis_weighs_that_light_by() {
     // BSDF ray that reaches the same light, or MIS would be biased.
     let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
     scene.environment = Vec3::new(0.3, 0.4, 0.5);
-    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(5.0)));
-    let quad = scene.add_mesh(shapes::quad());
-    scene.add_instance(
-        quad,
-        lamp,
+    add_lamp_facing_down(
+        &mut scene,
+        5.0,
         Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0))
-            * Affine3A::from_rotation_x(std::f32::consts::PI)
             * Affine3A::from_scale(Vec3::splat(2.0)),
     );
     scene.lights = [
