@@ -23,7 +23,7 @@ use kiln::render::checkpoint::{self, Checkpoint};
 use kiln::render::{
     Backend, GpuContext, RenderControl, RenderSettings, RenderStats, Renderer, context,
 };
-use kiln::scene::{self, Denoiser, Quality, Scene};
+use kiln::scene::{self, Denoiser, Quality, Scene, lookdev};
 use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler};
 
 #[derive(Parser)]
@@ -45,6 +45,24 @@ struct Cli {
     import_timeout: f64,
     #[command(subcommand)]
     command: Command,
+}
+
+/// What an imported model without lights stands on (the look-dev default).
+#[derive(Clone, Copy, ValueEnum)]
+enum GroundArg {
+    /// Nothing: the model floats in the sky.
+    None,
+    /// A matte grey plane under the model's bounds, which its shadow falls on.
+    Plane,
+}
+
+impl From<GroundArg> for lookdev::Ground {
+    fn from(g: GroundArg) -> Self {
+        match g {
+            GroundArg::None => lookdev::Ground::None,
+            GroundArg::Plane => lookdev::Ground::Plane,
+        }
+    }
 }
 
 #[derive(Clone, Copy, ValueEnum)]
@@ -128,6 +146,9 @@ enum Command {
         /// The scene file to write; meshes and images go to `<stem>.assets/` beside it.
         #[arg(short, long)]
         output: PathBuf,
+        /// What a model that brings no lights stands on under the look-dev sky.
+        #[arg(long, value_enum, default_value_t = GroundArg::Plane)]
+        ground: GroundArg,
     },
     /// The worker of an isolated import: imports FILE in this process and writes the
     /// calls the importer made to standard output, for the Kiln that started it.
@@ -225,6 +246,10 @@ struct RenderArgs {
     /// View transform from scene radiance to display (default: the scene's, or agx).
     #[arg(long, value_parser = key_parser(&Tonemap::ALL, Tonemap::key))]
     tonemap: Option<Tonemap>,
+    /// What an imported model that brings no lights stands on, under the look-dev sky
+    /// and sun it gets: a matte grey plane under its bounds, or nothing.
+    #[arg(long, value_enum, default_value_t = GroundArg::Plane)]
+    ground: GroundArg,
     /// Stop after this many seconds and write what has accumulated.
     #[arg(long)]
     time_limit: Option<f64>,
@@ -469,7 +494,11 @@ fn main() -> ExitCode {
             isolated_plugins(),
         ),
         Command::Plugins => list_plugins(&plugins()),
-        Command::Import { file, output } => import(&plugins(), &file, &output),
+        Command::Import {
+            file,
+            output,
+            ground,
+        } => import(&plugins(), &file, &output, ground.into()),
         Command::ImportWorker { file } => {
             let stream = PluginHost::discover(&cli.plugin_dirs).import_recorded(&file);
             std::io::stdout()
@@ -546,10 +575,21 @@ fn info(backend: Option<Backend>) -> Result<()> {
     Ok(())
 }
 
-fn load(path: Option<&Path>, plugins: &PluginHost) -> Result<(Scene, String)> {
+/// The scene `path` names (an import is staged on `ground` when it brings no lights), or
+/// the bundled default, with the name to report it by.
+fn load(
+    path: Option<&Path>,
+    plugins: &PluginHost,
+    ground: lookdev::Ground,
+) -> Result<(Scene, String)> {
     match path {
         Some(p) if plugins.handles(PluginKind::Importer, p) => {
-            Ok((import_file(plugins, p)?.scene, p.display().to_string()))
+            let imported = import_file(plugins, p)?;
+            let mut scene = imported.scene;
+            if !imported.has_lights {
+                lookdev::add_ground(&mut scene, ground);
+            }
+            Ok((scene, p.display().to_string()))
         }
         Some(p) => Ok((scene::load_scene(p)?, p.display().to_string())),
         None => Ok((
@@ -567,9 +607,12 @@ fn import_file(plugins: &PluginHost, file: &Path) -> Result<kiln::plugin::Import
     Ok(imported)
 }
 
-fn import(plugins: &PluginHost, file: &Path, output: &Path) -> Result<()> {
+fn import(plugins: &PluginHost, file: &Path, output: &Path, ground: lookdev::Ground) -> Result<()> {
     let imported = import_file(plugins, file)?;
-    let scene = imported.scene;
+    let mut scene = imported.scene;
+    if !imported.has_lights {
+        lookdev::add_ground(&mut scene, ground);
+    }
     scene::save_scene(&scene, output, &imported.images)?;
     eprintln!(
         "wrote {}: {} meshes, {} materials, {} instances, {} lights",
@@ -617,17 +660,19 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     if args.exposure.is_some_and(|ev| !ev.is_finite()) {
         bail!("--exposure must be a finite number of stops");
     }
-    let (mut scene, name) = load(args.scene.as_deref(), plugins)?;
+    let (mut scene, name) = load(args.scene.as_deref(), plugins, args.ground.into())?;
     match args.environment {
         Some(EnvironmentArg::Uniform(colour)) => {
             scene.environment = colour;
             scene.environment_map = None;
+            scene.world = None;
         }
         Some(EnvironmentArg::Map(path)) => {
             let map = kiln::scene::EnvironmentMap::load(&path).map_err(|e| {
                 anyhow::anyhow!("cannot load environment map {}: {e}", path.display())
             })?;
             scene.environment_map = Some(map);
+            scene.world = None;
         }
         None => {}
     }

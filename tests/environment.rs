@@ -72,7 +72,24 @@ fn probe(scene: &Scene, entry: &str, input: &[[u32; 4]], words: u64, invocations
 
 #[test]
 fn environment_sampling_passes_chi_square_against_its_pdf() {
-    let scene = scene_with(test_map());
+    assert_sampling_matches_pdf(test_map());
+}
+
+/// A world graph's bake (a clear sky, its sun left to a light) is sampled by its pdf too.
+#[test]
+fn a_baked_sky_passes_chi_square_against_its_pdf() {
+    let mut world = kiln::scene::lookdev::world();
+    world.resolution = 64;
+    let baked = kiln::render::world_bake::bake_world(&gpu(), &world).expect("bake");
+    let kiln::render::world_bake::Environment::Map(map) = baked.environment else {
+        panic!("a sky bakes into a map")
+    };
+    assert_sampling_matches_pdf(map);
+}
+
+/// Samples `map` by importance and checks the directions' histogram against its pdf.
+fn assert_sampling_matches_pdf(map: EnvironmentMap) {
+    let scene = scene_with(map);
     let samples = 1u32 << 20;
     let bins = SphereBins::for_sample_count(samples as usize);
     let cells = bins.cell_count() as u32;

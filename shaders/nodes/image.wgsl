@@ -87,3 +87,12 @@ fn node_image(tex: u32, uv: vec2<f32>, color_space: u32, extension: u32, interpo
     let d = nd_texel_wrapped(tex, x0 + 1, y0 + 1, w, h, extension, srgb);
     return mix(mix(a, b, tx), mix(c, d, tx), ty);
 }
+
+// The UV of direction `d` in an equirectangular image, as the environment map reads it
+// (shaders/lights/environment.wgsl): u = φ / 2π + 1/2 with φ = atan2(x, −z), and v = 1 at
+// +Y (the top row), 0 at −Y.
+fn nd_equirectangular_uv(d: vec3<f32>) -> vec2<f32> {
+    let n = select(vec3<f32>(0.0, 1.0, 0.0), normalize(d), dot(d, d) > 0.0);
+    let u = fract(atan2(n.x, -n.z) / (2.0 * 3.14159265) + 0.5);
+    return vec2<f32>(u, 1.0 - acos(clamp(n.y, -1.0, 1.0)) / 3.14159265);
+}

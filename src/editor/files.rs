@@ -171,11 +171,14 @@ pub fn open_document(path: &Path, plugins: &PluginHost) -> Result<Document, Stri
     let imported = plugins
         .import(path)
         .map_err(|e| format!("cannot import {}: {e}", path.display()))?;
-    imported
-        .scene
+    let mut scene = imported.scene;
+    if !imported.has_lights {
+        scene::lookdev::add_ground(&mut scene, scene::lookdev::Ground::Plane);
+    }
+    scene
         .validate()
         .map_err(|e| format!("{}: {e}", path.display()))?;
-    Ok(Document::new(imported.scene, None, imported.images))
+    Ok(Document::new(scene, None, imported.images))
 }
 
 /// Writes `document`'s scene to `path` (atomically, with its assets beside it) and

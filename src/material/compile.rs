@@ -26,7 +26,9 @@ use super::graph::{
     Conversion, GROUP, GROUP_INPUT, GROUP_PARAM, Graph, Input, Link, Node, Param, REROUTE,
     REROUTE_INPUT, REROUTE_OUTPUT, RampStop, SocketType, Value,
 };
-use super::nodes::{self, Code, Default, Emit, MATERIAL_OUTPUT, NodeDef, ParamKind, Params};
+use super::nodes::{
+    self, Code, Default, Emit, MATERIAL_OUTPUT, NodeDef, ParamKind, Params, WORLD_OUTPUT,
+};
 
 /// A graph error, with where it is.
 #[derive(Clone, Debug, Error, PartialEq)]
@@ -938,33 +940,55 @@ fn check_types(ctx: &Ctx, flat: &[FlatNode]) -> Result<(), GraphError> {
 }
 
 fn find_output(ctx: &Ctx, graph: &Graph, flat: &[FlatNode]) -> Result<usize, GraphError> {
+    find_root(ctx, graph, flat, MATERIAL_OUTPUT)
+}
+
+/// The graph's node of kind `kind` (a material's or a world's output): the one `output`
+/// names, or the only one at the top level.
+fn find_root(ctx: &Ctx, graph: &Graph, flat: &[FlatNode], kind: &str) -> Result<usize, GraphError> {
     if let Some(id) = &graph.output {
         return match flat.iter().position(|n| &n.id == id) {
-            Some(i) if flat[i].def.kind == MATERIAL_OUTPUT => Ok(i),
-            Some(_) => Err(ctx.err(
-                Some(id),
-                None,
-                format!("the output must be a {MATERIAL_OUTPUT} node"),
-            )),
+            Some(i) if flat[i].def.kind == kind => Ok(i),
+            Some(_) => Err(ctx.err(Some(id), None, format!("the output must be a {kind} node"))),
             None => Err(ctx.err(None, None, format!("output node \"{id}\" does not exist"))),
         };
     }
     let outputs: Vec<usize> = (0..flat.len())
-        .filter(|&i| flat[i].def.kind == MATERIAL_OUTPUT && !flat[i].id.contains('/'))
+        .filter(|&i| flat[i].def.kind == kind && !flat[i].id.contains('/'))
         .collect();
     match outputs.as_slice() {
         [one] => Ok(*one),
-        [] => Err(ctx.err(
-            None,
-            None,
-            format!("the graph has no {MATERIAL_OUTPUT} node"),
-        )),
+        [] => Err(ctx.err(None, None, format!("the graph has no {kind} node"))),
         _ => Err(ctx.err(
             None,
             None,
-            format!("several {MATERIAL_OUTPUT} nodes: say which with `output: \"id\"`"),
+            format!("several {kind} nodes: say which with `output: \"id\"`"),
         )),
     }
+}
+
+/// Compiles a world graph, the radiance its [`WORLD_OUTPUT`] node sees arrive from each
+/// direction, into `fn <function>(sp: ShadingPoint) -> vec3<f32>`. The world's shading
+/// point looks from the origin: its position and generated coordinates are the direction
+/// (`render::world_bake` sets it up).
+pub fn compile_world(
+    graph: &Graph,
+    function: &str,
+    textures: &mut BTreeMap<String, u32>,
+) -> Result<CompiledMaterial, GraphError> {
+    let ctx = Ctx { material: "world" };
+    let flat = Flattener::new(&ctx, graph).run()?;
+    check_types(&ctx, &flat)?;
+    let output = find_root(&ctx, graph, &flat, WORLD_OUTPUT)?;
+    emit_function(
+        &ctx,
+        flat,
+        (output, 0),
+        (function, "vec3<f32>"),
+        textures,
+        Constants::Inline,
+        |_, root| (root.to_owned(), MaterialTraits::default()),
+    )
 }
 
 /// Depth-first search from the output; a node met again while still open closes a cycle.
@@ -1112,7 +1136,7 @@ fn merge_identical(flat: &mut [FlatNode], root: usize) {
                 }
             }
         }
-        if flat[n].def.kind == MATERIAL_OUTPUT {
+        if flat[n].def.outputs.is_empty() {
             continue;
         }
         let key = format!(
@@ -1427,7 +1451,8 @@ impl Emitter<'_> {
     }
 
     fn output_expr(&self, n: usize, o: usize) -> String {
-        if self.flat[n].def.kind == MATERIAL_OUTPUT {
+        // An output node (a material's or a world's) is its template's value.
+        if self.flat[n].def.outputs.is_empty() {
             return format!("n{n}");
         }
         format!("n{n}{}", self.flat[n].def.outputs[o].field)

@@ -27,6 +27,7 @@ pub const NODE_FILES: &[ShaderFile] = &[
     node_file!("color.wgsl"),
     node_file!("textures.wgsl"),
     node_file!("image.wgsl"),
+    node_file!("sky.wgsl"),
     node_file!("volume.wgsl"),
 ];
 

@@ -2,7 +2,8 @@
 //! parameters, documentation, the WGSL it compiles to and, where the CPU can compute it
 //! exactly, its constant folding. `docs/NODES.md` is generated from these declarations
 //! (`kiln material nodes`), and the compiler ([`super::compile`]) reads nothing else about
-//! a node: it knows no node by name, only the structural [`MATERIAL_OUTPUT`] and the
+//! a node: it knows no node by name, only the structural [`MATERIAL_OUTPUT`] and
+//! [`WORLD_OUTPUT`] and the
 //! group kinds of [`super::graph`].
 //!
 //! Code is given as a template: `{name}` is replaced by the WGSL expression of the input
@@ -22,6 +23,10 @@ use crate::shader::principled::{self, ParamValue};
 /// The node a material renders: the root of compilation, part of the graph model rather
 /// than a node the library could do without.
 pub const MATERIAL_OUTPUT: &str = "material_output";
+
+/// The node a world graph renders: the radiance arriving from each direction
+/// ([`super::compile::compile_world`]).
+pub const WORLD_OUTPUT: &str = "world_output";
 
 /// The bump node: the one node that evaluates an input (its height) as a function of the
 /// shading point ([`Emit::input_function`]), so the editor's interpreter
@@ -716,6 +721,132 @@ fn build() -> Vec<NodeDef> {
             range: None,
             code: Code::Template(
                 "node_image({file}, {vector}.xy, {color_space}, {extension}, {interpolation})",
+            ),
+        },
+        NodeDef {
+            kind: "environment_texture",
+            label: "Environment Texture",
+            category: "Texture",
+            doc: "An equirectangular image looked up by direction (Blender's Environment Texture): +Y up, the image's middle looks down −Z and its right half toward +X. For worlds; rotate it with a Mapping node.",
+            inputs: vec![implicit(
+                "vector",
+                "sp.generated",
+                "the direction (in a world: the view direction)",
+                "the direction to look up",
+            )],
+            outputs: vec![
+                out("color", Color, ".rgb", "colour, linear"),
+                out("alpha", Float, ".a", "alpha (1 for images without)"),
+            ],
+            params: vec![
+                ParamDef {
+                    name: "file",
+                    kind: ParamKind::File,
+                    doc: "the image, relative to the scene or material file",
+                },
+                choice(
+                    "color_space",
+                    &["linear", "srgb"],
+                    "linear for HDR and EXR images; srgb decodes 8-bit colour",
+                ),
+                choice(
+                    "interpolation",
+                    &["linear", "closest"],
+                    "bilinear, or the nearest texel",
+                ),
+            ],
+            traits: None,
+            fold: None,
+            range: None,
+            code: Code::Template(
+                "node_image({file}, nd_equirectangular_uv({vector}), 1u - {color_space}, 0u, {interpolation})",
+            ),
+        },
+        NodeDef {
+            kind: "sky_texture",
+            label: "Sky Texture",
+            category: "Texture",
+            doc: "A clear sky by single scattering (Nishita, as Cycles' Nishita sky): air, aerosols and ozone over a spherical Earth at 16 wavelengths, in spectral radiance W/(m²·sr·nm) averaged under the CIE ȳ curve. The sun's disc is not in `color`: in a world the renderer adds it as a sun light of irradiance `sun` and angular diameter `sun_size`, sampled analytically.",
+            inputs: vec![
+                implicit(
+                    "vector",
+                    "sp.generated",
+                    "the direction (in a world: the view direction)",
+                    "the direction to look along, world space, +Y up",
+                ),
+                float(
+                    "sun_elevation",
+                    15.0,
+                    FloatRange::new(-90.0, 90.0),
+                    "the sun's angle above the horizon, degrees",
+                ),
+                float(
+                    "sun_rotation",
+                    0.0,
+                    FloatRange::new(-360.0, 360.0),
+                    "the sun's angle about +Y, degrees: 0 toward −Z, 90 toward +X",
+                ),
+                float(
+                    "sun_size",
+                    0.545,
+                    FloatRange::new(0.0, 45.0).soft(0.0, 10.0),
+                    "the sun disc's angular diameter, degrees (softens shadows; the sun's irradiance stays)",
+                ),
+                float(
+                    "sun_intensity",
+                    1.0,
+                    FloatRange::new(0.0, 1000.0).soft(0.0, 10.0),
+                    "multiplies the sun's irradiance",
+                ),
+                float(
+                    "altitude",
+                    0.0,
+                    FloatRange::new(0.0, 59000.0).soft(0.0, 10000.0),
+                    "the viewer's height above sea level, metres",
+                ),
+                float(
+                    "air",
+                    1.0,
+                    FloatRange::new(0.0, 10.0),
+                    "density of air molecules (Rayleigh scattering: the blue)",
+                ),
+                float(
+                    "dust",
+                    1.0,
+                    FloatRange::new(0.0, 10.0),
+                    "density of aerosols (Mie scattering: haze around the sun)",
+                ),
+                float(
+                    "ozone",
+                    1.0,
+                    FloatRange::new(0.0, 10.0),
+                    "density of ozone (absorbs orange: the blue of twilight)",
+                ),
+            ],
+            outputs: vec![
+                out(
+                    "color",
+                    Color,
+                    ".color",
+                    "the sky's radiance along the vector",
+                ),
+                out(
+                    "sun",
+                    Color,
+                    ".sun",
+                    "the sun's irradiance on a surface facing it, after the atmosphere",
+                ),
+            ],
+            params: vec![ParamDef {
+                name: "sun_disc",
+                kind: ParamKind::Bool(true),
+                doc: "add the sun (in a world: a sun light)",
+            }],
+            traits: None,
+            fold: None,
+            range: None,
+            code: Code::Template(
+                "nd_sky({vector}, {sun_elevation}, {sun_rotation}, {altitude}, {air}, {dust}, {ozone}, {sun_intensity}, {sun_disc})",
             ),
         },
         NodeDef {
@@ -1614,6 +1745,27 @@ fn build() -> Vec<NodeDef> {
             fold: None,
             range: None,
             code: Code::Template("nd_material_output({surface}, {volume})"),
+        },
+        NodeDef {
+            kind: WORLD_OUTPUT,
+            label: "World Output",
+            category: "Output",
+            doc: "The world: the radiance that arrives from each direction where a ray leaves the scene, colour × strength (Blender's Background into World Output). The renderer bakes it into an environment map it samples by importance; a Sky Texture's sun becomes a sun light.",
+            inputs: vec![
+                color("color", [0.05; 3], "the radiance seen in each direction"),
+                float(
+                    "strength",
+                    1.0,
+                    FloatRange::new(0.0, f32::INFINITY).soft(0.0, 10.0),
+                    "multiplies the colour",
+                ),
+            ],
+            outputs: vec![],
+            params: vec![],
+            traits: None,
+            fold: None,
+            range: None,
+            code: Code::Template("nd_world_output({color}, {strength})"),
         },
     ]
 }

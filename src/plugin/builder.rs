@@ -12,7 +12,7 @@ use glam::{Affine3A, Mat4, Vec2, Vec3, Vec4Swizzles};
 use kiln_plugin_api as api;
 
 use crate::material::texture::{decode_texture, load_texture};
-use crate::scene::{Camera, Light, Material, Mesh, Scene};
+use crate::scene::{Camera, Light, Material, Mesh, Scene, lookdev};
 
 /// Vertices and triangles one import may hand over, in total: malformed files that
 /// claim billions of elements are refused before they exhaust memory.
@@ -324,8 +324,9 @@ impl ImportState {
         (self.scene.lights.len() - 1) as u32
     }
 
-    /// The import, made renderable: a file without a camera gets one that frames it, and
-    /// one without lights a neutral white sky.
+    /// The import, made renderable: a file without a camera gets the look-dev default's
+    /// three-quarter view that frames it, and one without lights its sky with a sun
+    /// ([`lookdev`]; the ground is the caller's choice, [`lookdev::add_ground`]).
     pub(super) fn finish(mut self) -> Imported {
         let has_lights = !self.scene.lights.is_empty()
             || self
@@ -334,10 +335,11 @@ impl ImportState {
                 .iter()
                 .any(|i| self.scene.materials[i.material].is_emissive());
         if !self.has_camera {
-            self.scene.camera = crate::scene::frame_camera(&self.scene);
+            self.scene.camera = lookdev::camera(&self.scene);
         }
         if !has_lights && self.scene.environment == Vec3::ZERO {
-            self.scene.environment = Vec3::splat(0.8);
+            self.scene.world = Some(lookdev::world());
+            self.scene.settings.view.exposure_ev = lookdev::EXPOSURE_EV;
         }
         Imported {
             scene: self.scene,

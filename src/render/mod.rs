@@ -23,6 +23,7 @@ mod renderer;
 pub mod tables;
 mod update;
 pub mod volume_grid;
+pub mod world_bake;
 
 pub use context::{Backend, GpuContext, GpuError};
 pub use export::export_film;

@@ -498,6 +498,9 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         scene.validate().map_err(RenderError::Scene)?;
+        // A world graph renders as the environment map and sun lights it bakes into.
+        let resolved = super::world_bake::resolve_world(&ctx, scene)?;
+        let scene: &Scene = &resolved;
         // Hidden objects stay in the scene (and its file) but are not rendered.
         let shown;
         let scene = if scene.instances.iter().all(|i| i.visible) {

@@ -17,6 +17,8 @@
 
 use thiserror::Error;
 
+use std::borrow::Cow;
+
 use super::gpu_scene::{
     LightArrays, in_fours, instance_arrays, instanced_lobes, light_arrays, write_grid_headers,
     write_texels,
@@ -97,6 +99,11 @@ impl Renderer {
     /// Brings the renderer from `old` (the scene it renders) to `new` in place, writing
     /// only what differs; refuses (changing nothing) what needs a new renderer.
     pub fn update(&mut self, old: &Scene, new: &Scene) -> Result<Updated, UpdateError> {
+        if old.world != new.world {
+            return Err(UpdateError::rebuild("the world changed"));
+        }
+        // A world's map and suns, baked once for both (the bake is remembered).
+        let (old, new) = (&*self.with_world(old)?, &*self.with_world(new)?);
         if old.meshes != new.meshes {
             return Err(UpdateError::rebuild("a mesh changed"));
         }
@@ -210,6 +217,7 @@ impl Renderer {
     /// the meshes' existing BVHs, writes it and the instances, then the lights. `scene`
     /// must have the meshes and instance count the renderer was built with.
     pub fn update_instances(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
         self.check_features(scene, &lights)?;
         let (tlas, packed) = self.place_instances(scene)?;
@@ -291,6 +299,7 @@ impl Renderer {
     /// A light edit (an analytic light, the environment's colour): recomputes and writes
     /// the light distribution. `scene` must have the renderer's light count.
     pub fn update_lights(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
         self.check_features(scene, &lights)?;
         self.check_lights(&lights)?;
@@ -301,6 +310,7 @@ impl Renderer {
     /// have changed). Refuses a change of a graph material's code or of the lobes the
     /// kernel contains.
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
+        let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
         let compiled = self.check_materials(scene, &lights)?;
         self.check_lights(&lights)?;
@@ -343,6 +353,12 @@ impl Renderer {
     pub fn set_max_bounces(&mut self, max_bounces: u32) {
         self.settings.max_bounces = max_bounces;
         self.base_params.max_bounces = max_bounces;
+    }
+
+    /// `scene` with its world baked into its environment and lights, as the renderer
+    /// renders it ([`super::world_bake::resolve_world`]).
+    fn with_world<'a>(&self, scene: &'a Scene) -> Result<Cow<'a, Scene>, UpdateError> {
+        Ok(super::world_bake::resolve_world(&self.ctx, scene)?)
     }
 
     /// Checks that the scene's materials (and its `lights`, [`light_arrays`]) fit the

@@ -16,7 +16,8 @@ use super::file::{SCENE_FORMAT_VERSION, SceneError};
 use super::obj::load_obj;
 use super::schema::*;
 use super::{
-    Camera, Clamp, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, shapes,
+    Camera, Clamp, EnvironmentMap, Light, LightObject, Material, Mesh, Scene, SceneSettings, World,
+    shapes,
 };
 use crate::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 use crate::shader::view::{Tonemap, ViewSettings};
@@ -111,6 +112,29 @@ impl MaterialDesc {
         let material = Material::with(name, self.principled);
         material.validate()?;
         Ok(material)
+    }
+}
+
+impl WorldDesc {
+    fn to_world(&self, base_dir: &Path) -> Result<World, String> {
+        let graph = match (&self.graph, &self.graph_file) {
+            (Some(_), Some(_)) => return Err("give `graph` or `graph_file`, not both".into()),
+            (None, None) => return Err("give a `graph` or a `graph_file`".into()),
+            (Some(g), None) => {
+                let mut g = g.clone();
+                crate::material::resolve_files(&mut g, base_dir);
+                g
+            }
+            (None, Some(file)) => {
+                crate::material::load_material(&base_dir.join(file))
+                    .map_err(|e| e.to_string())?
+                    .1
+            }
+        };
+        let mut world = World::from_graph(graph).map_err(|e| e.to_string())?;
+        world.resolution = self.resolution;
+        world.validate()?;
+        Ok(world)
     }
 }
 
@@ -216,6 +240,12 @@ fn build_scene(
         map.strength = desc.strength;
         map.rotation_degrees = desc.rotation;
         scene.environment_map = Some(map);
+    }
+    if let Some(desc) = &file.world {
+        scene.world = Some(
+            desc.to_world(base_dir)
+                .map_err(|e| invalid(format!("world: {e}")))?,
+        );
     }
     let render = &file.render;
     let tonemap = render_key(

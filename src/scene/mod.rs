@@ -11,19 +11,22 @@ mod environment;
 pub mod file;
 mod light;
 mod load;
+pub mod lookdev;
 mod material;
 mod mesh;
 mod obj;
 mod save;
 mod schema;
 pub mod shapes;
+mod world;
 
 pub use camera::Camera;
 pub use environment::EnvironmentMap;
 pub use file::{SCENE_FORMAT_VERSION, SceneError, load_scene, parse_scene, save_scene};
 pub use light::{Light, LightObject};
-pub use material::{Material, graph_from_principled};
+pub use material::{GraphMaterial, Material, graph_from_principled};
 pub use mesh::Mesh;
+pub use world::{DEFAULT_WORLD_RESOLUTION, SKY_TEXTURE, Sun, WORLD_RESOLUTIONS, World};
 
 use std::path::Path;
 
@@ -371,6 +374,9 @@ pub struct Scene {
     pub environment: Vec3,
     /// Replaces the uniform `environment` when present.
     pub environment_map: Option<EnvironmentMap>,
+    /// A node graph for the environment; replaces `environment` and `environment_map`
+    /// when present (the renderer bakes it into a map, `render::world_bake`).
+    pub world: Option<World>,
     pub materials: Vec<Material>,
     pub meshes: Vec<Mesh>,
     pub instances: Vec<Instance>,
@@ -386,6 +392,7 @@ impl Scene {
             camera,
             environment: Vec3::ZERO,
             environment_map: None,
+            world: None,
             materials: Vec::new(),
             meshes: Vec::new(),
             instances: Vec::new(),
@@ -483,6 +490,9 @@ impl Scene {
         if let Some(map) = &self.environment_map {
             map.validate()?;
         }
+        if let Some(world) = &self.world {
+            world.validate()?;
+        }
         for m in &self.materials {
             m.validate()
                 .map_err(|e| format!("material \"{}\": {e}", m.name))?;
@@ -534,27 +544,4 @@ pub fn validate_image_size(width: u32, height: u32) -> Result<(), String> {
         ));
     }
     Ok(())
-}
-
-/// A camera that frames every instance of `scene`: looking at the centre of their bounds
-/// from the front and a little above, at a distance that fits them in a 40° view.
-pub fn frame_camera(scene: &Scene) -> Camera {
-    let mut lo = Vec3::splat(f32::MAX);
-    let mut hi = Vec3::splat(f32::MIN);
-    for inst in &scene.instances {
-        for p in &scene.meshes[inst.mesh].positions {
-            let w = inst.transform.transform_point3(*p);
-            lo = lo.min(w);
-            hi = hi.max(w);
-        }
-    }
-    if lo.x > hi.x {
-        return Camera::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, 40.0);
-    }
-    let centre = (lo + hi) * 0.5;
-    let radius = ((hi - lo).length() * 0.5).max(1e-6);
-    let fov = 40.0f32;
-    let distance = radius / (fov.to_radians() * 0.5).sin() * 1.05;
-    let direction = Vec3::new(0.0, 0.35, 1.0).normalize();
-    Camera::look_at(centre + direction * distance, centre, fov)
 }

@@ -77,26 +77,7 @@ pub fn save_scene(
     for m in &scene.materials {
         let name = unique(&mut taken, &m.name);
         let desc = match &m.graph {
-            Some(g) => {
-                let mut graph = g.graph.clone();
-                for file in graph.image_files_mut() {
-                    if let Some(i) = file
-                        .strip_prefix("image:")
-                        .and_then(|n| n.parse::<usize>().ok())
-                    {
-                        if let Some(f) = image_files.get(i) {
-                            *file = f.clone();
-                        }
-                    } else if Path::new(file.as_str()).is_relative() {
-                        // Loading resolved it against the old scene's folder, as seen from
-                        // the working directory; the saved scene may live elsewhere.
-                        if let Ok(absolute) = std::path::absolute(file.as_str()) {
-                            *file = absolute.to_string_lossy().into_owned();
-                        }
-                    }
-                }
-                MaterialDesc::from_graph(graph)
-            }
+            Some(g) => MaterialDesc::from_graph(saved_graph(&g.graph, &image_files)),
             None => MaterialDesc::from_params(m),
         };
         material_names.push(name.clone());
@@ -222,6 +203,11 @@ pub fn save_scene(
         }
         None => None,
     };
+    let world = scene.world.as_ref().map(|w| WorldDesc {
+        graph: Some(saved_graph(&w.graph, &image_files)),
+        graph_file: None,
+        resolution: w.resolution,
+    });
     let file = SceneFile {
         version: SCENE_FORMAT_VERSION,
         render: RenderDesc {
@@ -250,6 +236,7 @@ pub fn save_scene(
         },
         environment: scene.environment.into(),
         environment_map,
+        world,
         materials: Named(materials),
         meshes: Named(meshes),
         instances,
@@ -261,6 +248,29 @@ pub fn save_scene(
         w.write_all(text.as_bytes()).map_err(|e| e.to_string())
     })
     .map_err(fail)
+}
+
+/// `graph` as a saved scene names its images: embedded ones (`image:N`) by the files
+/// `image_files` they were written to, others by absolute path.
+fn saved_graph(graph: &crate::material::Graph, image_files: &[String]) -> crate::material::Graph {
+    let mut graph = graph.clone();
+    for file in graph.image_files_mut() {
+        if let Some(i) = file
+            .strip_prefix("image:")
+            .and_then(|n| n.parse::<usize>().ok())
+        {
+            if let Some(f) = image_files.get(i) {
+                *file = f.clone();
+            }
+        } else if Path::new(file.as_str()).is_relative() {
+            // Loading resolved it against the old scene's folder, as seen from the working
+            // directory; the saved scene may live elsewhere.
+            if let Ok(absolute) = std::path::absolute(file.as_str()) {
+                *file = absolute.to_string_lossy().into_owned();
+            }
+        }
+    }
+    graph
 }
 
 #[cfg(test)]

@@ -27,6 +27,8 @@ pub(super) struct SceneFile {
     pub(super) environment: [f32; 3],
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub(super) environment_map: Option<EnvironmentMapDesc>,
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) world: Option<WorldDesc>,
     #[serde(default)]
     pub(super) materials: Named<MaterialDesc>,
     #[serde(default)]
@@ -47,6 +49,24 @@ pub(super) struct EnvironmentMapDesc {
     /// Degrees about +Y.
     #[serde(default)]
     pub(super) rotation: f32,
+}
+
+/// The world: a node graph ending in a `world_output` node, inline or in a graph file,
+/// and the width of the environment map it is baked into.
+#[derive(Debug, Serialize, Deserialize)]
+#[serde(deny_unknown_fields)]
+pub(super) struct WorldDesc {
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) graph: Option<crate::material::Graph>,
+    /// A graph file (`.kmat` format), relative to the scene file.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub(super) graph_file: Option<String>,
+    #[serde(default = "default_world_resolution")]
+    pub(super) resolution: u32,
+}
+
+fn default_world_resolution() -> u32 {
+    super::DEFAULT_WORLD_RESOLUTION
 }
 
 /// A RON map from names to entries, kept in the order the file lists them: the scene's

@@ -177,3 +177,11 @@ pub fn run_scene_kernel(
     )
     .unwrap_or_else(|e| panic!("{e}"))
 }
+
+/// The bundled plugins, as `cargo build` left them next to the test executable.
+pub fn bundled_plugins() -> kiln::plugin::PluginHost {
+    let exe = std::env::current_exe().unwrap();
+    let mut plugins = kiln::plugin::PluginHost::default();
+    plugins.load_dir(exe.parent().unwrap(), true);
+    plugins
+}
