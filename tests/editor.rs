@@ -1016,3 +1016,61 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
         }
     );
 }
+
+/// The World tab makes a sky world in one step, edits its sun as a value like any other
+/// (one undo step, and the viewport renders the new world), and the world is saved with
+/// the scene.
+#[test]
+fn the_world_tab_makes_and_edits_a_sky_and_saves_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("sky.kiln");
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.save.push_back(path.clone());
+    let mut harness = start(Setup {
+        dialogs,
+        size: egui::vec2(1280.0, 1100.0),
+        ..Setup::default()
+    });
+    step_until(&mut harness, "the first samples", samples_done);
+    harness.get_by_label("🌐 World").click();
+    harness.step();
+    harness.get_by_label("Use Sky Texture").click();
+    harness.step();
+    harness.step();
+    let sky_elevation = |app: &EditorApp| -> Option<f32> {
+        let world = app.document().scene().world.as_ref()?;
+        match world.graph.nodes["sky"].inputs.get("sun_elevation") {
+            Some(kiln::material::Input::Value(kiln::material::Value::Float(e))) => Some(*e),
+            _ => None,
+        }
+    };
+    assert_eq!(
+        sky_elevation(harness.state()),
+        Some(kiln::scene::lookdev::SUN_ELEVATION)
+    );
+    let restarts = harness.state().viewport_status().unwrap().restarts;
+    set_value(&mut harness, "Sun Elevation", 10.0);
+    assert_eq!(sky_elevation(harness.state()), Some(10.0));
+    step_until(&mut harness, "the new world's samples", |app| {
+        app.viewport_status().is_some_and(|s| {
+            s.restarts > restarts && s.samples >= SAMPLE_LIMIT && s.error.is_none()
+        })
+    });
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(
+        sky_elevation(harness.state()),
+        Some(kiln::scene::lookdev::SUN_ELEVATION)
+    );
+    harness.key_press_modifiers(
+        egui::Modifiers::COMMAND | egui::Modifiers::SHIFT,
+        egui::Key::Z,
+    );
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
+    harness.step();
+    let saved = kiln::scene::load_scene(&path).unwrap();
+    assert_eq!(saved.world, harness.state().document().scene().world);
+    assert!(saved.world.is_some());
+}

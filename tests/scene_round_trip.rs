@@ -70,6 +70,9 @@ fn first_difference(a: &Scene, b: &Scene) -> String {
     if a.environment_map != b.environment_map {
         return "environment map".into();
     }
+    if a.world != b.world {
+        return format!("world {:?}\n!=\n{:?}", a.world, b.world);
+    }
     for (i, (x, y)) in a.materials.iter().zip(&b.materials).enumerate() {
         if x != y {
             return format!("material {i}: {x:?}\n!=\n{y:?}");
@@ -119,6 +122,25 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
     sky.strength = 2.5;
     sky.rotation_degrees = -30.25;
     scene.environment_map = Some(sky);
+    // A world graph: a sky with its sun moved, mixed with an image looked up by direction.
+    let world_graph = kiln::material::parse_material(
+        r#"(version: 1, nodes: {
+            "sky": (type: "sky_texture", params: { "sun_disc": false }, inputs: {
+                "sun_elevation": 12.5, "sun_rotation": -40.0, "altitude": 300.0, "dust": 2.0,
+            }),
+            "image": (type: "environment_texture", params: { "file": "tex.png", "interpolation": "closest" }),
+            "mix": (type: "mix_color", inputs: { "factor": 0.25, "a": "sky.color", "b": "image.color" }),
+            "out": (type: "world_output", inputs: { "color": "mix.result", "strength": 0.75 }),
+        })"#,
+        "world",
+    )
+    .unwrap()
+    .1;
+    let mut world_graph = world_graph;
+    kiln::material::resolve_files(&mut world_graph, dir.path());
+    let mut world = kiln::scene::World::from_graph(world_graph).unwrap();
+    world.resolution = 512;
+    scene.world = Some(world);
     scene.settings = SceneSettings {
         width: 320,
         height: 180,

@@ -13,8 +13,9 @@
 // The sun's disc is not part of `color`: `sun` is its irradiance on a surface facing it
 // (after the atmosphere), and the renderer adds the disc as a distant light of that
 // irradiance and the node's sun size (src/render/world_bake.rs), sampled analytically.
-// Directions are world space with +Y up; below the horizon the view ray ends at a black
-// ground, so the lower half holds only the haze in front of it.
+// Directions are world space with +Y up; below the horizon the view ray ends at a matte
+// ground of albedo `ground_albedo` that the sun lights (the sky's light on it is left
+// out), seen through the haze in front of it.
 
 struct NdSky {
     color: vec3<f32>,
@@ -179,6 +180,7 @@ fn nd_sky(
     air: f32,
     dust: f32,
     ozone: f32,
+    ground_albedo: f32,
     sun_intensity: f32,
     disc: bool,
 ) -> NdSky {
@@ -215,11 +217,23 @@ fn nd_sky(
     var radiance: array<vec4<f32>, 4>;
     var sun: array<vec4<f32>, 4>;
     let sun_column = sky_column(o, s, SKY_VIEW_STEPS);
+    // Where the view ray ends at the ground: a Lambertian surface of `ground_albedo` lit
+    // by the sun through the atmosphere (not by the sky), seen through the air between.
+    var ground_light = vec4<f32>(0.0);
+    if (ground > 0.0) {
+        let g = o + d * ground;
+        ground_light = sky_column(g, s, SKY_LIGHT_STEPS);
+        ground_light.w *= max(dot(normalize(g), s), 0.0) * clamp(ground_albedo, 0.0, 1.0) / 3.14159265;
+    }
     for (var k = 0u; k < 4u; k++) {
         let nm = sky_wavelengths(k);
         let e = sky_sun_spectrum(nm);
         radiance[k] = e * (sky_rayleigh(nm) * amounts.x * rayleigh_phase * air_sum[k]
             + SKY_MIE_SCATTERING * amounts.y * mie_phase * dust_sum[k]);
+        if (ground_light.w > 0.0) {
+            radiance[k] += e * ground_light.w
+                * exp(-sky_optical_depth(view + ground_light.xyz, amounts, k));
+        }
         sun[k] = e * exp(-sky_optical_depth(sun_column.xyz, amounts, k)) * sun_column.w
             * select(0.0, max(sun_intensity, 0.0), disc);
     }

@@ -19,7 +19,7 @@ use super::graph_edit::GraphEdit;
 use crate::material::texture::load_texture;
 use crate::material::{Graph, GraphError};
 use crate::scene::{
-    Camera, EnvironmentMap, Instance, Light, LightObject, Material, Scene, SceneSettings,
+    Camera, EnvironmentMap, Instance, Light, LightObject, Material, Scene, SceneSettings, World,
 };
 use crate::shader::principled::ParamValue;
 use crate::shader::view::ViewSettings;
@@ -125,6 +125,9 @@ pub enum Command {
     },
     /// Replaces (or removes) the environment map.
     SetEnvironmentMap(Option<Box<EnvironmentMap>>),
+    /// Replaces (or removes) the world graph, which takes the place of the environment's
+    /// colour and map while there is one.
+    SetWorld(Option<Box<World>>),
     /// Adds the meshes, materials, objects and lights of an imported scene after the
     /// document's own (its objects refer to its own meshes and materials).
     Append(Box<Appended>),
@@ -170,6 +173,7 @@ impl Command {
             Command::SetView(_) => (15, 0, ""),
             Command::SetEnvironmentColor(_) => (13, 0, ""),
             Command::SetEnvironmentMapParams { .. } => (14, 0, ""),
+            Command::SetWorld(_) => (16, 0, ""),
             Command::EditGraph { material, edit } => {
                 (6, *material, if edit.only_moves() { "move" } else { "" })
             }
@@ -940,6 +944,16 @@ impl Document {
                 }
                 let old = std::mem::replace(&mut self.scene.environment_map, map.map(|m| *m));
                 Ok(Command::SetEnvironmentMap(old.map(Box::new)))
+            }
+            Command::SetWorld(world) => {
+                if let Some(world) = &world {
+                    world.validate().map_err(CommandError)?;
+                    world
+                        .suns()
+                        .map_err(|e| CommandError(format!("the world: {e}")))?;
+                }
+                let old = std::mem::replace(&mut self.scene.world, world.map(|w| *w));
+                Ok(Command::SetWorld(old.map(Box::new)))
             }
             Command::Append(appended) => {
                 let Appended { mut scene, images } = *appended;

@@ -1,20 +1,22 @@
 //! The Render and World tabs of the properties editor, as Blender has them: the render
 //! settings the scene file carries (resolution with presets, samples, bounces, seed, view
 //! transform, exposure), the editor's own (the viewport's sample limit, export options),
-//! the final render's button, progress and export; and the environment (colour, map,
-//! strength, rotation). Document settings change through commands, like every other edit.
+//! the final render's button, progress and export; and the world (its node graph's
+//! values, or the environment's colour, map, strength and rotation). Document settings change through commands, like every other edit.
 
 use egui::{DragValue, RichText, Ui};
 use glam::Vec3;
 
 use crate::film::tonemap::Tonemap;
-use crate::scene::Quality;
+use crate::material::nodes::{self, ParamKind, WORLD_OUTPUT};
+use crate::material::{Input, Param, SocketType, Value};
+use crate::scene::{Quality, WORLD_RESOLUTIONS, World, lookdev};
 use crate::shader::sampling::{FilterKind, MAX_FILTER_WIDTH, Sampler};
 
 use super::app::PIXEL_SIZES;
 use super::document::{Command, Document, GestureId};
 use super::final_render::RenderState;
-use super::inspector::{Edit, float_row, gesture, section};
+use super::inspector::{Edit, float_row, gesture, parameter_label, section};
 use super::session::ViewportPreferences;
 
 /// Resolution presets (Blender's Format presets, in the order of the list).
@@ -438,10 +440,17 @@ pub enum WorldAction {
     LoadMap,
 }
 
-/// The World tab: the uniform environment, or the environment map that replaces it.
+/// The World tab: the world's node graph, or the uniform environment and the environment
+/// map that replaces it.
 pub fn world_tab_ui(ui: &mut Ui, document: &Document) -> Vec<WorldAction> {
     let mut actions = Vec::new();
     let scene = document.scene();
+    section(ui, "World Graph", |ui| {
+        world_graph_ui(ui, scene.world.as_ref(), &mut actions)
+    });
+    if scene.world.is_some() {
+        ui.weak("The world graph lights the scene; the colour and map below wait unused.");
+    }
     section(ui, "Surface", |ui| {
         // Shown as a colour and a strength, as Blender's Background node has them.
         let radiance = scene.environment;
@@ -512,4 +521,120 @@ pub fn world_tab_ui(ui: &mut Ui, document: &Document) -> Vec<WorldAction> {
         }
     });
     actions
+}
+
+/// The world graph as Blender's World properties show a world's node tree: each node's
+/// unlinked numbers, colours and switches, the output's first, then the bake's
+/// resolution. Without a world, a button that makes one of a Sky Texture.
+fn world_graph_ui(ui: &mut Ui, world: Option<&World>, actions: &mut Vec<WorldAction>) {
+    let set = |world: Option<World>, gesture: Option<GestureId>| {
+        WorldAction::Edit(Edit {
+            command: Command::SetWorld(world.map(Box::new)),
+            gesture,
+        })
+    };
+    let Some(world) = world else {
+        ui.label("Graph");
+        if ui
+            .button("Use Sky Texture")
+            .on_hover_text("A clear sky with its sun, as a world graph (docs/NODES.md, World).")
+            .clicked()
+        {
+            actions.push(set(Some(lookdev::world()), None));
+        }
+        ui.end_row();
+        return;
+    };
+    ui.label("Graph");
+    if ui.button("Remove").clicked() {
+        actions.push(set(None, None));
+    }
+    ui.end_row();
+    let mut ids: Vec<&String> = world.graph.nodes.keys().collect();
+    ids.sort_by_key(|id| (world.graph.nodes[*id].kind != WORLD_OUTPUT, *id));
+    for id in ids {
+        let node = &world.graph.nodes[id];
+        let Some(def) = nodes::find(&node.kind) else {
+            continue;
+        };
+        ui.label(RichText::new(def.label).strong());
+        ui.weak(id.as_str());
+        ui.end_row();
+        for input in &def.inputs {
+            let value = match node.inputs.get(input.name) {
+                Some(Input::Link(_)) => continue,
+                Some(Input::Value(v)) => Some(v.clone()),
+                None => match &input.default {
+                    nodes::Default::Value(v) => Some(v.clone()),
+                    nodes::Default::Implicit(..) => None,
+                },
+            };
+            let label = parameter_label(input.name);
+            let changed = match (value, input.range) {
+                (Some(Value::Float(mut x)), Some(range)) => {
+                    let l = ui.label(&label).on_hover_text(input.doc);
+                    let r = ui
+                        .add(
+                            DragValue::new(&mut x)
+                                .speed(range.drag_speed())
+                                .range(range.min..=range.max)
+                                .max_decimals(3),
+                        )
+                        .labelled_by(l.id);
+                    ui.end_row();
+                    r.changed().then(|| (Value::Float(x), gesture(&r)))
+                }
+                (Some(Value::Vec3(mut c)), _) if input.ty == SocketType::Color => {
+                    let l = ui.label(&label).on_hover_text(input.doc);
+                    let r = ui.color_edit_button_rgb(&mut c).labelled_by(l.id);
+                    ui.end_row();
+                    r.changed().then(|| (Value::Vec3(c), gesture(&r)))
+                }
+                _ => None,
+            };
+            if let Some((value, gesture)) = changed {
+                let mut edited = world.clone();
+                if let Some(n) = edited.graph.nodes.get_mut(id) {
+                    n.inputs.insert(input.name.to_owned(), Input::Value(value));
+                }
+                actions.push(set(Some(edited), gesture));
+            }
+        }
+        for param in &def.params {
+            let ParamKind::Bool(default) = param.kind else {
+                continue;
+            };
+            let mut on = match node.params.get(param.name) {
+                Some(Param::Bool(b)) => *b,
+                _ => default,
+            };
+            ui.label(parameter_label(param.name))
+                .on_hover_text(param.doc);
+            if ui.checkbox(&mut on, "").changed() {
+                let mut edited = world.clone();
+                if let Some(n) = edited.graph.nodes.get_mut(id) {
+                    n.params.insert(param.name.to_owned(), Param::Bool(on));
+                }
+                actions.push(set(Some(edited), None));
+            }
+            ui.end_row();
+        }
+    }
+    let mut resolution = world.resolution;
+    let l = ui
+        .label("Resolution")
+        .on_hover_text("Width of the environment map the world is baked into; its height is half.");
+    let r = ui
+        .add(
+            DragValue::new(&mut resolution)
+                .range(WORLD_RESOLUTIONS)
+                .speed(8.0),
+        )
+        .labelled_by(l.id);
+    ui.end_row();
+    if r.changed() {
+        let mut edited = world.clone();
+        edited.resolution = resolution;
+        actions.push(set(Some(edited), gesture(&r)));
+    }
 }

@@ -43,6 +43,52 @@ a wire on with the type of what feeds it (its output is `output`; it compiles to
 link, a value or that input's default), or 0 / black when it has none (a shader output:
 what its consumer reads unconnected). `preview: true` shows the node's output as an image
 under it in the node editor; the compiler ignores it.
+
+## Worlds
+
+The world (Blender's World) is a graph of the same nodes ending in a **World Output** node
+instead of a Material Output: the radiance that arrives from each direction where a ray
+leaves the scene. A scene names it with `world: (graph_file: \"sky.kmat\")` or an inline
+`graph` (docs/SCENE_FORMAT.md); it takes the place of the constant environment and the
+environment map. In a world the shading point looks from the origin: the position, the
+generated and object coordinates (what a texture's vector reads unconnected) are the
+view direction, +Y up, so a Gradient or Noise Texture varies over the sky and a Mapping
+node rotates it. An **Environment Texture** reads an equirectangular image by direction;
+the **Sky Texture** is a physically based clear sky.
+
+```ron
+(
+    version: 1,
+    name: \"Clear sky\",
+    nodes: {
+        \"sky\": (type: \"sky_texture\", inputs: { \"sun_elevation\": 35.0, \"sun_rotation\": 140.0 }),
+        \"out\": (type: \"world_output\", inputs: { \"color\": \"sky.color\", \"strength\": 1.0 }),
+    },
+)
+```
+
+The renderer bakes the world into an equirectangular map (`resolution` texels wide, half
+as high; 1024 unless the scene says) at the start of a render, and samples that map by
+importance against BSDF sampling, as it does an environment map loaded from a file. A
+world whose output reads no link keeps the constant environment's exact path. A Sky
+Texture's sun is not baked: with `sun_disc` on, it becomes a sun light of the node's
+size, sampled analytically and seen by camera and glossy rays, whose irradiance is the
+node's `sun` output carried through what the graph does to the sky's colour (a strength,
+a tint, a mix). So its elevation, rotation and size must be values, not links, and the
+node must stand at the top level of the graph.
+
+The Sky Texture integrates single scattering along each view ray in a spherical
+atmosphere (Nishita 1993, the model of Cycles' Nishita sky): Rayleigh scattering by air
+(8 km scale height), Mie scattering and absorption by aerosols (1.2 km), absorption by a
+layer of ozone (300 Dobson units at 1), at 16 wavelengths from 380 to 755 nm under a
+5778 K black-body sun of 1361 W/m², converted to linear Rec. 709 through the CIE 1931
+colour-matching functions. Its unit is spectral radiance, W/(m²·sr·nm), averaged under
+the luminance curve ȳ: a white surface under a sun 35° up in a clear sky receives about
+0.85 in all, which the look-dev default exposes as +1.9 stops. Tested against Bucholtz's
+Rayleigh optical depths and Kasten and Young's air mass (`tests/world.rs`): the sun
+through clear air keeps what they predict within 0.4% (at the zenith and 30° up). Below
+the horizon the view ray ends at a matte ground (`ground_albedo`, 0.3) lit by the sun
+through the atmosphere, seen through the haze in front of it.
 ";
 
 fn value(v: &Value) -> String {

@@ -365,14 +365,21 @@ impl Graph {
                 })
     }
 
-    /// The files its image-texture nodes read, in the graph and its groups: resolved
-    /// against the file's folder on loading, renamed on saving and on merging scenes.
+    /// The files its image-reading nodes (those with a file parameter) read, in the graph
+    /// and its groups: resolved against the file's folder on loading, renamed on saving
+    /// and on merging scenes.
     pub fn image_files_mut(&mut self) -> impl Iterator<Item = &mut String> {
         let groups = self.groups.values_mut().flat_map(|g| g.nodes.values_mut());
         self.nodes
             .values_mut()
             .chain(groups)
-            .filter(|node| node.kind == "image_texture")
+            .filter(|node| {
+                super::nodes::find(&node.kind).is_some_and(|def| {
+                    def.params.iter().any(|p| {
+                        p.name == "file" && matches!(p.kind, super::nodes::ParamKind::File)
+                    })
+                })
+            })
             .filter_map(|node| match node.params.get_mut("file") {
                 Some(Param::Text(file)) => Some(file),
                 _ => None,

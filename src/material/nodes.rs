@@ -822,6 +822,12 @@ fn build() -> Vec<NodeDef> {
                     FloatRange::new(0.0, 10.0),
                     "density of ozone (absorbs orange: the blue of twilight)",
                 ),
+                float(
+                    "ground_albedo",
+                    0.3,
+                    UNIT,
+                    "the ground below the horizon: how much of the sun's light it reflects",
+                ),
             ],
             outputs: vec![
                 out(
@@ -846,7 +852,7 @@ fn build() -> Vec<NodeDef> {
             fold: None,
             range: None,
             code: Code::Template(
-                "nd_sky({vector}, {sun_elevation}, {sun_rotation}, {altitude}, {air}, {dust}, {ozone}, {sun_intensity}, {sun_disc})",
+                "nd_sky({vector}, {sun_elevation}, {sun_rotation}, {altitude}, {air}, {dust}, {ozone}, {ground_albedo}, {sun_intensity}, {sun_disc})",
             ),
         },
         NodeDef {
