@@ -822,6 +822,13 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             settings.volume_resolution
         );
     }
+    if info.world_texels > 0 {
+        eprintln!(
+            "world: baked into {} texels in {:.0} ms",
+            info.world_texels,
+            info.world_bake.as_secs_f64() * 1e3
+        );
+    }
     let pixels = settings.width as u64 * settings.height as u64;
     let bar = if args.quiet {
         ProgressBar::hidden()

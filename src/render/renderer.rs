@@ -367,6 +367,10 @@ pub struct BuildInfo {
     pub volume_bake: Duration,
     /// Grid points baked.
     pub volume_voxels: u64,
+    /// Baking the world graph into its map (compile and evaluation; zero when the bake of
+    /// an identical world was remembered, or the scene has no world), and the map's texels.
+    pub world_bake: Duration,
+    pub world_texels: u64,
 }
 
 pub struct Renderer {
@@ -499,7 +503,13 @@ impl Renderer {
     ) -> Result<Self, RenderError> {
         scene.validate().map_err(RenderError::Scene)?;
         // A world graph renders as the environment map and sun lights it bakes into.
+        let world_texels = scene
+            .world
+            .as_ref()
+            .map_or(0, |w| u64::from(w.resolution) * u64::from(w.resolution / 2));
+        let world_start = Instant::now();
         let resolved = super::world_bake::resolve_world(&ctx, scene)?;
+        let world_bake = world_start.elapsed();
         let scene: &Scene = &resolved;
         // Hidden objects stay in the scene (and its file) but are not rendered.
         let shown;
@@ -633,6 +643,8 @@ impl Renderer {
                 kernel_compiled,
                 volume_bake: Duration::ZERO,
                 volume_voxels: 0,
+                world_bake,
+                world_texels,
             },
             ctx,
             pipeline,
