@@ -12,6 +12,7 @@ pub mod accel;
 pub mod bench;
 pub mod editor;
 pub mod film;
+pub mod limits;
 pub mod material;
 pub mod plugin;
 pub mod render;

@@ -19,6 +19,7 @@ use kiln::plugin::{ExportFilm, Isolation, PluginHost, PluginKind};
 
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
+use kiln::limits::Limits;
 use kiln::render::checkpoint::{self, Checkpoint};
 use kiln::render::{
     Backend, GpuContext, RenderControl, RenderSettings, RenderStats, Renderer, context,
@@ -43,6 +44,22 @@ struct Cli {
     /// Seconds an isolated import may take before it is stopped.
     #[arg(long, global = true, default_value_t = 600.0, value_name = "SECS")]
     import_timeout: f64,
+    /// The largest width or height of an image texture read (an environment map may be
+    /// this wide and half as high); larger files are refused before decoding.
+    #[arg(long, global = true, value_name = "TEXELS", default_value_t = Limits::DEFAULT.texture_size,
+          value_parser = clap::value_parser!(u32).range(1..))]
+    max_texture_size: u32,
+    /// The most vertices, and triangles, one import may hand over.
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT.triangles,
+          value_parser = clap::value_parser!(u64).range(1..))]
+    max_triangles: u64,
+    /// The most nodes a material graph may expand to, every use of a group counted with
+    /// its nodes.
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT.graph_nodes)]
+    max_graph_nodes: usize,
+    /// How deep node groups may nest.
+    #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT.group_depth)]
+    max_group_depth: usize,
     #[command(subcommand)]
     command: Command,
 }
@@ -452,6 +469,12 @@ fn main() -> ExitCode {
         .with_writer(std::io::stderr)
         .init();
     let cli = Cli::parse();
+    kiln::limits::set(Limits {
+        texture_size: cli.max_texture_size,
+        triangles: cli.max_triangles,
+        graph_nodes: cli.max_graph_nodes,
+        group_depth: cli.max_group_depth,
+    });
     let backend = cli.backend.map(Backend::from);
     if !(cli.import_timeout.is_finite() && cli.import_timeout > 0.0) {
         eprintln!(

@@ -726,3 +726,131 @@ fn quality_presets_are_described_in_the_help_and_flags_beside_them_win() {
     let final_ = read_exr(&out);
     assert_eq!(final_.channel("noisy.R").len(), 16 * 16);
 }
+
+/// `kiln ARGS` (which must fail); its stderr.
+fn fails(args: &[&str]) -> String {
+    let out = kiln().args(args).output().expect("kiln runs");
+    assert!(!out.status.success(), "kiln {args:?} succeeded");
+    stderr(&out)
+}
+
+/// A group used four times inside a group used four times …, `depth` groups deep: 4^(depth
+/// − 1) noise nodes in a small file.
+fn nested_groups(depth: usize) -> String {
+    let groups: Vec<String> = (0..depth)
+        .map(|d| {
+            let nodes = if d + 1 == depth {
+                r#""n": (type: "noise_texture")"#.to_owned()
+            } else {
+                (0..4)
+                    .map(|i| format!(r#""c{i}": (type: "group", params: {{ "group": "g{}" }})"#, d + 1))
+                    .collect::<Vec<_>>()
+                    .join(", ")
+            };
+            let out = if d + 1 == depth { "n.color" } else { "c0.out" };
+            format!(
+                r#""g{d}": (outputs: [(name: "out", type: color)], nodes: {{ {nodes} }}, links: {{ "out": "{out}" }})"#
+            )
+        })
+        .collect();
+    format!(
+        r#"(version: 1, name: "nested", groups: {{ {} }}, nodes: {{
+            "g": (type: "group", params: {{ "group": "g0" }}),
+            "surface": (type: "principled_bsdf", inputs: {{ "base_color": "g.out" }}),
+            "out": (type: "material_output", inputs: {{ "surface": "surface.bsdf" }}),
+        }})"#,
+        groups.join(", ")
+    )
+}
+
+/// Each resource limit is a default a flag moves: lowered, it refuses what the default
+/// takes, naming the flag; raised, it takes what the default refuses.
+#[test]
+fn resource_limit_flags_lower_and_raise_the_limits() {
+    let dir = tempfile::tempdir().unwrap();
+    let dir = dir.path();
+
+    // Graph nodes and group depth: 4^5 noise nodes in 6 nested groups, about 1 400 nodes.
+    let kmat = dir.join("nested.kmat");
+    std::fs::write(&kmat, nested_groups(6)).unwrap();
+    let kmat = kmat.to_str().unwrap();
+    let ok = kiln().args(["material", "check", kmat]).output().unwrap();
+    assert!(ok.status.success(), "{}", stderr(&ok));
+    let e = fails(&["material", "check", kmat, "--max-graph-nodes", "500"]);
+    assert!(
+        e.contains("more than 500 nodes") && e.contains("--max-graph-nodes"),
+        "{e}"
+    );
+    let e = fails(&["material", "check", kmat, "--max-group-depth", "3"]);
+    assert!(
+        e.contains("deeper than 3") && e.contains("--max-group-depth"),
+        "{e}"
+    );
+    // 4^7 noise nodes (about 38 000 with the groups): over the default, under a raised one.
+    let big = dir.join("big.kmat");
+    std::fs::write(&big, nested_groups(8)).unwrap();
+    let big = big.to_str().unwrap();
+    let e = fails(&["material", "check", big]);
+    assert!(e.contains("more than 10000 nodes"), "{e}");
+    let ok = kiln()
+        .args(["material", "check", big, "--max-graph-nodes", "50000"])
+        .output()
+        .unwrap();
+    assert!(ok.status.success(), "{}", stderr(&ok));
+
+    // Texture size: a scene whose material reads a 16 × 16 image.
+    image::RgbaImage::from_pixel(16, 16, image::Rgba([200, 100, 50, 255]))
+        .save(dir.join("tex.png"))
+        .unwrap();
+    let scene = dir.join("textured.kiln");
+    std::fs::write(
+        &scene,
+        r#"(version: 1, camera: (position: (0, 0, 3), look_at: (0, 0, 0), projection: Perspective(fov_y: 40)),
+            materials: { "m": (graph: (nodes: {
+                "image": (type: "image_texture", params: { "file": "tex.png" }),
+                "surface": (type: "principled_bsdf", inputs: { "base_color": "image.color" }),
+                "out": (type: "material_output", inputs: { "surface": "surface.bsdf" }),
+            })) },
+            meshes: { "quad": Quad },
+            instances: [(mesh: "quad", material: "m")])"#,
+    )
+    .unwrap();
+    let out = dir.join("out.png");
+    let (scene, out) = (scene.to_str().unwrap(), out.to_str().unwrap());
+    let e = fails(&["render", scene, "-o", out, "--max-texture-size", "8"]);
+    assert!(
+        e.contains("tex.png") && e.contains("--max-texture-size"),
+        "{e}"
+    );
+
+    // Triangles: an OBJ of two triangles through the importer plugin. A mesh over the
+    // limit is left out of the import with a warning naming the flag.
+    let obj = dir.join("two.obj");
+    std::fs::write(
+        &obj,
+        "v 0 0 0\nv 1 0 0\nv 1 1 0\nv 0 1 0\nf 1 2 3\nf 1 3 4\n",
+    )
+    .unwrap();
+    let saved = dir.join("two.kiln");
+    let meshes = |args: &[&str]| {
+        let out = kiln()
+            .args([
+                "import",
+                obj.to_str().unwrap(),
+                "-o",
+                saved.to_str().unwrap(),
+            ])
+            .args(args)
+            .output()
+            .unwrap();
+        assert!(out.status.success(), "{}", stderr(&out));
+        (
+            kiln::scene::load_scene(&saved).unwrap().meshes.len(),
+            stderr(&out),
+        )
+    };
+    let (left, warning) = meshes(&["--max-triangles", "1", "--ground", "none"]);
+    assert_eq!(left, 0, "{warning}");
+    assert!(warning.contains("--max-triangles"), "{warning}");
+    assert_eq!(meshes(&["--ground", "none"]).0, 1);
+}

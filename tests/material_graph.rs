@@ -43,6 +43,11 @@ fn validate_kernel(graph: &Graph) -> Result<String, String> {
     Ok(compiled.code)
 }
 
+/// Whether nodes of `def` read an image file (the image and environment textures).
+fn reads_a_file(def: &kiln::material::nodes::NodeDef) -> bool {
+    def.params.iter().any(|p| matches!(p.kind, ParamKind::File))
+}
+
 #[test]
 fn every_node_type_with_every_option_compiles_and_naga_accepts_the_kernel() {
     let mut checked = 0;
@@ -51,10 +56,10 @@ fn every_node_type_with_every_option_compiles_and_naga_accepts_the_kernel() {
             continue;
         }
         // Each enum option once, every output once.
-        // Image textures need a file (compiling does not read it).
+        // Image-reading nodes need a file (compiling does not read it).
         let base = || {
             let n = Node::new(def.kind);
-            if def.kind == "image_texture" {
+            if reads_a_file(def) {
                 n.param("file", Param::Text("wall.png".into()))
             } else {
                 n
@@ -225,7 +230,7 @@ fn a_graph_expanding_past_the_node_limit_is_refused_before_it_exhausts_memory() 
     // 4^6 = 4096 noise nodes (and the groups around them) expand and compile.
     let (_, small) = parse_material(&group_bomb(7), "bomb.kmat").unwrap();
     compile("bomb", &small, "m").expect("a graph under the limit compiles");
-    // 4^13 would take tens of gigabytes: refused after the first MAX_EXPANDED_NODES.
+    // 4^13 would take tens of gigabytes: refused after the limit's first nodes.
     let text = group_bomb(14);
     assert!(text.len() < 5000, "a small file: {} bytes", text.len());
     let (_, bomb) = parse_material(&text, "bomb.kmat").unwrap();
@@ -234,7 +239,7 @@ fn a_graph_expanding_past_the_node_limit_is_refused_before_it_exhausts_memory() 
     assert!(
         e.contains(&format!(
             "expands to more than {} nodes",
-            kiln::material::compile::MAX_EXPANDED_NODES
+            kiln::limits::Limits::DEFAULT.graph_nodes
         )),
         "{e}"
     );
@@ -406,7 +411,7 @@ mod random_graphs {
     fn recipe() -> impl Strategy<Value = Recipe> {
         let kinds = library()
             .iter()
-            .filter(|d| d.kind != "material_output" && d.kind != "principled_bsdf")
+            .filter(|d| !d.outputs.is_empty() && d.kind != "principled_bsdf")
             .count();
         (
             prop::collection::vec((0..kinds, prop::collection::vec(any::<u32>(), 16)), 1..12),
@@ -423,14 +428,14 @@ mod random_graphs {
     fn build(r: &Recipe) -> Graph {
         let defs: Vec<_> = library()
             .iter()
-            .filter(|d| d.kind != "material_output" && d.kind != "principled_bsdf")
+            .filter(|d| !d.outputs.is_empty() && d.kind != "principled_bsdf")
             .collect();
         let mut g = Graph::default();
         let mut outputs: Vec<(String, &str, SocketType)> = Vec::new();
         for (i, (kind, choices)) in r.nodes.iter().enumerate() {
             let def = defs[*kind];
             let mut node = Node::new(def.kind);
-            if def.kind == "image_texture" {
+            if reads_a_file(def) {
                 node = node.param("file", Param::Text("wall.png".into()));
             }
             for (k, socket) in def.inputs.iter().enumerate() {

@@ -1116,3 +1116,56 @@ fn set_noise_scale(harness: &mut Harness<'_, EditorApp>, value: f64) {
     ));
     steps(harness, 3);
 }
+
+/// The node editor's World switch shows the world's graph on the same canvas: New World
+/// makes one of the environment's colour, a Sky Texture added from the menu and wired into
+/// the output lights the viewport (with a sun), and undo takes the wire away.
+#[test]
+fn the_world_graph_is_edited_on_the_canvas() {
+    let mut harness = harness(ScriptedDialogs::default());
+    step_until(&mut harness, "the first samples", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.samples >= SAMPLE_LIMIT && s.error.is_none())
+    });
+    harness.get_by_label("World").click();
+    steps(&mut harness, 2);
+    assert!(harness.state().node_editor().showing_world());
+    harness.get_by_label("New World").click();
+    steps(&mut harness, 3);
+    let world_graph = |app: &EditorApp| app.document().world_graph().expect("a world");
+    assert!(world_graph(harness.state()).nodes.contains_key("output"));
+    if let Some(path) = std::env::var_os("KILN_WORLD_SHOT") {
+        harness.render().unwrap().save(path).unwrap();
+    }
+
+    add_from_menu(&mut harness, egui::vec2(30.0, 40.0), "sky", "Sky Texture");
+    assert_eq!(
+        world_graph(harness.state()).nodes["sky_texture"].kind,
+        "sky_texture"
+    );
+    let restarts = harness.state().viewport_status().unwrap().restarts;
+    frame_all(&mut harness);
+    let before = world_graph(harness.state());
+    drag(&mut harness, ("sky_texture", "color"), ("output", "color"));
+    if let Some(path) = std::env::var_os("KILN_WORLD_SHOT") {
+        harness.render().unwrap().save(path).unwrap();
+    }
+    let wired = world_graph(harness.state());
+    assert_eq!(
+        wired.nodes["output"].inputs.get("color"),
+        Some(&Input::Link(Link::new("sky_texture", "color"))),
+        "message: {:?}",
+        harness.state().node_editor().message()
+    );
+    let world = harness.state().document().scene().world.clone().unwrap();
+    assert_eq!(world.suns().unwrap().len(), 1);
+    step_until(&mut harness, "the sky's samples", |app| {
+        app.viewport_status().is_some_and(|s| {
+            s.restarts > restarts && s.samples >= SAMPLE_LIMIT && s.error.is_none()
+        })
+    });
+
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    steps(&mut harness, 2);
+    assert_eq!(world_graph(harness.state()), before);
+}

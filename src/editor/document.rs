@@ -85,6 +85,9 @@ pub enum Command {
         material: usize,
         edit: GraphEdit,
     },
+    /// An edit of the world's node graph, kept like a material's when it no longer
+    /// compiles (the world renders as it last compiled).
+    EditWorldGraph(GraphEdit),
     /// Inserts a material at `index` (later materials move up one); `pending` is an
     /// edited graph that did not compile, restored with it.
     AddMaterial {
@@ -174,6 +177,7 @@ impl Command {
             Command::SetEnvironmentColor(_) => (13, 0, ""),
             Command::SetEnvironmentMapParams { .. } => (14, 0, ""),
             Command::SetWorld(_) => (16, 0, ""),
+            Command::EditWorldGraph(edit) => (17, 0, if edit.only_moves() { "move" } else { "" }),
             Command::EditGraph { material, edit } => {
                 (6, *material, if edit.only_moves() { "move" } else { "" })
             }
@@ -192,7 +196,7 @@ impl Command {
     pub fn changes_image(&self) -> bool {
         match self {
             Command::Rename { .. } | Command::RenameMaterial { .. } | Command::SetView(_) => false,
-            Command::EditGraph { edit, .. } => edit.changes_image(),
+            Command::EditGraph { edit, .. } | Command::EditWorldGraph(edit) => edit.changes_image(),
             _ => true,
         }
     }
@@ -264,6 +268,8 @@ pub struct Document {
     /// Edited graphs that do not compile, by material, with the compiler's error; the
     /// scene keeps such a material as it last compiled.
     pending_graphs: std::collections::BTreeMap<usize, (Graph, GraphError)>,
+    /// The edited world graph when it does not compile, with the error.
+    pending_world: Option<(Graph, GraphError)>,
     path: Option<PathBuf>,
     undo: Vec<Step>,
     redo: Vec<Step>,
@@ -292,6 +298,7 @@ impl Document {
             images,
             selection: None,
             pending_graphs: std::collections::BTreeMap::new(),
+            pending_world: None,
             path,
             undo: Vec::new(),
             redo: Vec::new(),
@@ -486,6 +493,20 @@ impl Document {
             Some(g) => g.graph.clone(),
             None => crate::scene::graph_from_principled(m),
         })
+    }
+
+    /// The world's graph as edited: one that does not compile, or the world's; `None`
+    /// without a world.
+    pub fn world_graph(&self) -> Option<Graph> {
+        if let Some((graph, _)) = &self.pending_world {
+            return Some(graph.clone());
+        }
+        Some(self.scene.world.as_ref()?.graph.clone())
+    }
+
+    /// Why the edited world graph does not compile, if it does not.
+    pub fn world_error(&self) -> Option<&GraphError> {
+        self.pending_world.as_ref().map(|(_, e)| e)
     }
 
     /// Why material `material`'s edited graph does not compile, if it does not.
@@ -953,8 +974,10 @@ impl Document {
                         .map_err(|e| CommandError(format!("the world: {e}")))?;
                 }
                 let old = std::mem::replace(&mut self.scene.world, world.map(|w| *w));
+                self.pending_world = None;
                 Ok(Command::SetWorld(old.map(Box::new)))
             }
+            Command::EditWorldGraph(edit) => self.edit_world_graph(edit),
             Command::Append(appended) => {
                 let Appended { mut scene, images } = *appended;
                 scene.validate().map_err(CommandError)?;
@@ -1047,6 +1070,31 @@ impl Document {
     /// Applies a graph edit to material `material`'s edited graph and recompiles it: a
     /// graph that compiles replaces the material; one that does not is kept with its
     /// error beside the material as it last compiled.
+    fn edit_world_graph(&mut self, edit: GraphEdit) -> Result<Command, CommandError> {
+        let (Some(mut graph), Some(world)) = (self.world_graph(), self.scene.world.as_ref()) else {
+            return Err(CommandError("the scene has no world graph".into()));
+        };
+        let inverse = edit
+            .apply(&mut graph)
+            .map_err(|e| CommandError(format!("the world: {e}")))?;
+        // Images the world already holds are reused rather than read again.
+        let known = world.images.clone();
+        let load = |file: &str| match known.get(file) {
+            Some(image) => Ok((**image).clone()),
+            None => load_texture(Path::new(file)),
+        };
+        let resolution = world.resolution;
+        match World::from_graph_with(graph.clone(), &load) {
+            Ok(mut compiled) => {
+                compiled.resolution = resolution;
+                self.scene.world = Some(compiled);
+                self.pending_world = None;
+            }
+            Err(error) => self.pending_world = Some((graph, error)),
+        }
+        Ok(Command::EditWorldGraph(inverse))
+    }
+
     fn edit_graph(&mut self, material: usize, edit: GraphEdit) -> Result<Command, CommandError> {
         let Some(mut graph) = self.material_graph(material) else {
             return Err(CommandError(format!("no material {material}")));

@@ -380,13 +380,11 @@ struct Scope<'a> {
     depth: usize,
 }
 
-const MAX_GROUP_DEPTH: usize = 16;
-
-/// The most nodes a material may expand to, every instance of a group counted with its
-/// nodes. A group used four times inside a group used four times … multiplies: a 4 KB file
-/// of 14 such groups expanded to 4^13 nodes and exhausted memory (docs/RELIABILITY.md).
-/// Hand-made graphs are hundreds of nodes; the kernel's code grows with the count.
-pub const MAX_EXPANDED_NODES: usize = 10_000;
+// The most nodes a material may expand to ([`crate::limits::Limits::graph_nodes`]),
+// every instance of a group counted with its nodes. A group used four times inside a group
+// used four times … multiplies: a 4 KB file of 14 such groups expanded to 4^13 nodes and
+// exhausted memory (docs/RELIABILITY.md). Hand-made graphs are hundreds of nodes; the
+// kernel's code grows with the count.
 
 impl<'a> Flattener<'a> {
     fn new(ctx: &'a Ctx<'a>, graph: &'a Graph) -> Self {
@@ -439,23 +437,29 @@ impl<'a> Flattener<'a> {
         for (id, node) in scope.nodes {
             let full = format!("{}{id}", scope.prefix);
             self.visited += 1;
-            if self.visited > MAX_EXPANDED_NODES {
+            let limit = crate::limits::current().graph_nodes;
+            if self.visited > limit {
                 return Err(self.ctx.err(
                     Some(&full),
                     None,
                     format!(
-                        "the graph expands to more than {MAX_EXPANDED_NODES} nodes (each use of a \
-                         group counts its nodes, so groups used inside groups multiply)"
+                        "the graph expands to more than {limit} nodes (each use of a group \
+                         counts its nodes, so groups used inside groups multiply; \
+                         --max-graph-nodes raises the limit)"
                     ),
                 ));
             }
             match node.kind.as_str() {
                 GROUP => {
-                    if scope.depth >= MAX_GROUP_DEPTH {
+                    let depth = crate::limits::current().group_depth;
+                    if scope.depth >= depth {
                         return Err(self.ctx.err(
                             Some(&full),
                             None,
-                            format!("groups nest deeper than {MAX_GROUP_DEPTH} (a group that contains itself?)"),
+                            format!(
+                                "groups nest deeper than {depth} (a group that contains itself? \
+                                 --max-group-depth raises the limit)"
+                            ),
                         ));
                     }
                     let (_, group) = self.group(&full, node)?;
@@ -616,7 +620,7 @@ impl<'a> Flattener<'a> {
         input: &Input,
         hops: usize,
     ) -> Result<Src, GraphError> {
-        if hops > 64 * MAX_GROUP_DEPTH {
+        if hops > 64 * crate::limits::current().group_depth {
             return Err(self.ctx.err(
                 Some(at),
                 Some(socket),

@@ -731,7 +731,7 @@ fn build() -> Vec<NodeDef> {
             inputs: vec![implicit(
                 "vector",
                 "sp.generated",
-                "the direction (in a world: the view direction)",
+                "the view direction, in a world",
                 "the direction to look up",
             )],
             outputs: vec![
@@ -771,7 +771,7 @@ fn build() -> Vec<NodeDef> {
                 implicit(
                     "vector",
                     "sp.generated",
-                    "the direction (in a world: the view direction)",
+                    "the view direction, in a world",
                     "the direction to look along, world space, +Y up",
                 ),
                 float(

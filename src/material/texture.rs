@@ -8,9 +8,6 @@ use std::sync::Arc;
 
 use kiln_plugin_api::read::{MAX_FILE_BYTES, read_bounded};
 
-/// The largest width or height accepted: bigger claims are refused before decoding.
-pub const MAX_TEXTURE_SIZE: u32 = 16384;
-
 /// A decoded image in the GPU's texel layout.
 #[derive(Clone, Debug, PartialEq)]
 pub struct TextureImage {
@@ -49,14 +46,22 @@ fn decode<R: std::io::BufRead + std::io::Seek>(
     what: &str,
 ) -> Result<TextureImage, String> {
     let path = what;
+    // The largest width or height accepted ([`crate::limits::Limits::texture_size`]):
+    // bigger claims are refused before decoding.
+    let size = crate::limits::current().texture_size;
     let mut limits = image::Limits::default();
-    limits.max_image_width = Some(MAX_TEXTURE_SIZE);
-    limits.max_image_height = Some(MAX_TEXTURE_SIZE);
-    limits.max_alloc = Some(2 << 30);
+    limits.max_image_width = Some(size);
+    limits.max_image_height = Some(size);
+    // Room for the largest image allowed, as 16-bit RGBA, and no more.
+    limits.max_alloc = Some((2u64 << 30).max(u64::from(size) * u64::from(size) * 8));
     reader.limits(limits);
-    let img = reader
-        .decode()
-        .map_err(|e| format!("cannot decode {path}: {e}"))?;
+    let img = reader.decode().map_err(|e| match e {
+        image::ImageError::Limits(_) => format!(
+            "cannot decode {path}: {e} (images are limited to {size} texels a side; \
+             --max-texture-size raises the limit)"
+        ),
+        e => format!("cannot decode {path}: {e}"),
+    })?;
     let (width, height) = (img.width(), img.height());
     let eight_bit = matches!(
         img.color(),

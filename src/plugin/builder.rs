@@ -14,10 +14,9 @@ use kiln_plugin_api as api;
 use crate::material::texture::{decode_texture, load_texture};
 use crate::scene::{Camera, Light, Material, Mesh, Scene, lookdev};
 
-/// Vertices and triangles one import may hand over, in total: malformed files that
-/// claim billions of elements are refused before they exhaust memory.
-pub const MAX_VERTICES: usize = 1 << 26;
-pub const MAX_TRIANGLES: usize = 1 << 26;
+// Vertices and triangles one import may hand over, in total
+// ([`crate::limits::Limits::triangles`]): malformed files that claim billions of elements
+// are refused before they exhaust memory.
 /// Bytes of embedded images one import may hand over.
 pub const MAX_IMAGE_BYTES: usize = 1 << 30;
 
@@ -126,11 +125,13 @@ impl ImportState {
                 "mesh \"{name}\": {index_count} indices is not a whole number of triangles"
             ));
         }
-        if self.vertices.saturating_add(n) > MAX_VERTICES
-            || self.triangles.saturating_add(index_count / 3) > MAX_TRIANGLES
+        let limit = usize::try_from(crate::limits::current().triangles).unwrap_or(usize::MAX);
+        if self.vertices.saturating_add(n) > limit
+            || self.triangles.saturating_add(index_count / 3) > limit
         {
             return self.refuse(format!(
-                "mesh \"{name}\": the import would exceed {MAX_VERTICES} vertices or {MAX_TRIANGLES} triangles"
+                "mesh \"{name}\": the import would exceed {limit} vertices or {limit} triangles \
+                 (--max-triangles raises the limit)"
             ));
         }
         let positions = unsafe { floats(m.positions, n, 3) }.expect("checked above");

@@ -63,9 +63,11 @@ impl EnvironmentMap {
                 self.texels.len()
             ));
         }
-        if self.width > 16384 || self.height > 8192 {
+        let size = crate::limits::current().texture_size;
+        let half = (size / 2).max(1);
+        if self.width > size || self.height > half {
             return Err(format!(
-                "environment map of {}x{} is larger than 16384x8192",
+                "environment map of {}x{} is larger than {size}x{half} (--max-texture-size raises the limit)",
                 self.width, self.height
             ));
         }

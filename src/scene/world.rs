@@ -19,6 +19,10 @@ pub const WORLD_RESOLUTIONS: std::ops::RangeInclusive<u32> = 16..=4096;
 /// its sun is a light of its own.
 pub const DEFAULT_WORLD_RESOLUTION: u32 = 1024;
 
+/// Where the node editor draws the output of the worlds made here, right of a texture at
+/// the origin.
+const OUTPUT_POSITION: [f32; 2] = [420.0, 0.0];
+
 /// The Sky Texture node, whose sun the renderer places as a light.
 pub const SKY_TEXTURE: &str = "sky_texture";
 
@@ -80,10 +84,10 @@ impl World {
     /// A world of one colour (Background colour × strength).
     pub fn constant(colour: Vec3) -> Self {
         let mut graph = Graph::default();
-        graph.add(
-            "output",
-            Node::new(WORLD_OUTPUT).input("color", Input::Value(Value::Vec3(colour.to_array()))),
-        );
+        let mut output =
+            Node::new(WORLD_OUTPUT).input("color", Input::Value(Value::Vec3(colour.to_array())));
+        output.position = Some(OUTPUT_POSITION);
+        graph.add("output", output);
         Self {
             graph,
             resolution: DEFAULT_WORLD_RESOLUTION,
@@ -95,18 +99,16 @@ impl World {
     /// and `rotation` degrees, into the output at `strength`.
     pub fn sky(elevation: f32, rotation: f32, strength: f32) -> Self {
         let mut graph = Graph::default();
-        graph.add(
-            "sky",
-            Node::new(SKY_TEXTURE)
-                .input("sun_elevation", Input::Value(Value::Float(elevation)))
-                .input("sun_rotation", Input::Value(Value::Float(rotation))),
-        );
-        graph.add(
-            "output",
-            Node::new(WORLD_OUTPUT)
-                .input("color", Input::Link(Link::new("sky", "color")))
-                .input("strength", Input::Value(Value::Float(strength))),
-        );
+        let mut sky = Node::new(SKY_TEXTURE)
+            .input("sun_elevation", Input::Value(Value::Float(elevation)))
+            .input("sun_rotation", Input::Value(Value::Float(rotation)));
+        sky.position = Some([0.0, 0.0]);
+        let mut output = Node::new(WORLD_OUTPUT)
+            .input("color", Input::Link(Link::new("sky", "color")))
+            .input("strength", Input::Value(Value::Float(strength)));
+        output.position = Some(OUTPUT_POSITION);
+        graph.add("sky", sky);
+        graph.add("output", output);
         Self {
             graph,
             resolution: DEFAULT_WORLD_RESOLUTION,

@@ -57,11 +57,14 @@ use crate::material::graph::{
 };
 use crate::material::nodes::{self, FloatRange, ParamKind};
 use crate::material::{Graph, GraphError, Input, Node, Param, SocketType, Value};
-use crate::scene::Material;
+use crate::scene::{Material, World};
 use graph_edit::GROUP_OUTPUT;
 
 /// The node type a dropped image becomes, and its parameter naming the file.
 const IMAGE_TEXTURE: &str = "image_texture";
+/// The key the editor's per-graph state (the snarl built, the groups entered) takes for the
+/// world's graph, which no material index reaches.
+const WORLD_KEY: usize = usize::MAX;
 const IMAGE_FILE_PARAM: &str = "file";
 
 /// The preview toggle in a node's header (an eye, as Blender's).
@@ -128,6 +131,9 @@ impl SnarlPin for RecordedPin {
 /// transient state of its menus.
 pub struct NodeEditor {
     material: Option<usize>,
+    /// Whether the canvas shows the world's graph instead of a material's (the Shader
+    /// Editor's Object / World switch in Blender).
+    world: bool,
     /// The selection the material was last taken from.
     followed: Option<Selection>,
     snarl: Snarl<String>,
@@ -197,6 +203,7 @@ impl Default for NodeEditor {
     fn default() -> Self {
         Self {
             material: None,
+            world: false,
             followed: None,
             snarl: Snarl::new(),
             path: Vec::new(),
@@ -259,6 +266,11 @@ impl NodeEditor {
     /// The material shown, by index into the scene's materials.
     pub fn material(&self) -> Option<usize> {
         self.material
+    }
+
+    /// Whether the canvas shows the world's graph.
+    pub fn showing_world(&self) -> bool {
+        self.world
     }
 
     /// The last refused edit's reason, shown above the canvas.
@@ -343,30 +355,63 @@ impl NodeEditor {
         let mut commands = Vec::new();
         self.follow_selection(document);
         self.material_bar(ui, document, thumbnails, &mut commands);
-        let Some(material) = self.material else {
-            ui.label("No material.");
-            return commands;
+        let world = self.world;
+        let (material, top) = if world {
+            let Some(top) = document.world_graph() else {
+                ui.horizontal(|ui| {
+                    ui.label("The scene has no world graph.");
+                    if ui
+                        .button("New World")
+                        .on_hover_text("A world of the environment's colour, as a graph")
+                        .clicked()
+                    {
+                        let world = World::constant(document.scene().environment);
+                        commands.push((Command::SetWorld(Some(Box::new(world))), None));
+                    }
+                });
+                // Keep the panel's height for the canvas that follows.
+                ui.allocate_space(ui.available_size());
+                return commands;
+            };
+            (WORLD_KEY, top)
+        } else {
+            let Some(material) = self.material else {
+                ui.label("No material.");
+                return commands;
+            };
+            let Some(top) = document.material_graph(material) else {
+                return commands;
+            };
+            (material, top)
         };
-        let Some(top) = document.material_graph(material) else {
-            return commands;
+        let command = |edit: GraphEdit| match world {
+            true => Command::EditWorldGraph(edit),
+            false => Command::EditGraph { material, edit },
         };
         // Inside a group, the canvas shows and edits its view; edits are wrapped to reach
         // the group ([`structure::scoped`]), the one shown this frame even when a key
         // enters or leaves one after drawing.
         self.follow_path(material, &top);
-        let name = &document.scene().materials[material].name;
+        let name = match world {
+            true => "World",
+            false => document.scene().materials[material].name.as_str(),
+        };
         for (edit, gesture) in self.scope_bar(ui, name, &top) {
-            commands.push((Command::EditGraph { material, edit }, gesture));
+            commands.push((command(edit), gesture));
         }
         let scope = self.path.last().cloned();
         let view = (scope.as_ref()).and_then(|g| graph_edit::group_view(&top, g).ok());
         let graph = view.as_ref().unwrap_or(&top);
-        let error = document.graph_error(material);
+        let error = match world {
+            true => document.world_error(),
+            false => document.graph_error(material),
+        };
         if let Some(e) = error {
             ui.label(
                 RichText::new(format!(
-                    "⚠ {} (the viewport shows the last valid material)",
-                    e.message
+                    "⚠ {} (the viewport shows the last valid {})",
+                    e.message,
+                    if world { "world" } else { "material" }
                 ))
                 .color(Color32::LIGHT_RED),
             );
@@ -377,7 +422,8 @@ impl NodeEditor {
         self.sync(material, graph, &top);
         // Previews are of the material's own nodes (a group's nodes compute per
         // instance): none inside a group.
-        let previews = previews.filter(|_| scope.is_none()).map(|p| {
+        // The world's nodes have no previews: a preview shades a sphere with a material.
+        let previews = previews.filter(|_| scope.is_none() && !world).map(|p| {
             if let Some(source) = document.scene().materials.get(material) {
                 p.want(material, &top, source);
             }
@@ -454,7 +500,7 @@ impl NodeEditor {
         if let Some(moves) = self.moves(graph) {
             edits.push((moves, Some(MOVE_GESTURE)));
         }
-        if scope.is_none() {
+        if scope.is_none() && !world {
             self.viewport_preview_keys(ui, material, graph, canvas);
         }
         edits.extend(self.frame_bars(ui, graph, &frames, canvas));
@@ -497,10 +543,11 @@ impl NodeEditor {
                 edits.push((edit, None));
             }
         }
-        commands.extend(edits.into_iter().map(|(edit, gesture)| {
-            let edit = structure::scoped(scope.as_deref(), edit);
-            (Command::EditGraph { material, edit }, gesture)
-        }));
+        commands.extend(
+            edits.into_iter().map(|(edit, gesture)| {
+                (command(structure::scoped(scope.as_deref(), edit)), gesture)
+            }),
+        );
         commands
     }
 
@@ -590,6 +637,16 @@ impl NodeEditor {
                 .map(|texture| egui::Image::new((texture.id(), egui::vec2(side, side))))
         };
         ui.horizontal(|ui| {
+            ui.selectable_value(&mut self.world, false, "Object")
+                .on_hover_text("The node graph of the selected object's material");
+            ui.selectable_value(&mut self.world, true, "World")
+                .on_hover_text(
+                    "The world's node graph: the light from every direction no object covers",
+                );
+            if self.world {
+                return;
+            }
+            ui.separator();
             let label = ui.label("Material");
             let current = self
                 .material
