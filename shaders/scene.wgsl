@@ -10,6 +10,7 @@ const INV_4PI: f32 = 0.07957747154594766788;
 // Params.flags
 const FLAG_LIGHT_SAMPLING: u32 = 1u;
 const FLAG_ENVIRONMENT_MAP: u32 = 2u;
+const FLAG_SHADOW_CATCHER: u32 = 4u;
 
 // Params.sampler (shaders/rng.wgsl)
 const SAMPLER_INDEPENDENT: u32 = 0u;
@@ -116,6 +117,7 @@ const NO_GRID: u32 = 0xffffffffu;
 const INSTANCE_HAS_NORMALS: u32 = 1u;
 const INSTANCE_HAS_UVS: u32 = 2u;
 const INSTANCE_HAS_UV1: u32 = 4u;
+const INSTANCE_SHADOW_CATCHER: u32 = 8u;
 
 // A fixed-parameter material: the principled parameters packed as `principled_unpack`
 // reads them (generated from src/shader/principled.rs, like PRINCIPLED_VEC4S).

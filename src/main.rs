@@ -71,6 +71,9 @@ enum GroundArg {
     None,
     /// A matte grey plane under the model's bounds, which its shadow falls on.
     Plane,
+    /// The plane as a shadow catcher: the image holds the model and its shadow as alpha
+    /// over a transparent background (write an EXR to keep the alpha).
+    Catcher,
 }
 
 impl From<GroundArg> for lookdev::Ground {
@@ -78,6 +81,7 @@ impl From<GroundArg> for lookdev::Ground {
         match g {
             GroundArg::None => lookdev::Ground::None,
             GroundArg::Plane => lookdev::Ground::Plane,
+            GroundArg::Catcher => lookdev::Ground::Catcher,
         }
     }
 }
@@ -264,7 +268,8 @@ struct RenderArgs {
     #[arg(long, value_parser = key_parser(&Tonemap::ALL, Tonemap::key))]
     tonemap: Option<Tonemap>,
     /// What an imported model that brings no lights stands on, under the look-dev sky
-    /// and sun it gets: a matte grey plane under its bounds, or nothing.
+    /// and sun it gets: a matte grey plane under its bounds, nothing, or the plane as a
+    /// shadow catcher (the model and its shadow as alpha over a transparent background).
     #[arg(long, value_enum, default_value_t = GroundArg::Plane)]
     ground: GroundArg,
     /// Stop after this many seconds and write what has accumulated.
@@ -747,7 +752,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
     if let Some(why) = denoiser.unavailable() {
         bail!("cannot denoise with {}: {why}", denoiser.key());
     }
+    // A shadow catcher's alpha is an AOV too.
     settings.aovs = denoiser != Denoiser::None
+        || scene.instances.iter().any(|i| i.shadow_catcher)
         || args
             .output
             .extension()

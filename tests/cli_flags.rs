@@ -854,3 +854,41 @@ fn resource_limit_flags_lower_and_raise_the_limits() {
     assert!(warning.contains("--max-triangles"), "{warning}");
     assert_eq!(meshes(&["--ground", "none"]).0, 1);
 }
+
+/// `--ground catcher` on a model without lights: the EXR's alpha holds the model (1), its
+/// shadow (in between) and the transparent background (0, with no colour).
+#[test]
+fn ground_catcher_writes_the_model_and_its_shadow_as_alpha() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("ball.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::uv_sphere(32, 16, true), &glb).unwrap();
+    let out = dir.path().join("ball.exr");
+    render(
+        &out,
+        &[
+            glb.to_str().unwrap(),
+            "--ground",
+            "catcher",
+            "--size",
+            "48x32",
+            "--spp",
+            "16",
+        ],
+    );
+    let exr = read_exr(&out);
+    let alpha = exr.channel("A");
+    let centre = (exr.height / 2) * exr.width + exr.width / 2;
+    assert!(
+        alpha[centre] > 0.99,
+        "the ball's alpha is {}",
+        alpha[centre]
+    );
+    // The top-left corner looks above the horizon: transparent, black.
+    assert_eq!(alpha[0], 0.0);
+    assert_eq!(exr.rgb(0), [0.0; 3]);
+    let shadowed = alpha.iter().filter(|a| **a > 0.3 && **a < 0.99).count();
+    assert!(
+        shadowed > 5,
+        "{shadowed} pixels of partial alpha: no shadow"
+    );
+}

@@ -3,7 +3,7 @@
 //! types and presses keys. The viewport accumulates on a worker thread and stops at a
 //! small sample limit, so the tests step frames until it reports what they wait for.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::time::Duration;
 
 use egui::accesskit::{self, Role};
@@ -384,7 +384,13 @@ fn a_gltf_opens_through_the_importer_plugin_and_saves_as_a_kiln_scene() {
     harness.step();
     assert_eq!(harness.state().error(), None);
     let imported = harness.state().document().scene().clone();
-    assert_eq!(imported.triangle_count(), 2, "the quad's two triangles");
+    // The quad brings no lights: the look-dev default stands it on a ground (two more).
+    assert_eq!(
+        imported.triangle_count(),
+        4,
+        "the quad's two triangles and the ground's"
+    );
+    assert!(imported.world.is_some() && imported.instances[1].name == "ground");
     // An imported file is not a Kiln scene: saving asks where, then writes one.
     assert_eq!(harness.state().document().path(), None);
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::S);
@@ -477,20 +483,26 @@ fn render_image_runs_in_the_background_and_exports_the_result() {
     assert_eq!((image.width(), image.height()), (48, 32));
 }
 
-#[test]
-fn view_settings_change_the_display_not_the_samples_and_are_saved_with_the_scene() {
-    let dir = tempfile::tempdir().unwrap();
-    let path = dir.path().join("looks.kiln");
+/// The editor on the Cornell box, tall enough for the Render tab's view settings and their
+/// menu below the sampling and denoising rows (and the World tab's sky), saving to `path`,
+/// once the viewport shows its first samples.
+fn tall_editor_saving_to(path: &Path) -> Harness<'static, EditorApp> {
     let mut dialogs = ScriptedDialogs::default();
-    dialogs.save.push_back(path.clone());
-    // Tall enough for the Render tab's view settings and their menu below the sampling
-    // and denoising rows.
+    dialogs.save.push_back(path.to_owned());
     let mut harness = start(Setup {
         dialogs,
         size: egui::vec2(1280.0, 1100.0),
         ..Setup::default()
     });
     step_until(&mut harness, "the first samples", samples_done);
+    harness
+}
+
+#[test]
+fn view_settings_change_the_display_not_the_samples_and_are_saved_with_the_scene() {
+    let dir = tempfile::tempdir().unwrap();
+    let path = dir.path().join("looks.kiln");
+    let mut harness = tall_editor_saving_to(&path);
     let restarts = harness.state().viewport_status().unwrap().restarts;
     harness.get_by_label("📷 Render").click();
     harness.step();
@@ -1024,14 +1036,7 @@ fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
 fn the_world_tab_makes_and_edits_a_sky_and_saves_it() {
     let dir = tempfile::tempdir().unwrap();
     let path = dir.path().join("sky.kiln");
-    let mut dialogs = ScriptedDialogs::default();
-    dialogs.save.push_back(path.clone());
-    let mut harness = start(Setup {
-        dialogs,
-        size: egui::vec2(1280.0, 1100.0),
-        ..Setup::default()
-    });
-    step_until(&mut harness, "the first samples", samples_done);
+    let mut harness = tall_editor_saving_to(&path);
     harness.get_by_label("🌐 World").click();
     harness.step();
     harness.get_by_label("Use Sky Texture").click();

@@ -253,6 +253,7 @@ fn hand_built_scene_with_every_attribute_reloads_equal() {
     scene.instances[1].name = "Teapot \"one\"".into();
     scene.instances[3].name = "hidden".into();
     scene.instances[3].visible = false;
+    scene.instances[2].shadow_catcher = true;
     scene.lights = vec![
         Light::Point {
             position: Vec3::new(0.0, 4.0, 0.0),

@@ -14,7 +14,9 @@ use glam::{Affine3A, Vec3};
 use kiln::material::{Graph, Input, Link, Node, Param, Value};
 use kiln::render::environment_cdf::luminance;
 use kiln::render::world_bake::{Environment, bake_world, lookdev_exposure};
+use kiln::render::{RenderControl, Renderer};
 use kiln::scene::{Camera, EnvironmentMap, Light, Material, Scene, World, lookdev, shapes};
+use std::sync::Arc;
 
 /// A world of one Sky Texture into the output, its sun at `elevation` degrees, with
 /// these amounts of air, dust and ozone.
@@ -436,4 +438,81 @@ fn an_import_without_lights_or_camera_gets_the_lookdev_default() {
         dark < 0.5 * light,
         "the ground in the ball's shadow is {dark}, beside it {light}"
     );
+}
+
+/// `--ground catcher`: the ground is a shadow catcher, so the camera sees the ball, the
+/// ball's shadow as alpha (a shadow's opacity: the share of light the ball blocks) and a
+/// transparent background; the export's alpha is that coverage, its colour black there.
+#[test]
+fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
+    let dir = tempfile::tempdir().unwrap();
+    let glb = dir.path().join("ball.glb");
+    kiln::bench::write_glb(&shapes::uv_sphere(48, 24, true), &glb).unwrap();
+    let mut scene = common::bundled_plugins()
+        .import(&glb)
+        .expect("imports")
+        .scene;
+    lookdev::add_ground(&mut scene, lookdev::Ground::Catcher);
+    let (width, height) = (96u32, 64u32);
+    let mut s = settings(width, height, 64);
+    s.aovs = true;
+    let ctx = gpu();
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, s).expect("renderer");
+    renderer
+        .render(0..64, RenderControl::default())
+        .expect("render");
+    assert!(renderer.transparent());
+    let film = renderer.read_film().expect("film");
+    let alpha = renderer
+        .read_aovs()
+        .expect("aovs")
+        .expect("asked for")
+        .alpha;
+    let radiance = film.radiance();
+    let at = |p: Vec3| {
+        let (x, y) = project(&scene.camera, p, width, height);
+        y as usize * width as usize + x as usize
+    };
+    let sun = lookdev::world().suns().unwrap()[0].direction;
+    // The ball's bounds (the scene's include the ground).
+    let ball = &scene.instances[0];
+    let (lo, hi) = scene.meshes[ball.mesh]
+        .positions
+        .iter()
+        .map(|p| ball.transform.transform_point3(*p))
+        .fold((Vec3::MAX, Vec3::MIN), |(lo, hi), p| (lo.min(p), hi.max(p)));
+    let c = (lo + hi) * 0.5;
+    let shadow = at(c - sun * ((c.y - lo.y) / sun.y));
+    let far = at(Vec3::new(
+        c.x - 3.0 * (hi.x - lo.x),
+        lo.y,
+        c.z + 0.5 * (hi.z - lo.z),
+    ));
+    let ball = at(c);
+    let sky = 0; // the top-left pixel looks above the horizon
+    eprintln!(
+        "catcher: alpha ball {:.3}, shadow {:.3}, far ground {:.3}, sky {:.3}",
+        alpha[ball], alpha[shadow], alpha[far], alpha[sky]
+    );
+    assert!(alpha[ball] > 0.99, "the ball's alpha is {}", alpha[ball]);
+    assert!(
+        alpha[shadow] > 0.6,
+        "the shadow's alpha is {}",
+        alpha[shadow]
+    );
+    assert!(
+        alpha[far] < 0.15,
+        "the far ground's alpha is {}",
+        alpha[far]
+    );
+    assert_eq!(alpha[sky], 0.0);
+    for i in [shadow, far, sky] {
+        assert_eq!(radiance[i], Vec3::ZERO, "pixel {i} has colour");
+    }
+    let export =
+        kiln::render::export_film(&renderer, scene.settings.view, kiln::scene::Denoiser::None)
+            .expect("export");
+    for i in [ball, shadow, far, sky] {
+        assert_eq!(export.radiance[4 * i + 3], alpha[i].clamp(0.0, 1.0));
+    }
 }

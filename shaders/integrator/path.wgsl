@@ -31,6 +31,9 @@ var<private> aov_depth: f32;
 // Light emitted by what the camera sees (surfaces, the sky), which the denoiser keeps
 // out of the light it filters.
 var<private> aov_emission: vec3<f32>;
+// Coverage: 1 where the camera ray meets a surface, 0 where it leaves the scene, and on a
+// shadow catcher whether the light sampled from it was blocked (`catcher_shadow`).
+var<private> aov_alpha: f32;
 
 // Surfaces a path may pass through (alpha cut-outs) before it counts as lost.
 const MAX_PASS_THROUGH: u32 = 64u;
@@ -237,6 +240,20 @@ fn sample_direct(v: ScatterVertex, p: Principled, beyond: Media) -> vec3<f32> {
     return f * tr * ls.radiance * (w / ls.pdf);
 }
 
+// A shadow catcher met by the camera ray (Cycles' shadow catcher, as the opacity of the
+// shadow alone): 1 when the light sampled from its point `pe`, on the side `n` faces, is
+// blocked by an object, 0 when it arrives or gives the point nothing. Averaged over a
+// pixel's samples, the share of light blocked, lights picked by power as next-event
+// estimation picks them.
+fn catcher_shadow(pe: PointError, n: vec3<f32>) -> f32 {
+    let ls = sample_light(pe.p);
+    if (ls.pdf <= 0.0 || dot(ls.wi, n) <= 0.0 || all(ls.radiance == vec3<f32>(0.0))) {
+        return 0.0;
+    }
+    let ray = Ray(offset_ray_origin(pe, n, ls.wi), ls.wi);
+    return select(0.0, 1.0, occluded(ray, ls.dist * (1.0 - 1e-4)));
+}
+
 // What a random walk leaves by: a white Lambertian surface.
 fn walk_exit_surface() -> Principled {
     var p = principled_default();
@@ -400,6 +417,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     }
                 }
                 if (!hit.hit) {
+                    if (depth == 0u && (params.flags & FLAG_SHADOW_CATCHER) != 0u) {
+                        // Beside a shadow catcher the background is transparent: the
+                        // camera sees nothing here (alpha 0).
+                        break;
+                    }
                     var w = 1.0;
                     if (nee && !prev_delta && params.environment.w > 0.0) {
                         w = power_heuristic(prev_bsdf_pdf, environment_light_pdf(vertex, ray.dir));
@@ -414,6 +436,11 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 s = surface_at(hit);
                 let material = fetch_material(s.material);
                 let front = dot(ray.dir, s.ng) < 0.0;
+                if (depth == 0u && (fetch_instance(hit.instance).flags & INSTANCE_SHADOW_CATCHER) != 0u) {
+                    // The camera sees a shadow catcher: only its shadow, as alpha.
+                    aov_alpha = catcher_shadow(s.pe, select(-s.ng, s.ng, front));
+                    break;
+                }
                 if (FEATURE_VOLUME && material.boundary_only != 0u) {
                     // A volume's bare boundary: the path enters or leaves its medium unchanged.
                     if (front) {
@@ -446,6 +473,9 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     continue;
                 }
 
+                if (depth == 0u) {
+                    aov_alpha = 1.0;
+                }
                 let emission = me.emission;
                 if (front && any(emission > vec3<f32>(0.0))) {
                     var w = 1.0;
@@ -658,6 +688,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         aov_normal = vec3<f32>(0.0);
         aov_depth = 0.0;
         aov_emission = vec3<f32>(0.0);
+        aov_alpha = 0.0;
         let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
         let primary = camera_ray(film_pos, rand2());
         var l: vec3<f32>;
@@ -673,7 +704,7 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         if (FEATURE_AOVS) {
             aov_a += vec4<f32>(aov_albedo, aov_depth);
             aov_n += vec4<f32>(aov_normal, 1.0);
-            aov_e += vec4<f32>(aov_emission, 0.0);
+            aov_e += vec4<f32>(aov_emission, aov_alpha);
         }
         if (FEATURE_NOISE) {
             // The second moment of the sample's r + g + b, for the noise estimate; Kahan

@@ -122,6 +122,28 @@ impl ExportFilm {
         }
     }
 
+    /// Gives the film coverage `alpha` (one value per pixel): the radiance stays
+    /// premultiplied (what the renderer averaged, as EXR expects), and the display colour
+    /// becomes the radiance over alpha under `view` (straight alpha, as PNG expects).
+    pub fn set_alpha(&mut self, alpha: &[f32], view: ViewSettings) {
+        for (i, &a) in alpha.iter().enumerate() {
+            let a = a.clamp(0.0, 1.0);
+            let (rgba, display) = (
+                &mut self.radiance[4 * i..4 * i + 4],
+                &mut self.display[4 * i..4 * i + 4],
+            );
+            rgba[3] = a;
+            let c = glam::Vec3::new(rgba[0], rgba[1], rgba[2]) / a.max(1e-6);
+            let d = if a > 0.0 {
+                view.tonemap.apply(c * view.exposure_ev.exp2())
+            } else {
+                glam::Vec3::ZERO
+            };
+            display[..3].copy_from_slice(&d.to_array().map(srgb_encode));
+            display[3] = a;
+        }
+    }
+
     /// The view the shared writers take (the plugin API's safe film).
     pub fn view(&self) -> kiln_plugin_api::Film<'_> {
         kiln_plugin_api::Film {

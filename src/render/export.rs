@@ -32,6 +32,11 @@ pub fn export_film(
         samples.extend(band.sums.iter().map(|s| s[3] as f32));
     }
     let aovs = renderer.read_aovs()?;
+    if renderer.transparent()
+        && let Some(aovs) = &aovs
+    {
+        film.set_alpha(&aovs.alpha, view);
+    }
     push_layers(renderer, &mut film, aovs, samples)?;
     Ok(film)
 }
@@ -59,6 +64,9 @@ fn export_denoised(
         data: film.radiance().iter().flat_map(|c| c.to_array()).collect(),
     });
     let samples = film.sums.iter().map(|s| s[3] as f32).collect();
+    if renderer.transparent() {
+        export.set_alpha(&aovs.alpha, view);
+    }
     push_layers(renderer, &mut export, Some(aovs), samples)?;
     Ok(export)
 }

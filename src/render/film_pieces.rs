@@ -296,6 +296,7 @@ pub fn read_aov_rows(
             aovs.depth.push(a[3] / samples);
             aovs.emission
                 .extend([e[0], e[1], e[2]].map(|v| v / samples));
+            aovs.alpha.push(e[3] / samples);
             let normal = glam::Vec3::new(n[0], n[1], n[2]);
             let unit = normal.try_normalize().unwrap_or(glam::Vec3::ZERO);
             aovs.normal.extend(unit.to_array());

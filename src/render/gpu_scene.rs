@@ -22,7 +22,7 @@ use crate::shader::bindings::{
 };
 use crate::shader::gpu_types::{
     BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, INSTANCE_SHADOW_CATCHER,
 };
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -203,7 +203,12 @@ pub fn instance_arrays(
                 to_object: rows(inst.transform.inverse()),
                 blas_root: blas_root[inst.mesh],
                 material: inst.material as u32,
-                flags: mesh_flags[inst.mesh],
+                flags: mesh_flags[inst.mesh]
+                    | if inst.shadow_catcher {
+                        INSTANCE_SHADOW_CATCHER
+                    } else {
+                        0
+                    },
                 volume_grid: grids[i as usize],
             }
         })

@@ -35,7 +35,9 @@ use crate::accel::query::Enclosures;
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::Film;
 use crate::scene::Scene;
-use crate::shader::gpu_types::{FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, GpuParams, GpuStats};
+use crate::shader::gpu_types::{
+    FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, FLAG_SHADOW_CATCHER, GpuParams, GpuStats,
+};
 use crate::shader::sampling::Sampling;
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -260,6 +262,9 @@ pub struct Aovs {
     /// The light the camera sees emitted directly, by surfaces and the sky (Cycles' Emit
     /// and Background passes together): part of the image, kept out of the denoiser.
     pub emission: Vec<f32>,
+    /// Coverage: 1 where the camera sees a surface, 0 where it sees the sky, and on a
+    /// shadow catcher the share of the light that objects block (its shadow's opacity).
+    pub alpha: Vec<f32>,
 }
 
 /// Reported after every dispatch.
@@ -465,6 +470,10 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
             0
         } | if gpu.has_environment_map {
             FLAG_ENVIRONMENT_MAP
+        } else {
+            0
+        } | if scene.instances.iter().any(|i| i.shadow_catcher) {
+            FLAG_SHADOW_CATCHER
         } else {
             0
         },
@@ -1178,6 +1187,12 @@ impl Renderer {
             [piece] => Some((&piece.sum, &piece.compensation)),
             _ => None,
         }
+    }
+
+    /// Whether the camera sees a transparent background: the scene has a shadow catcher,
+    /// and exports take their alpha from the coverage AOV ([`Aovs::alpha`]).
+    pub fn transparent(&self) -> bool {
+        self.base_params.flags & FLAG_SHADOW_CATCHER != 0
     }
 
     /// Moves the camera without rebuilding anything: later samples see `camera`. Clear

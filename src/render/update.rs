@@ -121,6 +121,14 @@ impl Renderer {
                 "instances were added, removed or remeshed",
             ));
         }
+        if old
+            .instances
+            .iter()
+            .zip(&new.instances)
+            .any(|(a, b)| a.shadow_catcher != b.shadow_catcher)
+        {
+            return Err(UpdateError::rebuild("a shadow catcher was set or cleared"));
+        }
         if old.materials.len() != new.materials.len() {
             return Err(UpdateError::rebuild("materials were added or removed"));
         }

@@ -370,6 +370,7 @@ fn build_scene(
         let added = scene.instances.last_mut().expect("just added");
         added.name = inst.name.clone();
         added.visible = inst.visible;
+        added.shadow_catcher = inst.shadow_catcher;
     }
     scene.lights = file.lights.iter().map(LightDesc::object).collect();
     Ok(scene)

@@ -43,6 +43,9 @@ pub enum Ground {
     /// A matte grey plane under the model's bounds.
     #[default]
     Plane,
+    /// The plane as a shadow catcher: the camera sees the model, its shadow as alpha and
+    /// a transparent background, for compositing (an EXR keeps the alpha).
+    Catcher,
 }
 
 /// The bounds (lowest, highest corner) of every instance of `scene`, in world space;
@@ -101,7 +104,7 @@ pub fn world() -> World {
 /// Puts `ground` under the bounds of `scene`'s instances (nothing for a scene without
 /// geometry or with [`Ground::None`]).
 pub fn add_ground(scene: &mut Scene, ground: Ground) {
-    if ground == Ground::Plane
+    if ground != Ground::None
         && let Some((lo, hi)) = bounds(scene)
     {
         let radius = ((hi - lo).length() * 0.5).max(1e-6);
@@ -128,6 +131,7 @@ pub fn add_ground(scene: &mut Scene, ground: Ground) {
         );
         if let Some(i) = scene.instances.last_mut() {
             i.name = "ground".into();
+            i.shadow_catcher = ground == Ground::Catcher;
         }
     }
 }

@@ -59,6 +59,10 @@ pub struct Instance {
     /// Hidden objects stay in the scene and its file but are not rendered
     /// ([`Scene::without_hidden`]).
     pub visible: bool,
+    /// A shadow catcher (Cycles' object property): the camera sees only the shadows
+    /// objects cast on it, as alpha, and a transparent background beside it; to every
+    /// other ray it is the surface its material makes (`lookdev::Ground::Catcher`).
+    pub shadow_catcher: bool,
 }
 
 /// A bounce limit no path reaches (the most the editor offers, as Cycles): Russian
@@ -418,6 +422,7 @@ impl Scene {
             transform,
             name: String::new(),
             visible: true,
+            shadow_catcher: false,
         });
     }
 

@@ -101,6 +101,7 @@ pub fn save_scene(
         .map(|inst| InstanceDesc {
             name: inst.name.clone(),
             visible: inst.visible,
+            shadow_catcher: inst.shadow_catcher,
             mesh: mesh_names[inst.mesh].clone(),
             material: material_names[inst.material].clone(),
             transform: TransformDesc {

@@ -514,6 +514,9 @@ pub(super) struct InstanceDesc {
     /// Hidden objects are kept but not rendered.
     #[serde(default = "yes", skip_serializing_if = "is_true")]
     pub(super) visible: bool,
+    /// The camera sees only the shadows cast on it, as alpha.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub(super) shadow_catcher: bool,
 }
 
 fn is_true(b: &bool) -> bool {

@@ -6,6 +6,9 @@ use bytemuck::{Pod, Zeroable};
 pub const FLAG_LIGHT_SAMPLING: u32 = 1;
 /// `Params.flags`: the environment is a map in `env_data`.
 pub const FLAG_ENVIRONMENT_MAP: u32 = 2;
+/// `Params.flags`: the scene has a shadow catcher, and the camera sees a transparent
+/// background (`shaders/integrator/path.wgsl`, `catcher_shadow`).
+pub const FLAG_SHADOW_CATCHER: u32 = 4;
 /// `Params.sampler`: independent random numbers, or Owen-scrambled Sobol' points
 /// (`shaders/rng.wgsl`).
 pub const SAMPLER_INDEPENDENT: u32 = 0;
@@ -16,6 +19,8 @@ pub const FILTER_TABLE_SIZE: u32 = 128;
 pub const INSTANCE_HAS_NORMALS: u32 = 1;
 pub const INSTANCE_HAS_UVS: u32 = 2;
 pub const INSTANCE_HAS_UV1: u32 = 4;
+/// The instance is a shadow catcher ([`crate::scene::Instance::shadow_catcher`]).
+pub const INSTANCE_SHADOW_CATCHER: u32 = 8;
 /// `Instance.volume_grid` of an instance without a grid ([`crate::render::volume_grid`]).
 pub const NO_GRID: u32 = u32::MAX;
 /// `AnalyticLight.kind`
@@ -25,15 +30,17 @@ pub const LIGHT_DISTANT: u32 = 2;
 
 /// Every constant above with its WGSL name, for the test that compares them with
 /// `shaders/scene.wgsl`.
-pub const MIRRORED_CONSTANTS: [(&str, u32); 13] = [
+pub const MIRRORED_CONSTANTS: [(&str, u32); 15] = [
     ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
     ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
+    ("FLAG_SHADOW_CATCHER", FLAG_SHADOW_CATCHER),
     ("SAMPLER_INDEPENDENT", SAMPLER_INDEPENDENT),
     ("SAMPLER_SOBOL", SAMPLER_SOBOL),
     ("FILTER_TABLE_SIZE", FILTER_TABLE_SIZE),
     ("INSTANCE_HAS_NORMALS", INSTANCE_HAS_NORMALS),
     ("INSTANCE_HAS_UVS", INSTANCE_HAS_UVS),
     ("INSTANCE_HAS_UV1", INSTANCE_HAS_UV1),
+    ("INSTANCE_SHADOW_CATCHER", INSTANCE_SHADOW_CATCHER),
     ("NO_GRID", NO_GRID),
     ("LIGHT_POINT", LIGHT_POINT),
     ("LIGHT_SPOT", LIGHT_SPOT),
