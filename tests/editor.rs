@@ -650,6 +650,38 @@ fn an_import_adds_to_the_scene_as_one_undo_step() {
     assert_eq!(*harness.state().document().scene(), start);
 }
 
+/// A model without lights imported into a new (unlit) scene is staged as `kiln edit
+/// model.glb` opens one: the sky world, the look-dev exposure and a ground under it, in
+/// the same undo step as the import.
+#[test]
+fn an_import_into_an_unlit_scene_gets_the_lookdev_default_in_one_undo_step() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.import.push_back(quad_glb(dir.path()));
+    let mut harness = harness_with(dialogs, bundled_plugins());
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::N);
+    harness.step();
+    let empty = harness.state().document().scene().clone();
+    assert!(harness.state().document().unlit());
+    harness.get_by_label("File").click();
+    harness.step();
+    harness.get_by_label("Import…").click();
+    harness.step();
+    assert_eq!(harness.state().error(), None);
+    let scene = harness.state().document().scene().clone();
+    assert!(scene.world.is_some());
+    assert_eq!(
+        scene.settings.view.exposure_ev,
+        kiln::scene::lookdev::EXPOSURE_EV
+    );
+    assert_eq!(scene.instances.len(), 2, "the quad and its ground");
+    assert_eq!(scene.instances[1].name, "ground");
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(*harness.state().document().scene(), empty);
+}
+
 #[test]
 fn an_autosave_left_by_a_crash_is_offered_and_recovered() {
     let state = tempfile::tempdir().unwrap();

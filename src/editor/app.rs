@@ -13,7 +13,7 @@ use glam::Vec3;
 
 use crate::plugin::PluginHost;
 use crate::render::{GpuContext, KernelKind};
-use crate::scene::{Camera, Scene};
+use crate::scene::{Camera, Scene, lookdev};
 
 use super::document::{Command, Document, GestureId, Selection};
 use super::files::{FileDialogs, open_document, save_document};
@@ -553,7 +553,7 @@ impl EditorApp {
     fn new_document(&mut self) {
         let camera = Camera::look_at(Vec3::new(7.0, 5.0, 7.0), Vec3::ZERO, 40.0);
         let mut scene = Scene::empty(camera);
-        scene.environment = Vec3::splat(0.05);
+        scene.environment = Vec3::splat(super::document::NEW_SCENE_GREY);
         self.replace_document(Document::new(scene, None, Vec::new()));
     }
 
@@ -575,8 +575,28 @@ impl EditorApp {
                 return;
             }
         };
-        let command = self.document.append(imported.scene, imported.images);
-        self.apply(command, None);
+        // A model without lights imported into a scene that nothing lights is staged as
+        // `kiln edit model.obj` opens one (the look-dev default), in the same undo step.
+        let stage = !imported.has_lights && self.document.unlit();
+        let mut scene = imported.scene;
+        if !stage {
+            let command = self.document.append(scene, imported.images);
+            self.apply(command, None);
+            return;
+        }
+        lookdev::add_ground(&mut scene, lookdev::Ground::Plane);
+        let world = scene.world.take().unwrap_or_else(lookdev::world);
+        let mut view = self.document.scene().settings.view;
+        view.exposure_ev = lookdev::EXPOSURE_EV;
+        let append = self.document.append(scene, imported.images);
+        let commands = vec![
+            append,
+            Command::SetWorld(Some(Box::new(world))),
+            Command::SetView(view),
+        ];
+        if let Err(e) = self.document.apply_all(commands) {
+            self.error = Some(e.to_string());
+        }
     }
 
     /// Recovers the offered autosave as an unsaved document (Save asks where, starting

@@ -258,6 +258,9 @@ pub const UNDO_STEPS: usize = 256;
 /// `saved_step` of a document whose saved state is no longer in its undo history.
 const SAVED_STATE_DROPPED: u64 = u64::MAX;
 
+/// The environment of a new scene: Blender's grey world, enough to see by and no light.
+pub const NEW_SCENE_GREY: f32 = 0.05;
+
 /// The scene being edited with the editor's state of it and its undo history.
 pub struct Document {
     /// The objects' and lights' names and visibility live in the scene (saved with it).
@@ -598,6 +601,58 @@ impl Document {
         self.redo.clear();
         self.bump(changes_image);
         Ok(())
+    }
+
+    /// Applies `commands` in order as one undo step (an import staged with its world and
+    /// exposure). A command refused undoes those applied before it: the document is left
+    /// as it was.
+    pub fn apply_all(&mut self, commands: Vec<Command>) -> Result<(), CommandError> {
+        let mut inverses = Vec::with_capacity(commands.len());
+        let mut changes_image = false;
+        for command in commands {
+            changes_image |= command.changes_image();
+            match self.execute(command) {
+                Ok(inverse) => inverses.push(inverse),
+                Err(e) => {
+                    for inverse in inverses.into_iter().rev() {
+                        if let Err(e) = self.execute(inverse) {
+                            tracing::error!("a refused batch did not undo: {e}");
+                        }
+                    }
+                    return Err(e);
+                }
+            }
+        }
+        let id = self.next_step;
+        self.next_step += 1;
+        self.undo.push(Step {
+            id,
+            inverses,
+            key: (u8::MAX, usize::MAX, ""),
+            gesture: None,
+        });
+        if self.undo.len() > UNDO_STEPS {
+            self.drop_oldest_step();
+        }
+        self.open_gesture = None;
+        self.redo.clear();
+        self.bump(changes_image);
+        Ok(())
+    }
+
+    /// Whether nothing lights the scene: no lights, no world graph or environment map, an
+    /// environment no brighter than a new scene's grey ([`NEW_SCENE_GREY`]) and no
+    /// emissive object (an import into it gets the look-dev default).
+    pub fn unlit(&self) -> bool {
+        let s = &self.scene;
+        s.lights.is_empty()
+            && s.world.is_none()
+            && s.environment.max_element() <= NEW_SCENE_GREY
+            && s.environment_map.is_none()
+            && !s
+                .instances
+                .iter()
+                .any(|i| s.materials[i.material].is_emissive())
     }
 
     /// Forgets the oldest undo step. The state below the stack is then the one that step
@@ -1438,6 +1493,31 @@ mod tests {
         assert_eq!(doc.scene(), &before);
         assert!(doc.redo());
         assert_eq!(doc.scene().instances.len(), before.instances.len() + added);
+    }
+
+    #[test]
+    fn a_batch_is_one_undo_step_and_a_refused_one_changes_nothing() {
+        let mut doc = document();
+        let before = doc.scene().clone();
+        let bad = Command::SetEnvironmentColor(Vec3::new(-1.0, 0.0, 0.0));
+        let refused = doc.apply_all(vec![
+            Command::SetEnvironmentColor(Vec3::splat(0.5)),
+            Command::SetWorld(Some(Box::new(crate::scene::lookdev::world()))),
+            bad,
+        ]);
+        assert!(refused.is_err());
+        assert_eq!(*doc.scene(), before);
+        assert!(!doc.undo(), "a refused batch leaves no step");
+        doc.apply_all(vec![
+            Command::SetEnvironmentColor(Vec3::splat(0.5)),
+            Command::SetWorld(Some(Box::new(crate::scene::lookdev::world()))),
+        ])
+        .unwrap();
+        assert!(doc.scene().world.is_some());
+        assert!(doc.undo());
+        assert_eq!(*doc.scene(), before, "one undo takes the whole batch back");
+        assert!(doc.redo());
+        assert_eq!(doc.scene().environment, Vec3::splat(0.5));
     }
 
     #[test]
