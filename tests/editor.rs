@@ -637,17 +637,22 @@ fn an_import_adds_to_the_scene_as_one_undo_step() {
     let mut harness = harness_with(dialogs, plugins);
     harness.step();
     let start = harness.state().document().scene().clone();
-    harness.get_by_label("File").click();
-    harness.step();
-    harness.get_by_label("Import…").click();
-    harness.step();
-    assert_eq!(harness.state().error(), None);
+    import_through_the_menu(&mut harness);
     let scene = harness.state().document().scene().clone();
     assert_eq!(scene.instances.len(), start.instances.len() + 1);
     assert_eq!(scene.triangle_count(), start.triangle_count() + 2);
     harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
     harness.step();
     assert_eq!(*harness.state().document().scene(), start);
+}
+
+/// File ▸ Import… (the dialog answers with the file queued), which must succeed.
+fn import_through_the_menu(harness: &mut Harness<'_, EditorApp>) {
+    harness.get_by_label("File").click();
+    harness.step();
+    harness.get_by_label("Import…").click();
+    harness.step();
+    assert_eq!(harness.state().error(), None);
 }
 
 /// A model without lights imported into a new (unlit) scene is staged as `kiln edit
@@ -664,11 +669,7 @@ fn an_import_into_an_unlit_scene_gets_the_lookdev_default_in_one_undo_step() {
     harness.step();
     let empty = harness.state().document().scene().clone();
     assert!(harness.state().document().unlit());
-    harness.get_by_label("File").click();
-    harness.step();
-    harness.get_by_label("Import…").click();
-    harness.step();
-    assert_eq!(harness.state().error(), None);
+    import_through_the_menu(&mut harness);
     let scene = harness.state().document().scene().clone();
     assert!(scene.world.is_some());
     assert_eq!(

@@ -437,7 +437,7 @@ fn an_import_without_lights_or_camera_gets_the_lookdev_default() {
     // The shadow of the ball's centre on the ground, and the ground as far on the sun's
     // side: the first is in shadow, the second lit.
     let sun = lookdev::world().suns().unwrap()[0].direction;
-    let (lo, hi) = lookdev::bounds(&mask).unwrap();
+    let (lo, hi) = mask.bounds().unwrap();
     let c = (lo + hi) * 0.5;
     let shadow = c - sun * ((c.y - lo.y) / sun.y);
     let beside = Vec3::new(2.0 * c.x - shadow.x, lo.y, 2.0 * c.z - shadow.z);

@@ -91,30 +91,16 @@ pub fn zoom(camera: &Camera, steps: f32) -> Camera {
     }
 }
 
-/// The world-space bounds of every object; None for a scene without geometry.
-fn scene_bounds(scene: &Scene) -> Option<(Vec3, Vec3)> {
-    let mut lo = Vec3::splat(f32::INFINITY);
-    let mut hi = Vec3::splat(f32::NEG_INFINITY);
-    for instance in &scene.instances {
-        for p in &scene.meshes[instance.mesh].positions {
-            let w = instance.transform.transform_point3(*p);
-            lo = lo.min(w);
-            hi = hi.max(w);
-        }
-    }
-    (lo.x <= hi.x).then_some((lo, hi))
-}
-
 /// The diagonal of the scene's bounds (1 for a scene without geometry): what fly speed
 /// scales with, so that a room and a city both take seconds to cross.
 pub fn scene_size(scene: &Scene) -> f32 {
-    scene_bounds(scene).map_or(1.0, |(lo, hi)| (hi - lo).length())
+    scene.bounds().map_or(1.0, |(lo, hi)| (hi - lo).length())
 }
 
 /// Keeps the view's direction and field of view and moves it back until every object
 /// fits, with the pivot at the centre of their bounds (Blender's Frame All, Home).
 pub fn frame_all(camera: &Camera, scene: &Scene) -> Camera {
-    let Some((lo, hi)) = scene_bounds(scene) else {
+    let Some((lo, hi)) = scene.bounds() else {
         return *camera;
     };
     let centre = (lo + hi) * 0.5;

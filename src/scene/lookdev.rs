@@ -48,25 +48,10 @@ pub enum Ground {
     Catcher,
 }
 
-/// The bounds (lowest, highest corner) of every instance of `scene`, in world space;
-/// `None` for a scene without geometry.
-pub fn bounds(scene: &Scene) -> Option<(Vec3, Vec3)> {
-    let mut lo = Vec3::splat(f32::MAX);
-    let mut hi = Vec3::splat(f32::MIN);
-    for inst in &scene.instances {
-        for p in &scene.meshes[inst.mesh].positions {
-            let w = inst.transform.transform_point3(*p);
-            lo = lo.min(w);
-            hi = hi.max(w);
-        }
-    }
-    (lo.x <= hi.x).then_some((lo, hi))
-}
-
 /// A camera that frames every instance of `scene` from the three-quarter view, the
 /// bounding sphere spanning [`FRAME_FILL`] of the frame's height.
 pub fn camera(scene: &Scene) -> Camera {
-    let Some((lo, hi)) = bounds(scene) else {
+    let Some((lo, hi)) = scene.bounds() else {
         return Camera::look_at(Vec3::new(0.0, 0.0, 5.0), Vec3::ZERO, FIELD_OF_VIEW);
     };
     let centre = (lo + hi) * 0.5;
@@ -105,7 +90,7 @@ pub fn world() -> World {
 /// geometry or with [`Ground::None`]).
 pub fn add_ground(scene: &mut Scene, ground: Ground) {
     if ground != Ground::None
-        && let Some((lo, hi)) = bounds(scene)
+        && let Some((lo, hi)) = scene.bounds()
     {
         let radius = ((hi - lo).length() * 0.5).max(1e-6);
         let centre = (lo + hi) * 0.5;

@@ -431,6 +431,21 @@ impl Scene {
         self.lights.len() - 1
     }
 
+    /// The bounds (lowest, highest corner) of every instance, in world space; `None` for
+    /// a scene without geometry.
+    pub fn bounds(&self) -> Option<(Vec3, Vec3)> {
+        let mut lo = Vec3::splat(f32::INFINITY);
+        let mut hi = Vec3::splat(f32::NEG_INFINITY);
+        for instance in &self.instances {
+            for p in &self.meshes[instance.mesh].positions {
+                let w = instance.transform.transform_point3(*p);
+                lo = lo.min(w);
+                hi = hi.max(w);
+            }
+        }
+        (lo.x <= hi.x).then_some((lo, hi))
+    }
+
     /// The scene as rendered: hidden objects and lights left out.
     pub fn without_hidden(&self) -> Scene {
         let mut scene = self.clone();
