@@ -579,16 +579,29 @@ impl Document {
                 .undo
                 .last()
                 .is_some_and(|s| s.gesture == gesture && s.key == key);
+        self.record(vec![inverse], key, gesture, merge, changes_image);
+        Ok(())
+    }
+
+    /// Records what was just executed: a new undo step of `inverses`, or with `merge` the
+    /// gesture's open step (whose first inverse already restores the state before the
+    /// gesture) under a new id, since it now holds more than when it may have been saved.
+    fn record(
+        &mut self,
+        inverses: Vec<Command>,
+        key: (u8, usize, &'static str),
+        gesture: Option<GestureId>,
+        merge: bool,
+        changes_image: bool,
+    ) {
         let id = self.next_step;
         self.next_step += 1;
         match self.undo.last_mut().filter(|_| merge) {
-            // The step's first inverse already restores the state before the gesture; a
-            // new id, since the step now holds more than when it may have been saved.
             Some(step) => step.id = id,
             None => {
                 self.undo.push(Step {
                     id,
-                    inverses: vec![inverse],
+                    inverses,
                     key,
                     gesture,
                 });
@@ -600,7 +613,6 @@ impl Document {
         self.open_gesture = gesture;
         self.redo.clear();
         self.bump(changes_image);
-        Ok(())
     }
 
     /// Applies `commands` in order as one undo step (an import staged with its world and
@@ -623,20 +635,14 @@ impl Document {
                 }
             }
         }
-        let id = self.next_step;
-        self.next_step += 1;
-        self.undo.push(Step {
-            id,
+        // Its own step: a batch never merges.
+        self.record(
             inverses,
-            key: (u8::MAX, usize::MAX, ""),
-            gesture: None,
-        });
-        if self.undo.len() > UNDO_STEPS {
-            self.drop_oldest_step();
-        }
-        self.open_gesture = None;
-        self.redo.clear();
-        self.bump(changes_image);
+            (u8::MAX, usize::MAX, ""),
+            None,
+            false,
+            changes_image,
+        );
         Ok(())
     }
 
