@@ -561,14 +561,10 @@ fn world_graph_ui(ui: &mut Ui, world: Option<&World>, actions: &mut Vec<WorldAct
         ui.weak(id.as_str());
         ui.end_row();
         for input in &def.inputs {
-            let value = match node.inputs.get(input.name) {
-                Some(Input::Link(_)) => continue,
-                Some(Input::Value(v)) => Some(v.clone()),
-                None => match &input.default {
-                    nodes::Default::Value(v) => Some(v.clone()),
-                    nodes::Default::Implicit(..) => None,
-                },
-            };
+            if matches!(node.inputs.get(input.name), Some(Input::Link(_))) {
+                continue;
+            }
+            let value = def.constant_input(node, input.name);
             let label = parameter_label(input.name);
             let changed = match (value, input.range) {
                 (Some(Value::Float(mut x)), Some(range)) => {

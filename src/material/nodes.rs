@@ -277,6 +277,20 @@ impl NodeDef {
     pub fn param(&self, name: &str) -> Option<&ParamDef> {
         self.params.iter().find(|p| p.name == name)
     }
+
+    /// The value input `name` of `node` (a node of this kind) takes: the value given, or
+    /// the declared default when none is; `None` for a link, an implicit default (a
+    /// property of the shading point) or no such input.
+    pub fn constant_input(&self, node: &super::graph::Node, name: &str) -> Option<Value> {
+        match node.inputs.get(name) {
+            Some(super::graph::Input::Value(v)) => Some(v.clone()),
+            Some(super::graph::Input::Link(_)) => None,
+            None => match &self.input(name)?.default {
+                Default::Value(v) => Some(v.clone()),
+                Default::Implicit(..) => None,
+            },
+        }
+    }
 }
 
 /// Every node type, in the order `docs/NODES.md` lists them.

@@ -108,16 +108,7 @@ pub fn constant_world(world: &World) -> Option<Vec3> {
     };
     let node = graph.nodes.get(&id).filter(|n| n.kind == WORLD_OUTPUT)?;
     let def = nodes::find(WORLD_OUTPUT).expect("the library declares the world output");
-    let value = |socket: &str| -> Option<Value> {
-        match node.inputs.get(socket) {
-            Some(Input::Value(v)) => Some(v.clone()),
-            Some(Input::Link(_)) => None,
-            None => match &def.input(socket)?.default {
-                nodes::Default::Value(v) => Some(v.clone()),
-                nodes::Default::Implicit(..) => None,
-            },
-        }
-    };
+    let value = |socket: &str| def.constant_input(node, socket);
     let colour = match value("color")? {
         Value::Vec3(c) => Vec3::from(c),
         Value::Float(f) => Vec3::splat(f),

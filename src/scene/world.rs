@@ -163,13 +163,9 @@ impl World {
                 continue;
             }
             let value = |socket: &str| -> Result<f32, GraphError> {
-                match node.inputs.get(socket) {
-                    None => match def.input(socket).map(|s| &s.default) {
-                        Some(nodes::Default::Value(Value::Float(v))) => Ok(*v),
-                        _ => unreachable!("the sky's {socket} defaults to a float"),
-                    },
-                    Some(Input::Value(Value::Float(v))) => Ok(*v),
-                    Some(_) => Err(err(
+                match def.constant_input(node, socket) {
+                    Some(Value::Float(v)) => Ok(v),
+                    _ => Err(err(
                         id,
                         Some(socket),
                         "the sun is a light placed from the Sky Texture's sun elevation, \
