@@ -87,6 +87,15 @@ pub struct BenchArgs {
     /// The noise threshold of --tradeoff's adaptive renders.
     #[arg(long, default_value_t = 0.02)]
     pub tradeoff_threshold: f32,
+    /// Render each --tradeoff cell this many times, each with its own seed, and report the
+    /// medians (of the seconds, samples, errors and SSIM, each on its own): one run's time
+    /// on a busy machine, and its error at a few samples, swing widely.
+    #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..))]
+    pub repeat: u32,
+    /// Only the --tradeoff methods whose name contains this text (any case, "plain" is
+    /// always measured: the ratios are to it); may be given several times. All by default.
+    #[arg(long = "method", value_name = "TEXT")]
+    pub methods: Vec<String>,
     /// Also write --tradeoff's rows as CSV to this file.
     #[arg(long, value_name = "FILE")]
     pub csv: Option<std::path::PathBuf>,
@@ -118,13 +127,18 @@ impl BenchArgs {
     }
 
     fn wants(&self, scene: &str) -> bool {
-        let scene = scene.to_lowercase();
-        self.scenes.is_empty()
-            || self
-                .scenes
-                .iter()
-                .any(|s| scene.contains(&s.to_lowercase()))
+        matches_any(&self.scenes, scene)
     }
+
+    fn wants_method(&self, method: &str) -> bool {
+        method == "plain" || matches_any(&self.methods, method)
+    }
+}
+
+/// Whether `name` contains any of `filters` (any case), or `filters` is empty.
+fn matches_any(filters: &[String], name: &str) -> bool {
+    let name = name.to_lowercase();
+    filters.is_empty() || filters.iter().any(|f| name.contains(&f.to_lowercase()))
 }
 
 /// A displaced sphere on a floor, lit by a quad light and a dim sky.
@@ -616,11 +630,12 @@ fn tradeoff(
         "Adapter: {}; {}x{} px, specialised kernels but where named, each scene's settings, \
          reference {} spp (two seeds); adaptive: --noise-threshold {threshold}; relMSE: \
          squared error over the reference squared plus 0.01; SSIM of the tone-mapped \
-         luminance.",
+         luminance; each cell the median of {} run(s), seeds 1 on.",
         ctx.describe(),
         args.size,
         args.size,
-        2 * half
+        2 * half,
+        args.repeat,
     )?;
     writeln!(out)?;
     writeln!(
@@ -629,7 +644,7 @@ fn tradeoff(
     )?;
     writeln!(out, "|---|---|---:|---:|---:|---:|---:|---:|---:|---:|")?;
     let mut csv =
-        String::from("scene,method,budget_s,seconds,spp,msamples_per_s,rmse,rel_mse,ssim\n");
+        String::from("scene,method,budget_s,seconds,spp,msamples_per_s,rmse,rel_mse,ssim,runs\n");
     let mut rows = Vec::new();
     let mut headlines = Vec::new();
     for (name, scene) in scenes {
@@ -642,48 +657,34 @@ fn tradeoff(
         let pixels = (size * size) as f64;
         for &budget in &args.budgets {
             let mut plain = None;
-            for method in tradeoff_methods(base, threshold) {
-                let mut r = Renderer::new(Arc::clone(ctx), scene, method.settings)?;
-                // The driver compiles a kernel at its first dispatch: not the budget's.
-                r.render(0..1, RenderControl::default())?;
-                r.clear_film();
-                let deadline = Instant::now() + Duration::from_secs_f64(budget);
-                let stats = r.render(
-                    0..u32::MAX,
-                    RenderControl {
-                        deadline: Some(deadline),
-                        ..RenderControl::default()
-                    },
-                )?;
-                let start = Instant::now();
-                let film = r.read_film()?;
-                let image = match (r.read_aovs()?, r.read_second_moments()?) {
-                    (Some(aovs), Some(moments)) if method.denoiser != scene::Denoiser::None => {
-                        crate::render::denoise::denoise_film(
-                            ctx,
-                            &film,
-                            &aovs,
-                            &moments,
-                            method.denoiser,
-                        )?
-                    }
-                    _ => film,
-                }
-                .radiance();
-                let denoise_seconds = if method.denoiser == scene::Denoiser::None {
-                    0.0
-                } else {
-                    start.elapsed().as_secs_f64()
+            let methods = tradeoff_methods(base, threshold);
+            for method in methods.into_iter().filter(|m| args.wants_method(&m.name)) {
+                let runs = (0..args.repeat)
+                    .map(|k| {
+                        let settings = RenderSettings {
+                            seed: base.seed + k,
+                            ..method.settings
+                        };
+                        measure_at_budget(ctx, scene, settings, method.denoiser, budget)
+                    })
+                    .collect::<Result<Vec<_>>>()?;
+                let median = |f: &dyn Fn(&BudgetRun) -> f64| {
+                    let mut values: Vec<f64> = runs.iter().map(f).collect();
+                    values.sort_by(f64::total_cmp);
+                    let n = values.len();
+                    (values[(n - 1) / 2] + values[n / 2]) / 2.0
                 };
-                let seconds = stats.elapsed.as_secs_f64() + denoise_seconds;
-                let rmse = (mean_square_difference(&image, &reference) - reference_noise)
-                    .max(0.0)
-                    .sqrt();
-                let rel = relative_mse(&image, &reference);
-                let similarity = ssim(&image, &reference, size, size);
+                let seconds = median(&|r| r.seconds);
+                let spp = median(&|r| r.pixel_samples / pixels);
+                let rate = median(&|r| r.pixel_samples / r.render_seconds / 1e6);
+                let rmse = median(&|r| {
+                    (mean_square_difference(&r.image, &reference) - reference_noise)
+                        .max(0.0)
+                        .sqrt()
+                });
+                let rel = median(&|r| relative_mse(&r.image, &reference));
+                let similarity = median(&|r| ssim(&r.image, &reference, size, size));
                 let plain_rel = *plain.get_or_insert(rel);
-                let spp = stats.pixel_samples as f64 / pixels;
-                let rate = stats.pixel_samples as f64 / stats.elapsed.as_secs_f64() / 1e6;
                 let method_name = &method.name;
                 writeln!(
                     out,
@@ -691,11 +692,12 @@ fn tradeoff(
                     rel / plain_rel
                 )?;
                 csv.push_str(&format!(
-                    "{name},{method_name},{budget},{seconds:.3},{spp:.2},{rate:.4},{rmse:.6},{rel:.6},{similarity:.5}\n"
+                    "{name},{method_name},{budget},{seconds:.3},{spp:.2},{rate:.4},{rmse:.6},{rel:.6},{similarity:.5},{}\n",
+                    args.repeat
                 ));
-                if *method_name == "adaptive + atrous" {
+                if method_name.starts_with("adaptive + ") {
                     headlines.push(format!(
-                        "{name}: at {budget} s, adaptive + atrous has {:.1}× lower relMSE than plain",
+                        "{name}: at {budget} s, {method_name} has {:.1}× lower relMSE than plain",
                         plain_rel / rel.max(1e-30)
                     ));
                 }
@@ -723,6 +725,60 @@ fn tradeoff(
         writeln!(out, "{line}")?;
     }
     Ok(())
+}
+
+/// One render of a `--tradeoff` cell: the image (denoised where asked) and its cost.
+struct BudgetRun {
+    image: Vec<Vec3>,
+    /// Rendering and denoising.
+    seconds: f64,
+    render_seconds: f64,
+    pixel_samples: f64,
+}
+
+/// Renders `scene` until `budget` seconds have passed, with its own renderer built (and
+/// its kernel compiled and dispatched once) before the clock starts, and denoises the film
+/// with `denoiser`, whose time counts.
+fn measure_at_budget(
+    ctx: &Arc<GpuContext>,
+    scene: &Scene,
+    settings: RenderSettings,
+    denoiser: scene::Denoiser,
+    budget: f64,
+) -> Result<BudgetRun> {
+    let mut r = Renderer::new(Arc::clone(ctx), scene, settings)?;
+    // The driver compiles a kernel at its first dispatch: not the budget's.
+    r.render(0..1, RenderControl::default())?;
+    r.clear_film();
+    let deadline = Instant::now() + Duration::from_secs_f64(budget);
+    let stats = r.render(
+        0..u32::MAX,
+        RenderControl {
+            deadline: Some(deadline),
+            ..RenderControl::default()
+        },
+    )?;
+    let start = Instant::now();
+    let film = r.read_film()?;
+    let image = match (r.read_aovs()?, r.read_second_moments()?) {
+        (Some(aovs), Some(moments)) if denoiser != scene::Denoiser::None => {
+            crate::render::denoise::denoise_film(ctx, &film, &aovs, &moments, denoiser)?
+        }
+        _ => film,
+    }
+    .radiance();
+    let denoise_seconds = if denoiser == scene::Denoiser::None {
+        0.0
+    } else {
+        start.elapsed().as_secs_f64()
+    };
+    let render_seconds = stats.elapsed.as_secs_f64();
+    Ok(BudgetRun {
+        image,
+        seconds: render_seconds + denoise_seconds,
+        render_seconds,
+        pixel_samples: stats.pixel_samples as f64,
+    })
 }
 
 /// The rows of a `--tradeoff --csv` file, for `--replot`.

@@ -15,7 +15,8 @@ pub struct Limits {
     /// The largest width or height of an image texture, and of an environment map (whose
     /// height may be half of it).
     pub texture_size: u32,
-    /// Vertices, and triangles, one import may hand over in total.
+    /// Vertices, and triangles, one import may hand over in total, and a scene file's
+    /// meshes may hold together.
     pub triangles: u64,
     /// Nodes a material graph may expand to, every use of a group counted with its nodes.
     pub graph_nodes: usize,

@@ -439,6 +439,8 @@ fn edit(
         thumbnails: true,
         graph_kernels: kiln::editor::GRAPH_KERNELS,
         pixel_size,
+        on_device_lost: Box::new(kiln::editor::restart_after_device_loss),
+        restarted_after_device_loss: kiln::editor::restarted_after_device_loss(),
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
     if let Some(error) = report.error {

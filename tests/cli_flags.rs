@@ -853,6 +853,11 @@ fn resource_limit_flags_lower_and_raise_the_limits() {
     assert_eq!(left, 0, "{warning}");
     assert!(warning.contains("--max-triangles"), "{warning}");
     assert_eq!(meshes(&["--ground", "none"]).0, 1);
+    // The saved scene keeps its mesh as an OBJ file, which the same limit refuses.
+    let out = dir.join("two.png");
+    let (saved, out) = (saved.to_str().unwrap(), out.to_str().unwrap());
+    let e = fails(&["render", saved, "-o", out, "--max-triangles", "1"]);
+    assert!(e.contains("--max-triangles") && e.contains("mesh"), "{e}");
 }
 
 /// `--ground catcher` on a model without lights: the EXR's alpha holds the model (1), its

@@ -1112,3 +1112,57 @@ fn the_world_tab_makes_and_edits_a_sky_and_saves_it() {
     assert_eq!(saved.world, harness.state().document().scene().world);
     assert!(saved.world.is_some());
 }
+
+/// A GPU device lost under the editor (destroyed here): the unsaved change is written to
+/// the recovery autosave at once, the editor hands over once (`kiln edit` starts a new
+/// editor on a new device) and draws nothing more; the new editor says why it started.
+#[test]
+fn a_lost_device_autosaves_the_document_and_hands_over_once() {
+    let state = tempfile::tempdir().unwrap();
+    let calls = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let record = std::sync::Arc::clone(&calls);
+    let mut harness = start(Setup {
+        state_dir: Some(state.path().to_owned()),
+        on_device_lost: Box::new(move |lost| record.lock().unwrap().push(lost)),
+        ..Setup::default()
+    });
+    step_until(&mut harness, "the first samples", samples_done);
+    harness.get_by_label("block").click();
+    harness.step();
+    set_field(&mut harness, "Location", 0, 250.0);
+    assert!(harness.state().document().is_dirty());
+    let moved = harness.state().document().scene().instances[6].transform;
+    let gpu = harness.state().gpu().expect("a wgpu device").clone();
+    gpu.device.destroy();
+    for _ in 0..5 {
+        harness.step();
+    }
+    let calls = calls.lock().unwrap().clone();
+    assert_eq!(calls.len(), 1, "{calls:?}");
+    assert!(
+        calls[0].reason.contains("destroyed") && calls[0].autosaved && calls[0].file.is_none(),
+        "{calls:?}"
+    );
+    let autosave = state
+        .path()
+        .join("recovery")
+        .join(std::process::id().to_string())
+        .join("autosave.kiln");
+    let saved = kiln::scene::load_scene(&autosave).unwrap();
+    assert_eq!(saved.instances[6].transform, moved);
+    assert!(
+        harness
+            .query_by_label_contains("The GPU device was lost")
+            .is_some()
+    );
+
+    let harness = start(Setup {
+        restarted_after_device_loss: Some("the device was destroyed".into()),
+        ..Setup::default()
+    });
+    assert!(
+        harness
+            .query_by_label_contains("so Kiln started the editor again")
+            .is_some()
+    );
+}

@@ -3,7 +3,7 @@
 //! [`Document`] and applies the commands its panels return; it owns the viewport's view
 //! (not part of the document, as in Blender) and turns mouse and keys into navigation.
 
-use std::path::PathBuf;
+use std::path::{Path, PathBuf};
 use std::sync::Arc;
 use std::thread::JoinHandle;
 use std::time::{Duration, Instant};
@@ -64,6 +64,25 @@ pub struct EditorOptions {
     /// quarter of the pixels (Blender's Preferences ▸ Viewport ▸ Pixel Size). None: the
     /// user's last choice, else 1.
     pub pixel_size: Option<u32>,
+    /// What the editor does once its GPU device is lost, after writing the document to
+    /// its recovery autosave: `kiln edit` starts a new editor on the same file
+    /// ([`super::restart_after_device_loss`]) and ends this one, whose window cannot draw
+    /// on a lost device; tests record the call.
+    pub on_device_lost: Box<dyn FnMut(DeviceLost)>,
+    /// Why the editor this one replaces lost its device, if it did: said at start,
+    /// beside the recovery of its unsaved changes.
+    pub restarted_after_device_loss: Option<String>,
+}
+
+/// A GPU device lost under the editor, and what of its document was kept.
+#[derive(Clone, Debug, PartialEq, Eq)]
+pub struct DeviceLost {
+    /// The driver's reason.
+    pub reason: String,
+    /// The document's file, if it has one.
+    pub file: Option<PathBuf>,
+    /// Whether unsaved changes were written to the recovery autosave just now.
+    pub autosaved: bool,
 }
 
 /// The viewport's pixel sizes the Render tab offers.
@@ -192,6 +211,9 @@ pub struct EditorApp {
     autosave_job: Option<JoinHandle<Result<(), String>>>,
     /// An autosave from a crashed session, offered at start.
     recovery: Option<Recovery>,
+    on_device_lost: Box<dyn FnMut(DeviceLost)>,
+    /// Why the device was lost, once it was: the editor then draws only that.
+    device_lost: Option<String>,
     quit_when_done: bool,
     report: Option<Arc<std::sync::Mutex<RunReport>>>,
     tool: Option<TransformTool>,
@@ -274,6 +296,16 @@ impl EditorApp {
         });
         let view = document.scene().camera;
         let session = options.state_dir.clone().map(SessionStore::new);
+        if let Some(reason) = &options.restarted_after_device_loss {
+            let notice = format!(
+                "The GPU device was lost ({reason}), so Kiln started the editor again; \
+                 unsaved changes, if there were any, are offered for recovery."
+            );
+            error = Some(match error {
+                Some(e) => format!("{notice}\n\n{e}"),
+                None => notice,
+            });
+        }
         let remembered = session.as_ref().map_or_else(
             ViewportPreferences::default,
             SessionStore::viewport_preferences,
@@ -323,6 +355,8 @@ impl EditorApp {
                 .map(SessionStore::recent)
                 .unwrap_or_default(),
             recovery: session.as_ref().and_then(SessionStore::recovery),
+            on_device_lost: options.on_device_lost,
+            device_lost: None,
             saved_viewport: viewport_preferences,
             session,
             autosave_every: options.autosave_every,
@@ -616,6 +650,52 @@ impl EditorApp {
             }
             Err(e) => self.error = Some(format!("the autosave cannot be recovered: {e}")),
         }
+    }
+
+    /// Checks whether the GPU device was lost (a driver crash, a reset, running out of
+    /// memory); once it is, writes unsaved changes to the recovery autosave at once (the
+    /// last may be a minute old) and hands over to [`EditorOptions::on_device_lost`].
+    /// True from then on: nothing else is drawn, since the window draws with the same
+    /// device.
+    fn handle_device_loss(&mut self, ui: &mut Ui) -> bool {
+        if let Some(reason) = &self.device_lost {
+            ui.label(format!(
+                "The GPU device was lost ({reason}); the document is in the recovery autosave."
+            ));
+            return true;
+        }
+        let Some(gpu) = &self.gpu else {
+            return false;
+        };
+        // Runs the device's callbacks, the one that says it is lost among them.
+        let _ = gpu.device.poll(wgpu::PollType::Poll);
+        let Some(reason) = gpu.lost() else {
+            return false;
+        };
+        tracing::error!("the editor's GPU device was lost: {reason}");
+        let autosaved = match &self.session {
+            Some(store) if self.document.is_dirty() => {
+                // A background autosave under way would finish after this one.
+                if let Some(job) = self.autosave_job.take() {
+                    let _ = job.join();
+                }
+                let source = self.document.path();
+                let written = store.autosave(self.document.scene(), self.document.images(), source);
+                if let Err(e) = &written {
+                    tracing::error!("the autosave after the device loss failed: {e}");
+                }
+                written.is_ok()
+            }
+            _ => false,
+        };
+        let lost = DeviceLost {
+            reason: reason.clone(),
+            file: self.document.path().map(Path::to_owned),
+            autosaved,
+        };
+        self.device_lost = Some(reason);
+        (self.on_device_lost)(lost);
+        true
     }
 
     /// Writes a changed document to the recovery autosave every [`AUTOSAVE_EVERY`], on a
@@ -2013,6 +2093,9 @@ impl eframe::App for EditorApp {
             self.frames_logged = 0;
             self.app_time = Duration::ZERO;
             self.log_start = now;
+        }
+        if self.handle_device_loss(ui) {
+            return;
         }
         // Before any panel is drawn: the first widget drawn would take Tab's focus.
         self.node_editor.release_tab_focus(ui.ctx());

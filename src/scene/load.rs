@@ -300,6 +300,9 @@ fn build_scene(
     }
 
     let mut mesh_ids = BTreeMap::new();
+    // Vertices and triangles of the meshes so far, against --max-triangles as an import's are.
+    let (mut vertices, mut triangles) = (0usize, 0usize);
+    let limit = usize::try_from(crate::limits::current().triangles).unwrap_or(usize::MAX);
     for (name, desc) in file.meshes.0 {
         let mut mesh = match desc {
             MeshDesc::Inline {
@@ -342,6 +345,14 @@ fn build_scene(
                 shapes::uv_sphere(segments, rings, smooth)
             }
         };
+        vertices = vertices.saturating_add(mesh.positions.len());
+        triangles = triangles.saturating_add(mesh.indices.len());
+        if vertices > limit || triangles > limit {
+            return Err(invalid(format!(
+                "mesh \"{name}\": the scene's meshes would exceed {limit} vertices or {limit} \
+                 triangles (--max-triangles raises the limit)"
+            )));
+        }
         mesh.name = name.clone();
         let id = scene.add_mesh(mesh);
         mesh_ids.insert(name, id);

@@ -10,7 +10,7 @@ use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
 use kiln::editor::viewport::GraphKernels;
-use kiln::editor::{EditorApp, EditorOptions, ScriptedDialogs};
+use kiln::editor::{DeviceLost, EditorApp, EditorOptions, ScriptedDialogs};
 use kiln::plugin::PluginHost;
 
 /// Samples per pixel the viewport stops at: tests wait for it, then the app rests.
@@ -42,6 +42,9 @@ pub struct Setup {
     pub sample_limit: u32,
     /// Screen pixels per viewport pixel ([`PIXEL_SIZE`]).
     pub pixel_size: u32,
+    /// What a lost device does (by default the test fails naming the reason).
+    pub on_device_lost: Box<dyn FnMut(DeviceLost)>,
+    pub restarted_after_device_loss: Option<String>,
 }
 
 impl Default for Setup {
@@ -57,6 +60,8 @@ impl Default for Setup {
             graph_kernels: GraphKernels::Interpreted,
             sample_limit: SAMPLE_LIMIT,
             pixel_size: PIXEL_SIZE,
+            on_device_lost: Box::new(|lost| panic!("the GPU device was lost: {}", lost.reason)),
+            restarted_after_device_loss: None,
         }
     }
 }
@@ -78,6 +83,8 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         graph_kernels,
         sample_limit,
         pixel_size,
+        on_device_lost,
+        restarted_after_device_loss,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -96,6 +103,8 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     thumbnails,
                     graph_kernels,
                     pixel_size: Some(pixel_size),
+                    on_device_lost,
+                    restarted_after_device_loss,
                 },
             )
         })
