@@ -5,8 +5,9 @@
 //! They are process-wide, like a thread pool's size: `kiln` sets them from its flags
 //! (`--max-texture-size`, `--max-triangles`, `--max-graph-nodes`, `--max-group-depth`)
 //! before it reads anything, and every loader and the material compiler read them where
-//! they check. Importer plugins keep limits of their own (the glTF importer: 2^26 elements
-//! per accessor), which these do not raise.
+//! they check. The triangle limit also goes to importer plugins, through the environment
+//! (`kiln_plugin_api::MAX_TRIANGLES_ENV`), so that they refuse a file's claimed counts
+//! before allocating them.
 
 use std::sync::atomic::{AtomicU32, AtomicU64, AtomicUsize, Ordering};
 
@@ -27,7 +28,7 @@ pub struct Limits {
 impl Limits {
     pub const DEFAULT: Self = Self {
         texture_size: 16384,
-        triangles: 1 << 26,
+        triangles: kiln_plugin_api::DEFAULT_MAX_TRIANGLES,
         graph_nodes: 10_000,
         group_depth: 16,
     };

@@ -49,7 +49,8 @@ struct Cli {
     #[arg(long, global = true, value_name = "TEXELS", default_value_t = Limits::DEFAULT.texture_size,
           value_parser = clap::value_parser!(u32).range(1..))]
     max_texture_size: u32,
-    /// The most vertices, and triangles, one import may hand over.
+    /// The most vertices, and triangles, one import may hand over (importer plugins refuse
+    /// larger counts before reading them) or a scene file's meshes may hold together.
     #[arg(long, global = true, value_name = "N", default_value_t = Limits::DEFAULT.triangles,
           value_parser = clap::value_parser!(u64).range(1..))]
     max_triangles: u64,
@@ -482,6 +483,14 @@ fn main() -> ExitCode {
         graph_nodes: cli.max_graph_nodes,
         group_depth: cli.max_group_depth,
     });
+    // SAFETY: no other thread runs yet. Importer plugins, here or in an isolated worker
+    // (which inherits it), read the limit from the environment.
+    unsafe {
+        std::env::set_var(
+            kiln_plugin_api::MAX_TRIANGLES_ENV,
+            cli.max_triangles.to_string(),
+        )
+    };
     let backend = cli.backend.map(Backend::from);
     if !(cli.import_timeout.is_finite() && cli.import_timeout > 0.0) {
         eprintln!(

@@ -858,6 +858,20 @@ fn resource_limit_flags_lower_and_raise_the_limits() {
     let (saved, out) = (saved.to_str().unwrap(), out.to_str().unwrap());
     let e = fails(&["render", saved, "-o", out, "--max-triangles", "1"]);
     assert!(e.contains("--max-triangles") && e.contains("mesh"), "{e}");
+    // The glTF importer refuses an accessor past the limit before reading it: the flag
+    // reaches the plugin (in an isolated worker too).
+    let glb = dir.join("ball.glb");
+    kiln::bench::write_glb(&kiln::scene::shapes::uv_sphere(8, 4, true), &glb).unwrap();
+    let glb = glb.to_str().unwrap();
+    for isolate in [false, true] {
+        let mut args = vec!["import", glb, "-o", saved, "--max-triangles", "10"];
+        if isolate {
+            args.push("--isolate-importers");
+        }
+        let out = kiln().args(&args).output().unwrap();
+        let e = stderr(&out);
+        assert!(e.contains("at most 10 are read"), "isolated {isolate}: {e}");
+    }
 }
 
 /// `--ground catcher` on a model without lights: the EXR's alpha holds the model (1), its

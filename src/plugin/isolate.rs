@@ -467,6 +467,11 @@ pub(super) fn import(
     for dir in &isolation.plugin_dirs {
         command.arg("--plugin-dir").arg(dir);
     }
+    // The worker's importer refuses counts past the same limit.
+    let limits = crate::limits::current();
+    command
+        .arg("--max-triangles")
+        .arg(limits.triangles.to_string());
     let mut child = command
         .arg("import-worker")
         .arg(file)

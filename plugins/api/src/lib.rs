@@ -24,6 +24,22 @@ pub const ABI_VERSION: u32 = 1;
 /// The symbol every plugin exports.
 pub const DESCRIPTOR_SYMBOL: &[u8] = b"kiln_plugin_descriptor";
 
+/// The environment variable through which the host hands its limit on the vertices, and
+/// the triangles, of one import (`kiln --max-triangles`) to the importers it loads, in
+/// its own process or an isolated one, so that an importer can refuse the counts a file
+/// claims before allocating them. The host sets it before it loads any plugin.
+pub const MAX_TRIANGLES_ENV: &str = "KILN_MAX_TRIANGLES";
+/// The host's limit when it sets none.
+pub const DEFAULT_MAX_TRIANGLES: u64 = 1 << 26;
+
+/// The limit in [`MAX_TRIANGLES_ENV`], or [`DEFAULT_MAX_TRIANGLES`].
+pub fn max_triangles() -> u64 {
+    std::env::var(MAX_TRIANGLES_ENV)
+        .ok()
+        .and_then(|v| v.parse().ok())
+        .unwrap_or(DEFAULT_MAX_TRIANGLES)
+}
+
 pub const KIND_IMPORTER: u32 = 1;
 pub const KIND_EXPORTER: u32 = 2;
 

@@ -1,6 +1,7 @@
 //! Accessors decoded into vectors, with every byte range checked before it is read:
 //! offset, stride and count against the buffer view, sparse indices and values against
-//! theirs, and counts against [`MAX_ELEMENTS`]. Normalised integers are mapped as the
+//! theirs, and counts against the host's `--max-triangles`
+//! ([`kiln_plugin_api::max_triangles`]). Normalised integers are mapped as the
 //! spec's §3.11 equations say, so quantised attributes (`KHR_mesh_quantization`) read
 //! like floats.
 //!
@@ -12,8 +13,6 @@ use gltf::json::validation::Checked;
 
 use crate::buffers::Buffers;
 
-/// Elements one accessor may hold (the host's limit on a whole import).
-pub const MAX_ELEMENTS: u64 = 1 << 26;
 /// Elements an accessor without a buffer view (zeros, perhaps with sparse values) may
 /// claim: such counts are not backed by bytes in the file.
 pub const MAX_UNBACKED_ELEMENTS: u64 = 1 << 20;
@@ -175,9 +174,11 @@ pub fn read<T: Element>(
         )));
     }
     let count = accessor.count.0;
-    if count > MAX_ELEMENTS {
+    // The host's limit on a whole import: one accessor past it could never be taken.
+    let max = kiln_plugin_api::max_triangles();
+    if count > max {
         return Err(fail(format!(
-            "{count} elements (at most {MAX_ELEMENTS} are read)"
+            "{count} elements (at most {max} are read; --max-triangles raises the limit)"
         )));
     }
     let size = component_size(component) * T::COMPONENTS;
