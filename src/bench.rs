@@ -201,14 +201,7 @@ fn measure(
     let first_dispatch = t.elapsed();
     // Warm-up: lets the batch size settle.
     renderer.render(1..4, RenderControl::default())?;
-    let deadline = Instant::now() + Duration::from_secs_f64(args.seconds);
-    let stats = renderer.render(
-        4..u32::MAX,
-        RenderControl {
-            deadline: Some(deadline),
-            ..RenderControl::default()
-        },
-    )?;
+    let stats = render_for(&mut renderer, 4..u32::MAX, args.seconds)?;
     let secs = stats.elapsed.as_secs_f64();
     Ok(Row {
         name: name.to_owned(),
@@ -727,6 +720,23 @@ fn tradeoff(
     Ok(())
 }
 
+/// Renders `samples` of every pixel, stopping at the end of the pass during which
+/// `seconds` have passed.
+fn render_for(
+    renderer: &mut Renderer,
+    samples: std::ops::Range<u32>,
+    seconds: f64,
+) -> Result<crate::render::RenderStats> {
+    let deadline = Instant::now() + Duration::from_secs_f64(seconds);
+    Ok(renderer.render(
+        samples,
+        RenderControl {
+            deadline: Some(deadline),
+            ..RenderControl::default()
+        },
+    )?)
+}
+
 /// One render of a `--tradeoff` cell: the image (denoised where asked) and its cost.
 struct BudgetRun {
     image: Vec<Vec3>,
@@ -750,14 +760,7 @@ fn measure_at_budget(
     // The driver compiles a kernel at its first dispatch: not the budget's.
     r.render(0..1, RenderControl::default())?;
     r.clear_film();
-    let deadline = Instant::now() + Duration::from_secs_f64(budget);
-    let stats = r.render(
-        0..u32::MAX,
-        RenderControl {
-            deadline: Some(deadline),
-            ..RenderControl::default()
-        },
-    )?;
+    let stats = render_for(&mut r, 0..u32::MAX, budget)?;
     let start = Instant::now();
     let film = r.read_film()?;
     let image = match (r.read_aovs()?, r.read_second_moments()?) {
