@@ -66,7 +66,7 @@ pub struct EditorOptions {
     pub pixel_size: Option<u32>,
     /// What the editor does once its GPU device is lost, after writing the document to
     /// its recovery autosave: `kiln edit` starts a new editor on the same file
-    /// ([`super::restart_after_device_loss`]) and ends this one, whose window cannot draw
+    /// (`restart_after_device_loss` in main.rs) and ends this one, whose window cannot draw
     /// on a lost device; tests record the call.
     pub on_device_lost: Box<dyn FnMut(DeviceLost)>,
     /// Why the editor this one replaces lost its device, if it did: said at start,

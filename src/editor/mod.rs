@@ -86,64 +86,6 @@ pub fn native_options() -> eframe::NativeOptions {
     }
 }
 
-/// Set in the environment of an editor started again after a lost device: the reason,
-/// and the process id of the editor it replaces.
-pub const DEVICE_LOST_ENV: &str = "KILN_DEVICE_LOST";
-pub const DEVICE_LOST_PID_ENV: &str = "KILN_DEVICE_LOST_PID";
-
-/// `kiln edit`'s answer to a lost GPU device ([`EditorOptions::on_device_lost`]): the
-/// window cannot draw again on that device, so this process starts a new editor on the
-/// same file (with a new device; its unsaved changes offered from the recovery autosave
-/// just written) and ends. An editor that was itself started after a loss does not start
-/// another: it ends, saying where the document is.
-pub fn restart_after_device_loss(lost: DeviceLost) {
-    let kept = if lost.autosaved {
-        "unsaved changes are in the recovery autosave"
-    } else {
-        "no unsaved changes"
-    };
-    eprintln!("error: the GPU device was lost ({}); {kept}", lost.reason);
-    if std::env::var_os(DEVICE_LOST_ENV).is_some() {
-        eprintln!(
-            "the editor had already been started again after a lost device: run kiln edit to recover"
-        );
-        std::process::exit(1);
-    }
-    let restart = std::env::current_exe().and_then(|exe| {
-        let mut command = std::process::Command::new(exe);
-        command.arg("edit").args(lost.file.as_ref());
-        command
-            .env(DEVICE_LOST_ENV, &lost.reason)
-            .env(DEVICE_LOST_PID_ENV, std::process::id().to_string())
-            .spawn()
-    });
-    match restart {
-        Ok(_) => {
-            eprintln!("starting the editor again");
-            std::process::exit(0);
-        }
-        Err(e) => {
-            eprintln!("cannot start the editor again ({e}): run kiln edit to recover");
-            std::process::exit(1);
-        }
-    }
-}
-
-/// In an editor started by [`restart_after_device_loss`]: why the last one lost its
-/// device, once that editor has ended (so that its autosave counts as left behind and is
-/// offered). None in any other editor.
-pub fn restarted_after_device_loss() -> Option<String> {
-    let reason = std::env::var(DEVICE_LOST_ENV).ok()?;
-    if let Ok(pid) = std::env::var(DEVICE_LOST_PID_ENV) {
-        let proc = std::path::Path::new("/proc").join(pid);
-        let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
-        while proc.exists() && std::time::Instant::now() < deadline {
-            std::thread::sleep(std::time::Duration::from_millis(50));
-        }
-    }
-    Some(reason)
-}
-
 /// Opens the editor's window and returns when it is closed.
 pub fn run(options: EditorOptions) -> Result<RunReport, eframe::Error> {
     let report = Arc::new(std::sync::Mutex::new(RunReport::default()));

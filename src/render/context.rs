@@ -177,8 +177,8 @@ impl GpuContext {
             adapter,
             device,
             queue,
+            pipelines: pipeline_cache_for(&info),
             info,
-            pipelines: Default::default(),
             pipelines_compiled: Default::default(),
             lost,
         }))
@@ -208,8 +208,8 @@ impl GpuContext {
             adapter,
             device,
             queue,
+            pipelines: pipeline_cache_for(&info),
             info,
-            pipelines: Default::default(),
             pipelines_compiled: Default::default(),
             lost,
         }))
@@ -244,9 +244,14 @@ impl GpuContext {
     }
 
     /// How many compiled pipelines the cache holds now (at most
-    /// [`PIPELINE_CACHE_CAPACITY`]).
+    /// [`pipeline_cache_capacity`]).
     pub fn pipelines_cached(&self) -> usize {
         self.pipelines.lock().map_or(0, |p| p.len())
+    }
+
+    /// How many compiled pipelines the cache keeps at most.
+    pub fn pipeline_capacity(&self) -> usize {
+        self.pipelines.lock().map_or(0, |p| p.capacity)
     }
 
     pub fn limits(&self) -> wgpu::Limits {
@@ -260,6 +265,33 @@ impl GpuContext {
 /// a graph's structure: the least recently used are dropped beyond this many. A scene
 /// uses a few at a time (its kernel's entry points, the editor's previews).
 pub const PIPELINE_CACHE_CAPACITY: usize = 32;
+
+/// What one compiled pipeline holds of the host's memory on a CPU adapter, whose
+/// pipelines are machine code in the process: measured by the editor soak on lavapipe
+/// (docs/RELIABILITY.md).
+pub const CPU_PIPELINE_BYTES: u64 = 300 << 20;
+
+/// How many pipelines a context on an adapter of `device_type` keeps: at most
+/// [`PIPELINE_CACHE_CAPACITY`], and on a CPU adapter no more than a quarter of the
+/// `available` memory holds at [`CPU_PIPELINE_BYTES`] each, but at least 4 (a scene's
+/// kernel entry points and the editor's previews).
+pub fn pipeline_cache_capacity(device_type: wgpu::DeviceType, available: Option<u64>) -> usize {
+    match (device_type, available) {
+        (wgpu::DeviceType::Cpu, Some(bytes)) => usize::try_from(bytes / 4 / CPU_PIPELINE_BYTES)
+            .unwrap_or(usize::MAX)
+            .clamp(4, PIPELINE_CACHE_CAPACITY),
+        _ => PIPELINE_CACHE_CAPACITY,
+    }
+}
+
+/// A pipeline cache sized for `info`'s adapter and the memory free now.
+fn pipeline_cache_for(
+    info: &wgpu::AdapterInfo,
+) -> std::sync::Mutex<PipelineCache<wgpu::ComputePipeline>> {
+    let capacity =
+        pipeline_cache_capacity(info.device_type, super::film_pieces::available_memory());
+    std::sync::Mutex::new(PipelineCache::with_capacity(capacity))
+}
 
 /// A cache of at most `capacity` values by key that drops the least recently used first.
 #[derive(Debug)]
@@ -322,7 +354,26 @@ impl<V: Clone> PipelineCache<V> {
 
 #[cfg(test)]
 mod tests {
-    use super::PipelineCache;
+    use super::{PIPELINE_CACHE_CAPACITY, PipelineCache, pipeline_cache_capacity};
+
+    #[test]
+    fn a_cpu_adapter_keeps_as_many_pipelines_as_a_quarter_of_free_memory_holds() {
+        const GIB: u64 = 1 << 30;
+        let gpu = wgpu::DeviceType::DiscreteGpu;
+        let cpu = wgpu::DeviceType::Cpu;
+        assert_eq!(
+            pipeline_cache_capacity(gpu, Some(GIB)),
+            PIPELINE_CACHE_CAPACITY
+        );
+        assert_eq!(pipeline_cache_capacity(cpu, None), PIPELINE_CACHE_CAPACITY);
+        // 20 GiB free: 5 GiB for pipelines of 300 MiB.
+        assert_eq!(pipeline_cache_capacity(cpu, Some(20 * GIB)), 17);
+        assert_eq!(pipeline_cache_capacity(cpu, Some(2 * GIB)), 4);
+        assert_eq!(
+            pipeline_cache_capacity(cpu, Some(1024 * GIB)),
+            PIPELINE_CACHE_CAPACITY
+        );
+    }
 
     #[test]
     fn the_pipeline_cache_drops_the_least_recently_used_beyond_its_capacity() {

@@ -126,7 +126,7 @@ fn check_film_memory(
 
 /// Memory the system could give this process without swapping, where it says
 /// (`MemAvailable` on Linux); None elsewhere.
-fn available_memory() -> Option<u64> {
+pub(crate) fn available_memory() -> Option<u64> {
     let info = std::fs::read_to_string("/proc/meminfo").ok()?;
     let line = info.lines().find(|l| l.starts_with("MemAvailable:"))?;
     let kib: u64 = line.split_whitespace().nth(1)?.parse().ok()?;
