@@ -508,10 +508,13 @@ fn restart_after_device_loss(lost: kiln::editor::DeviceLost) {
 /// offered). None in any other editor.
 fn restarted_after_device_loss() -> Option<String> {
     let reason = std::env::var(DEVICE_LOST_ENV).ok()?;
-    if let Ok(pid) = std::env::var(DEVICE_LOST_PID_ENV) {
-        let proc = std::path::Path::new("/proc").join(pid);
+    if let Some(pid) = std::env::var(DEVICE_LOST_PID_ENV)
+        .ok()
+        .and_then(|p| p.parse().ok())
+    {
         let deadline = std::time::Instant::now() + std::time::Duration::from_secs(5);
-        while proc.exists() && std::time::Instant::now() < deadline {
+        while kiln::editor::session::process_is_running(pid) && std::time::Instant::now() < deadline
+        {
             std::thread::sleep(std::time::Duration::from_millis(50));
         }
     }

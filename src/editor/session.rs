@@ -206,7 +206,7 @@ impl SessionStore {
 
 /// Whether a process with this id is running (on Linux, by `/proc`; elsewhere assumed
 /// not, so an autosave is always offered).
-fn process_is_running(pid: u32) -> bool {
+pub fn process_is_running(pid: u32) -> bool {
     Path::new("/proc").join(pid.to_string()).exists()
 }
 
