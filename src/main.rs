@@ -194,6 +194,23 @@ enum MaterialCommand {
     },
     /// Print the node reference (docs/NODES.md) generated from the node library.
     Nodes,
+    /// Read the materials of a material file (MaterialX `.mtlx`, through a material-format
+    /// plugin) and write each as a `.kmat` file in a folder; warnings name what could not
+    /// be represented.
+    Import {
+        file: PathBuf,
+        /// The folder the `.kmat` files are written to (made if missing).
+        #[arg(short, long)]
+        output: PathBuf,
+    },
+    /// Write a `.kmat` material in another format (MaterialX `.mtlx`), through a
+    /// material-format plugin.
+    Export {
+        file: PathBuf,
+        /// The file to write; its extension picks the format.
+        #[arg(short, long)]
+        output: PathBuf,
+    },
 }
 
 #[derive(clap::Args)]
@@ -608,7 +625,7 @@ fn main() -> ExitCode {
         }
         Command::Info => info(backend),
         Command::Bench(args) => kiln::bench::run(&args, backend, &mut std::io::stdout()),
-        Command::Material(command) => material(command),
+        Command::Material(command) => material(command, &plugins()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -636,8 +653,57 @@ fn compile_material_file(
     Ok((name, compiled, kernel.text))
 }
 
-fn material(command: MaterialCommand) -> Result<()> {
+fn material(command: MaterialCommand, plugins: &PluginHost) -> Result<()> {
+    use kiln::material::relative_files;
     match command {
+        MaterialCommand::Import { file, output } => {
+            let imported = plugins.import_materials(&file)?;
+            for warning in &imported.warnings {
+                eprintln!("warning: {warning}");
+            }
+            if imported.materials.is_empty() {
+                anyhow::bail!("{} holds no material Kiln can read", file.display());
+            }
+            std::fs::create_dir_all(&output)
+                .with_context(|| format!("cannot make the folder {}", output.display()))?;
+            let mut written = Vec::new();
+            for (name, mut graph) in imported.materials {
+                relative_files(&mut graph, &output);
+                let stem: String = name
+                    .chars()
+                    .map(|c| {
+                        if c.is_alphanumeric() || c == '-' {
+                            c
+                        } else {
+                            '_'
+                        }
+                    })
+                    .collect();
+                let mut path = output.join(format!("{stem}.kmat"));
+                for n in 2.. {
+                    if !written.contains(&path) {
+                        break;
+                    }
+                    path = output.join(format!("{stem}_{n}.kmat"));
+                }
+                kiln::material::save_material(&path, &name, &graph)?;
+                println!("{}", path.display());
+                written.push(path);
+            }
+        }
+        MaterialCommand::Export { file, output } => {
+            let (name, mut graph) = kiln::material::load_material(&file)?;
+            // Compiled first: a graph Kiln cannot render is not handed to other tools.
+            kiln::material::compile(&name, &graph, "material_0")
+                .with_context(|| format!("{} does not compile", file.display()))?;
+            let folder = match output.parent() {
+                Some(p) if !p.as_os_str().is_empty() => p,
+                _ => std::path::Path::new("."),
+            };
+            relative_files(&mut graph, folder);
+            plugins.export_material(&output, &name, &graph)?;
+            println!("{}", output.display());
+        }
         MaterialCommand::Check { file } => {
             let (name, compiled, kernel) = compile_material_file(&file)?;
             println!(

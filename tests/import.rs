@@ -42,10 +42,15 @@ fn host() -> PluginHost {
     let exe = std::env::current_exe().unwrap();
     let mut host = PluginHost::default();
     host.load_dir(exe.parent().unwrap(), true);
-    for kind in [PluginKind::Importer, PluginKind::Exporter] {
+    for kind in [
+        PluginKind::Importer,
+        PluginKind::Exporter,
+        PluginKind::Material,
+    ] {
         for ext in match kind {
             PluginKind::Importer => ["gltf", "glb", "obj"].as_slice(),
             PluginKind::Exporter => ["png", "exr"].as_slice(),
+            PluginKind::Material => ["mtlx"].as_slice(),
         } {
             assert!(
                 host.handles(kind, Path::new(&format!("x.{ext}"))),

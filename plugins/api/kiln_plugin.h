@@ -1,4 +1,4 @@
-/* Kiln plugin ABI, version 1: the C declarations of plugins/api/src/lib.rs.
+/* Kiln plugin ABI, version 2: the C declarations of plugins/api/src/lib.rs.
  *
  * A plugin is a shared library exporting
  *     const KilnPluginDescriptor *kiln_plugin_descriptor(void);
@@ -15,9 +15,10 @@
 extern "C" {
 #endif
 
-#define KILN_ABI_VERSION 1u
+#define KILN_ABI_VERSION 2u
 #define KILN_KIND_IMPORTER 1u
 #define KILN_KIND_EXPORTER 2u
+#define KILN_KIND_MATERIAL 3u /* a material format (version 2 on) */
 #define KILN_STATUS_OK 0
 #define KILN_STATUS_ERROR 1
 #define KILN_INVALID_ID 0xffffffffu
@@ -91,6 +92,20 @@ typedef int32_t (*KilnImportFn)(const char *path, const KilnSceneBuilder *builde
 typedef int32_t (*KilnExportFn)(const char *path, const KilnFilmView *film, const char *options,
                                 KilnErrorBuffer *error);
 
+/* Material formats (version 2 on). Materials are the text of .kmat files
+ * (docs/NODES.md); files they name are relative to the material file. */
+typedef struct KilnMaterialSink {
+    void *ctx;
+    uint32_t (*add_material)(void *ctx, const char *name, const char *kmat);
+    void (*warn)(void *ctx, const char *message);
+} KilnMaterialSink;
+
+typedef int32_t (*KilnMaterialImportFn)(const char *path, const KilnMaterialSink *sink,
+                                        KilnErrorBuffer *error);
+/* library: the node types kmat uses, their sockets typed (RON, docs/PLUGINS.md). */
+typedef int32_t (*KilnMaterialExportFn)(const char *path, const char *name, const char *kmat,
+                                        const char *library, KilnErrorBuffer *error);
+
 typedef struct KilnPluginDescriptor {
     uint32_t abi_version; /* must be first */
     uint32_t kind;
@@ -99,6 +114,10 @@ typedef struct KilnPluginDescriptor {
     const char *extensions; /* "gltf,glb" */
     KilnImportFn import;    /* importers */
     KilnExportFn export_;   /* exporters */
+    /* Version 2 on; a version-1 descriptor ends above (an initialiser that leaves them
+     * out sets them to NULL). */
+    KilnMaterialImportFn import_material; /* material formats that read */
+    KilnMaterialExportFn export_material; /* material formats that write */
 } KilnPluginDescriptor;
 
 #ifdef __cplusplus

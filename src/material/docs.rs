@@ -155,3 +155,65 @@ pub fn nodes_markdown() -> String {
     }
     out
 }
+
+/// The declarations of node types `kinds` as RON, for material exporters that must type
+/// every socket they write (`kiln_plugin_api::kmat::read::parse_library`): per type its
+/// inputs with their types and constant defaults, its outputs, and the defaults of its
+/// choice and flag parameters. Unknown kinds (group
+/// nodes, reroutes, outputs) are left out.
+pub fn library_text<'a>(kinds: impl IntoIterator<Item = &'a str>) -> String {
+    let mut kinds: Vec<&str> = kinds.into_iter().collect();
+    kinds.sort_unstable();
+    kinds.dedup();
+    let mut out = String::from("[\n");
+    for def in kinds.into_iter().filter_map(super::nodes::find) {
+        let inputs: Vec<String> = def
+            .inputs
+            .iter()
+            .map(|s| {
+                let default = match &s.default {
+                    Default::Value(v) => format!(", default: {}", value_text(v)),
+                    Default::Implicit(..) => String::new(),
+                };
+                format!("(name: {:?}, type: {}{default})", s.name, s.ty.name())
+            })
+            .collect();
+        let outputs: Vec<String> = def
+            .outputs
+            .iter()
+            .map(|o| format!("(name: {:?}, type: {})", o.name, o.ty.name()))
+            .collect();
+        let params: Vec<String> = def
+            .params
+            .iter()
+            .filter_map(|p| {
+                let default = match p.kind {
+                    ParamKind::Enum(options) => format!("{:?}", options.first()?),
+                    ParamKind::Bool(b) => b.to_string(),
+                    ParamKind::Ramp | ParamKind::File => return None,
+                };
+                Some(format!("(name: {:?}, default: {default})", p.name))
+            })
+            .collect();
+        let _ = writeln!(
+            out,
+            "    (type: {:?}, inputs: [{}], outputs: [{}], params: [{}]),",
+            def.kind,
+            inputs.join(", "),
+            outputs.join(", "),
+            params.join(", ")
+        );
+    }
+    out.push_str("]\n");
+    out
+}
+
+/// A constant in RON, as `.kmat` files write it.
+fn value_text(v: &Value) -> String {
+    let f = |x: f32| format!("{x:?}");
+    match v {
+        Value::Float(x) => f(*x),
+        Value::Vec2([x, y]) => format!("({}, {})", f(*x), f(*y)),
+        Value::Vec3([x, y, z]) => format!("({}, {}, {})", f(*x), f(*y), f(*z)),
+    }
+}

@@ -288,6 +288,59 @@ pub fn principled_lobes(
     set
 }
 
+/// Makes the image paths of a graph (as seen from the working directory, as
+/// [`resolve_files`] leaves them) relative to the folder `to` a file of it is written
+/// in, so that the folder can move with its images; a path on another root stays
+/// absolute.
+pub fn relative_files(graph: &mut Graph, to: &Path) {
+    let Ok(to) = std::path::absolute(to) else {
+        return;
+    };
+    for file in graph.image_files_mut() {
+        if file.starts_with("image:") {
+            continue;
+        }
+        let Ok(absolute) = std::path::absolute(file.as_str()) else {
+            continue;
+        };
+        if let Some(relative) = relative_path(&absolute, &to) {
+            *file = relative.to_string_lossy().into_owned();
+        }
+    }
+}
+
+/// `path` relative to the folder `base` (both absolute), through `..` where needed;
+/// `None` when they share no root.
+fn relative_path(path: &Path, base: &Path) -> Option<std::path::PathBuf> {
+    use std::path::Component;
+    fn normal(p: &Path) -> Vec<Component<'_>> {
+        let mut parts: Vec<Component> = Vec::new();
+        for c in p.components() {
+            match c {
+                Component::CurDir => {}
+                Component::ParentDir if matches!(parts.last(), Some(Component::Normal(_))) => {
+                    parts.pop();
+                }
+                c => parts.push(c),
+            }
+        }
+        parts
+    }
+    let (path, base) = (normal(path), normal(base));
+    if path.first() != base.first() {
+        return None;
+    }
+    let common = path.iter().zip(&base).take_while(|(a, b)| a == b).count();
+    let mut relative = std::path::PathBuf::new();
+    for _ in common..base.len() {
+        relative.push("..");
+    }
+    for c in &path[common..] {
+        relative.push(c.as_os_str());
+    }
+    Some(relative)
+}
+
 /// Makes image paths of `image_texture` nodes (in the graph and its groups) relative to
 /// `base`, the directory of the file the graph came from.
 pub fn resolve_files(graph: &mut Graph, base: &Path) {
@@ -302,6 +355,17 @@ pub fn resolve_files(graph: &mut Graph, base: &Path) {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    #[test]
+    fn relative_paths_climb_out_of_the_base_folder() {
+        let rel = |p: &str, b: &str| relative_path(Path::new(p), Path::new(b)).unwrap();
+        assert_eq!(rel("/a/b/c.png", "/a/b"), Path::new("c.png"));
+        assert_eq!(
+            rel("/a/img/c.png", "/a/out/mats"),
+            Path::new("../../img/c.png")
+        );
+        assert_eq!(rel("/a/./x/../c.png", "/a"), Path::new("c.png"));
+    }
 
     #[test]
     fn muted_is_saved_only_when_set_and_reads_back() {

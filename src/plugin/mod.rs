@@ -25,6 +25,8 @@ pub use crate::film::output::{ExportFilm, ExportLayer};
 pub enum PluginKind {
     Importer,
     Exporter,
+    /// Reads material files into graphs, writes graphs as material files, or both.
+    Material,
 }
 
 impl std::fmt::Display for PluginKind {
@@ -32,6 +34,7 @@ impl std::fmt::Display for PluginKind {
         f.write_str(match self {
             PluginKind::Importer => "importer",
             PluginKind::Exporter => "exporter",
+            PluginKind::Material => "material format",
         })
     }
 }
@@ -70,6 +73,8 @@ struct Loaded {
     info: PluginInfo,
     import: Option<api::ImportFn>,
     export: Option<api::ExportFn>,
+    import_material: Option<api::MaterialImportFn>,
+    export_material: Option<api::MaterialExportFn>,
     // Last: the functions above point into it.
     _library: &'static libloading::Library,
 }
@@ -174,18 +179,23 @@ impl PluginHost {
         if descriptor.is_null() {
             return Err("kiln_plugin_descriptor returned null".into());
         }
-        // Only the version field is read before the version is known to match.
+        // Only the version field is read before the version is known to be spoken, and
+        // a version-1 descriptor only as far as version 1 declares it.
         let version = unsafe { std::ptr::addr_of!((*descriptor).abi_version).read() };
-        if version != api::ABI_VERSION {
+        if !(api::MIN_ABI_VERSION..=api::ABI_VERSION).contains(&version) {
             return Err(format!(
-                "plugin ABI version {version}, this Kiln speaks version {}",
+                "plugin ABI version {version}, this Kiln speaks versions {} to {}",
+                api::MIN_ABI_VERSION,
                 api::ABI_VERSION
             ));
         }
-        let d = unsafe { &*descriptor };
+        let d = unsafe { read_descriptor(descriptor, version) };
         let kind = match d.kind {
             api::KIND_IMPORTER if d.import.is_some() => PluginKind::Importer,
             api::KIND_EXPORTER if d.export.is_some() => PluginKind::Exporter,
+            api::KIND_MATERIAL if d.import_material.is_some() || d.export_material.is_some() => {
+                PluginKind::Material
+            }
             k => return Err(format!("kind {k} without its function")),
         };
         let info = PluginInfo {
@@ -215,6 +225,8 @@ impl PluginHost {
             info,
             import: d.import,
             export: d.export,
+            import_material: d.import_material,
+            export_material: d.export_material,
             _library: library,
         });
         Ok(())
@@ -225,11 +237,7 @@ impl PluginHost {
     }
 
     fn find(&self, kind: PluginKind, path: &Path) -> Result<&Loaded, PluginError> {
-        let extension = path
-            .extension()
-            .and_then(|e| e.to_str())
-            .unwrap_or("")
-            .to_ascii_lowercase();
+        let extension = extension_of(path);
         self.loaded
             .iter()
             .find(|l| l.info.kind == kind && l.info.extensions.contains(&extension))
@@ -307,6 +315,93 @@ impl PluginHost {
         extensions
     }
 
+    /// The material formats' extensions: those read (`writes` false) or written.
+    pub fn material_extensions(&self, writes: bool) -> Vec<String> {
+        let mut extensions: Vec<String> = self
+            .loaded
+            .iter()
+            .filter(|l| {
+                l.info.kind == PluginKind::Material
+                    && if writes {
+                        l.export_material.is_some()
+                    } else {
+                        l.import_material.is_some()
+                    }
+            })
+            .flat_map(|l| l.info.extensions.iter().cloned())
+            .collect();
+        extensions.sort();
+        extensions.dedup();
+        extensions
+    }
+
+    /// Reads the materials of `path` with the material format for its extension. Each
+    /// is parsed as a `.kmat` graph; one that does not parse is left out with a warning
+    /// naming it. Image files the graphs name are resolved against `path`'s folder.
+    pub fn import_materials(&self, path: &Path) -> Result<ImportedMaterials, PluginError> {
+        let plugin = self.find(PluginKind::Material, path)?;
+        let Some(import) = plugin.import_material else {
+            return Err(PluginError::Invalid(format!(
+                "{} writes \".{}\" files but does not read them",
+                plugin.info.name,
+                extension_of(path)
+            )));
+        };
+        let c_path = c_path(path)?;
+        let mut state = MaterialState {
+            path: path.display().to_string(),
+            imported: ImportedMaterials::default(),
+        };
+        let sink = api::MaterialSink {
+            ctx: (&raw mut state).cast(),
+            add_material: material_sink_add,
+            warn: material_sink_warn,
+        };
+        plugin.call(path, |error| unsafe {
+            import(c_path.as_ptr(), &sink, error)
+        })?;
+        Ok(state.imported)
+    }
+
+    /// Writes material `name` with `graph` to `path` with the material format for its
+    /// extension, as `.kmat` text and the declarations of the node types it uses.
+    pub fn export_material(
+        &self,
+        path: &Path,
+        name: &str,
+        graph: &crate::material::Graph,
+    ) -> Result<(), PluginError> {
+        let plugin = self.find(PluginKind::Material, path)?;
+        let Some(export) = plugin.export_material else {
+            return Err(PluginError::Invalid(format!(
+                "{} reads \".{}\" files but does not write them",
+                plugin.info.name,
+                extension_of(path)
+            )));
+        };
+        let c_path = c_path(path)?;
+        let c_name = CString::new(name.replace('\0', " ")).expect("NULs replaced");
+        let kmat = crate::material::material_text(name, graph)
+            .map_err(|e| PluginError::Invalid(e.to_string()))?;
+        let kinds = graph
+            .nodes
+            .values()
+            .chain(graph.groups.values().flat_map(|g| g.nodes.values()))
+            .map(|n| n.kind.as_str());
+        let library = crate::material::docs::library_text(kinds);
+        let c_kmat = CString::new(kmat.replace('\0', " ")).expect("NULs replaced");
+        let c_library = CString::new(library).expect("no NULs in node declarations");
+        plugin.call(path, |error| unsafe {
+            export(
+                c_path.as_ptr(),
+                c_name.as_ptr(),
+                c_kmat.as_ptr(),
+                c_library.as_ptr(),
+                error,
+            )
+        })
+    }
+
     /// The extensions the importer plugins read.
     pub fn import_extensions(&self) -> Vec<String> {
         let mut extensions: Vec<String> = self
@@ -352,6 +447,96 @@ impl PluginHost {
             export(c_path.as_ptr(), &view, c_options.as_ptr(), error)
         })
     }
+}
+
+/// A copy of the descriptor at `descriptor`, read field by field as far as ABI `version`
+/// declares it (the functions of later versions are `None`).
+///
+/// # Safety
+/// `descriptor` must point to a descriptor of `version`.
+unsafe fn read_descriptor(
+    descriptor: *const api::PluginDescriptor,
+    version: u32,
+) -> api::PluginDescriptor {
+    use std::ptr::addr_of;
+    unsafe {
+        let (import_material, export_material) = if version >= 2 {
+            (
+                addr_of!((*descriptor).import_material).read(),
+                addr_of!((*descriptor).export_material).read(),
+            )
+        } else {
+            (None, None)
+        };
+        api::PluginDescriptor {
+            abi_version: version,
+            kind: addr_of!((*descriptor).kind).read(),
+            name: addr_of!((*descriptor).name).read(),
+            version: addr_of!((*descriptor).version).read(),
+            extensions: addr_of!((*descriptor).extensions).read(),
+            import: addr_of!((*descriptor).import).read(),
+            export: addr_of!((*descriptor).export).read(),
+            import_material,
+            export_material,
+        }
+    }
+}
+
+fn extension_of(path: &Path) -> String {
+    path.extension()
+        .and_then(|e| e.to_str())
+        .unwrap_or("")
+        .to_ascii_lowercase()
+}
+
+/// What a material format's import gave: the materials that parsed, by name, and what
+/// it (or the host) reported.
+#[derive(Debug, Default)]
+pub struct ImportedMaterials {
+    pub materials: Vec<(String, crate::material::Graph)>,
+    pub warnings: Vec<String>,
+}
+
+struct MaterialState {
+    /// The imported file: graphs' image files are resolved against its folder.
+    path: String,
+    imported: ImportedMaterials,
+}
+
+/// A C string from a plugin, lossily.
+unsafe fn lossy(p: *const c_char) -> String {
+    if p.is_null() {
+        return String::new();
+    }
+    unsafe { CStr::from_ptr(p) }.to_string_lossy().into_owned()
+}
+
+unsafe extern "C" fn material_sink_add(
+    ctx: *mut std::ffi::c_void,
+    name: *const c_char,
+    kmat: *const c_char,
+) -> u32 {
+    let state = unsafe { &mut *ctx.cast::<MaterialState>() };
+    let (name, text) = unsafe { (lossy(name), lossy(kmat)) };
+    let imported = &mut state.imported;
+    match crate::material::parse_material(&text, &state.path) {
+        Ok((_, graph)) => {
+            imported.materials.push((name, graph));
+            (imported.materials.len() - 1) as u32
+        }
+        Err(e) => {
+            imported
+                .warnings
+                .push(format!("material {name} left out: {e}"));
+            u32::MAX
+        }
+    }
+}
+
+unsafe extern "C" fn material_sink_warn(ctx: *mut std::ffi::c_void, message: *const c_char) {
+    let state = unsafe { &mut *ctx.cast::<MaterialState>() };
+    let message = unsafe { lossy(message) };
+    state.imported.warnings.push(message);
 }
 
 fn c_path(path: &Path) -> Result<CString, PluginError> {

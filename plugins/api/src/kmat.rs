@@ -8,12 +8,15 @@
 //! the host parses and compiles it and reports mistakes. The multiply helpers fold
 //! constants, so a material without textures stays a single principled node with numbers.
 
+pub mod read;
+
 use std::fmt::Write;
 
 /// A node input: a constant, or the output `socket` of node `node`.
 #[derive(Clone, Debug, PartialEq)]
 pub enum Value {
     Float(f32),
+    Vec2([f32; 2]),
     Color([f32; 3]),
     Vector([f32; 3]),
     /// `"node.socket"`.
@@ -29,7 +32,7 @@ impl Value {
         match self {
             Value::Float(v) => *v == 1.0,
             Value::Color(c) => c.iter().all(|&v| v == 1.0),
-            Value::Vector(_) | Value::Link(_) => false,
+            Value::Vec2(_) | Value::Vector(_) | Value::Link(_) => false,
         }
     }
 
@@ -38,13 +41,14 @@ impl Value {
         match *self {
             Value::Float(v) => Some([v; 3]),
             Value::Color(c) => Some(c),
-            Value::Vector(_) | Value::Link(_) => None,
+            Value::Vec2(_) | Value::Vector(_) | Value::Link(_) => None,
         }
     }
 
     fn text(&self) -> String {
         match self {
             Value::Float(x) => float(*x),
+            Value::Vec2([x, y]) => format!("({}, {})", float(*x), float(*y)),
             Value::Color([r, g, b]) | Value::Vector([r, g, b]) => {
                 format!("({}, {}, {})", float(*r), float(*g), float(*b))
             }
@@ -58,6 +62,9 @@ impl Value {
 pub enum Param {
     Text(String),
     Bool(bool),
+    Number(f32),
+    /// Colour-ramp stops: position and linear RGBA.
+    Ramp(Vec<(f32, [f32; 4])>),
 }
 
 impl Param {
@@ -65,6 +72,17 @@ impl Param {
         match self {
             Param::Text(t) => string(t),
             Param::Bool(b) => b.to_string(),
+            Param::Number(x) => float(*x),
+            Param::Ramp(stops) => {
+                let stops: Vec<String> = stops
+                    .iter()
+                    .map(|(p, c)| {
+                        let c: Vec<String> = c.iter().map(|&x| float(x)).collect();
+                        format!("(position: {}, color: ({}))", float(*p), c.join(", "))
+                    })
+                    .collect();
+                format!("[{}]", stops.join(", "))
+            }
         }
     }
 }
@@ -75,6 +93,8 @@ pub struct Node {
     kind: String,
     params: Vec<(String, Param)>,
     inputs: Vec<(String, Value)>,
+    position: Option<[f32; 2]>,
+    muted: bool,
 }
 
 impl Node {
@@ -83,7 +103,42 @@ impl Node {
             kind: kind.to_owned(),
             params: Vec::new(),
             inputs: Vec::new(),
+            position: None,
+            muted: false,
         }
+    }
+
+    /// A muted node computes nothing (its outputs pass its first input of their type).
+    pub fn mute(mut self) -> Self {
+        self.muted = true;
+        self
+    }
+
+    /// Where a graph editor draws the node.
+    pub fn at(mut self, x: f32, y: f32) -> Self {
+        self.position = Some([x, y]);
+        self
+    }
+
+    /// A node instantiating group `group` of the graph.
+    pub fn group(group: &str) -> Self {
+        Self::new("group").text("group", group)
+    }
+
+    pub fn kind(&self) -> &str {
+        &self.kind
+    }
+
+    pub fn has_position(&self) -> bool {
+        self.position.is_some()
+    }
+
+    /// The ids of the nodes its inputs link to.
+    pub fn links(&self) -> impl Iterator<Item = &str> {
+        self.inputs.iter().filter_map(|(_, v)| match v {
+            Value::Link(l) => Some(l.rsplit_once('.').map_or(l.as_str(), |(n, _)| n)),
+            _ => None,
+        })
     }
 
     /// Sets a text parameter.
@@ -127,13 +182,48 @@ fn set<T>(list: &mut Vec<(String, T)>, name: &str, value: T) {
     }
 }
 
-/// A material graph under construction, nodes in the order added.
+/// A socket a group exposes: its name, type (`float`, `vector`, `color`, `bsdf`, …) and,
+/// for an input, the value it takes unconnected.
+#[derive(Clone, Debug, PartialEq)]
+pub struct Socket {
+    pub name: String,
+    pub ty: String,
+    pub default: Option<Value>,
+}
+
+/// A node group: a graph used as a node. Inside, a node of type `group_input` has one
+/// output per input; `outputs` are fed by `links` (output name, inner `"node.socket"`).
+#[derive(Clone, Debug, Default)]
+pub struct Group {
+    pub inputs: Vec<Socket>,
+    pub outputs: Vec<Socket>,
+    pub nodes: Graph,
+    pub links: Vec<(String, String)>,
+}
+
+/// A material graph under construction, nodes in the order added, with the groups its
+/// nodes use.
 #[derive(Clone, Debug, Default)]
 pub struct Graph {
     nodes: Vec<(String, Node)>,
+    groups: Vec<(String, Group)>,
 }
 
 impl Graph {
+    /// Adds group `name`, replacing one of that name.
+    pub fn add_group(&mut self, name: &str, group: Group) {
+        set(&mut self.groups, name, group);
+    }
+
+    pub fn nodes(&self) -> &[(String, Node)] {
+        &self.nodes
+    }
+
+    /// The node `id`, to change in place.
+    pub fn node_mut(&mut self, id: &str) -> Option<&mut Node> {
+        self.nodes.iter_mut().find(|(k, _)| k == id).map(|(_, n)| n)
+    }
+
     /// Adds `node` as `id` (or `id_2`, `id_3`, … if taken) and returns the id used.
     pub fn add(&mut self, id: &str, node: Node) -> String {
         let mut unique = id.to_owned();
@@ -195,8 +285,53 @@ impl Graph {
             "(\n    version: 1,\n    name: {},\n    nodes: {{",
             string(name)
         );
+        self.write_nodes(&mut out, "        ");
+        out.push_str("    },\n");
+        if !self.groups.is_empty() {
+            out.push_str("    groups: {\n");
+            for (name, group) in &self.groups {
+                let sockets = |list: &[Socket]| -> String {
+                    let items: Vec<String> = list
+                        .iter()
+                        .map(|s| {
+                            let default = s
+                                .default
+                                .as_ref()
+                                .map(|d| format!(", default: {}", d.text()))
+                                .unwrap_or_default();
+                            format!("(name: {}, type: {}{default})", string(&s.name), s.ty)
+                        })
+                        .collect();
+                    items.join(", ")
+                };
+                let _ = writeln!(
+                    out,
+                    "        {}: (\n            inputs: [{}],\n            outputs: [{}],\n            nodes: {{",
+                    string(name),
+                    sockets(&group.inputs),
+                    sockets(&group.outputs)
+                );
+                group.nodes.write_nodes(&mut out, "                ");
+                let links: Vec<String> = group
+                    .links
+                    .iter()
+                    .map(|(k, v)| format!("{}: {}", string(k), string(v)))
+                    .collect();
+                let _ = writeln!(
+                    out,
+                    "            }},\n            links: {{ {} }},\n        ),",
+                    links.join(", ")
+                );
+            }
+            out.push_str("    },\n");
+        }
+        out.push_str(")\n");
+        out
+    }
+
+    fn write_nodes(&self, out: &mut String, indent: &str) {
         for (id, node) in &self.nodes {
-            let _ = write!(out, "        {}: (type: {}", string(id), string(&node.kind));
+            let _ = write!(out, "{indent}{}: (type: {}", string(id), string(&node.kind));
             if !node.params.is_empty() {
                 let params = entries(&node.params, Param::text);
                 let _ = write!(out, ", params: {{ {params} }}");
@@ -205,10 +340,14 @@ impl Graph {
                 let inputs = entries(&node.inputs, Value::text);
                 let _ = write!(out, ", inputs: {{ {inputs} }}");
             }
+            if let Some([x, y]) = node.position {
+                let _ = write!(out, ", position: ({}, {})", float(x), float(y));
+            }
+            if node.muted {
+                out.push_str(", muted: true");
+            }
             out.push_str("),\n");
         }
-        out.push_str("    },\n)\n");
-        out
     }
 }
 

@@ -18,8 +18,12 @@ pub mod recording;
 
 use std::ffi::{CStr, CString, c_char, c_void};
 
-/// Bumped on any change to the types below.
-pub const ABI_VERSION: u32 = 1;
+/// Bumped on any change to the types below. Version 2 appended the material-format
+/// functions to [`PluginDescriptor`]; the host still loads version-1 plugins (whose
+/// descriptors end before them) and reads those fields only from version 2 on.
+pub const ABI_VERSION: u32 = 2;
+/// The oldest version the host loads.
+pub const MIN_ABI_VERSION: u32 = 1;
 
 /// The symbol every plugin exports.
 pub const DESCRIPTOR_SYMBOL: &[u8] = b"kiln_plugin_descriptor";
@@ -42,6 +46,9 @@ pub fn max_triangles() -> u64 {
 
 pub const KIND_IMPORTER: u32 = 1;
 pub const KIND_EXPORTER: u32 = 2;
+/// A material format (MaterialX, …): reads files into material graphs, writes graphs to
+/// files, or both (ABI version 2).
+pub const KIND_MATERIAL: u32 = 3;
 
 /// Return codes of `import` and `export`.
 pub const STATUS_OK: i32 = 0;
@@ -56,6 +63,24 @@ pub type ExportFn = unsafe extern "C" fn(
     path: *const c_char,
     film: *const FilmView,
     options: *const c_char,
+    error: *mut ErrorBuffer,
+) -> i32;
+
+/// Reads the material file `path` and hands each material it holds to `sink`.
+pub type MaterialImportFn = unsafe extern "C" fn(
+    path: *const c_char,
+    sink: *const MaterialSink,
+    error: *mut ErrorBuffer,
+) -> i32;
+/// Writes the material graph `kmat` (the text of a `.kmat` file) named `name` to `path`.
+/// Files it names are relative to `path`'s folder, as the host has rewritten them.
+/// `library` declares the node types the graph uses (RON, [`kmat::read::parse_library`]):
+/// their sockets' types and defaults, which the graph's text does not carry.
+pub type MaterialExportFn = unsafe extern "C" fn(
+    path: *const c_char,
+    name: *const c_char,
+    kmat: *const c_char,
+    library: *const c_char,
     error: *mut ErrorBuffer,
 ) -> i32;
 
@@ -74,6 +99,10 @@ pub struct PluginDescriptor {
     pub import: Option<ImportFn>,
     /// For exporters; null for importers.
     pub export: Option<ExportFn>,
+    /// For material formats that read files (ABI version 2 on); null otherwise.
+    pub import_material: Option<MaterialImportFn>,
+    /// For material formats that write files (ABI version 2 on); null otherwise.
+    pub export_material: Option<MaterialExportFn>,
 }
 
 // The descriptor is immutable static data.
@@ -195,6 +224,20 @@ pub struct SceneBuilder {
     pub warn: unsafe extern "C" fn(ctx: *mut c_void, message: *const c_char),
 }
 
+/// Callbacks the host provides to material importers.
+#[repr(C)]
+pub struct MaterialSink {
+    pub ctx: *mut c_void,
+    /// A material as the text of a `.kmat` file; image files it names are relative to
+    /// the imported file. Returns the material's index, or `u32::MAX` when the host
+    /// rejected it (the reason is reported as a warning).
+    pub add_material:
+        unsafe extern "C" fn(ctx: *mut c_void, name: *const c_char, kmat: *const c_char) -> u32,
+    /// Something the plugin could not represent (a node it cannot map, a missing
+    /// texture): reported, not silently dropped.
+    pub warn: unsafe extern "C" fn(ctx: *mut c_void, message: *const c_char),
+}
+
 /// One named image layer of the film: `channels` floats per pixel, row-major from the
 /// top-left.
 #[repr(C)]
@@ -310,6 +353,31 @@ impl<'a> Builder<'a> {
     }
 }
 
+/// A safe view of the host's material sink for Rust material importers.
+pub struct Materials<'a> {
+    raw: &'a MaterialSink,
+}
+
+impl<'a> Materials<'a> {
+    /// # Safety
+    /// `raw` must be a valid sink for the duration of the import call.
+    pub unsafe fn from_raw(raw: &'a MaterialSink) -> Self {
+        Self { raw }
+    }
+
+    /// Adds a material given as `.kmat` text; `None` if the host rejected it.
+    pub fn add(&mut self, name: &str, kmat: &str) -> Option<u32> {
+        let (name, kmat) = (c_string(name), c_string(kmat));
+        let id = unsafe { (self.raw.add_material)(self.raw.ctx, name.as_ptr(), kmat.as_ptr()) };
+        (id != u32::MAX).then_some(id)
+    }
+
+    pub fn warn(&mut self, message: &str) {
+        let m = c_string(message);
+        unsafe { (self.raw.warn)(self.raw.ctx, m.as_ptr()) }
+    }
+}
+
 /// A safe view of the film for Rust exporters.
 pub struct Film<'a> {
     pub width: u32,
@@ -384,6 +452,21 @@ pub trait Exporter {
     const VERSION: &'static str;
     const EXTENSIONS: &'static str;
     fn export(path: &std::path::Path, film: &Film, options: &[(&str, &str)]) -> Result<(), String>;
+}
+
+/// A material format: reads material files into `.kmat` graphs, and writes graphs as
+/// files. A format that only reads (or only writes) returns an error from the other.
+pub trait MaterialFormat {
+    const NAME: &'static str;
+    const VERSION: &'static str;
+    const EXTENSIONS: &'static str;
+    /// Whether [`MaterialFormat::import`] and [`MaterialFormat::export`] are
+    /// implemented: the descriptor offers only those that are.
+    const READS: bool = true;
+    const WRITES: bool = true;
+    fn import(path: &std::path::Path, materials: &mut Materials) -> Result<(), String>;
+    /// `library` is the host's declaration of the node types `kmat` uses.
+    fn export(path: &std::path::Path, name: &str, kmat: &str, library: &str) -> Result<(), String>;
 }
 
 /// The message of a caught panic.
@@ -483,6 +566,21 @@ impl StaticDescriptor {
         import: Option<ImportFn>,
         export: Option<ExportFn>,
     ) -> Self {
+        Self::with_materials(kind, name, version, extensions, import, export, None, None)
+    }
+
+    #[doc(hidden)]
+    #[allow(clippy::too_many_arguments)]
+    pub fn with_materials(
+        kind: u32,
+        name: &str,
+        version: &str,
+        extensions: &str,
+        import: Option<ImportFn>,
+        export: Option<ExportFn>,
+        import_material: Option<MaterialImportFn>,
+        export_material: Option<MaterialExportFn>,
+    ) -> Self {
         let strings = [c_string(name), c_string(version), c_string(extensions)];
         let descriptor = PluginDescriptor {
             abi_version: ABI_VERSION,
@@ -492,6 +590,8 @@ impl StaticDescriptor {
             extensions: strings[2].as_ptr(),
             import,
             export,
+            import_material,
+            export_material,
         };
         Self {
             _strings: strings,
@@ -591,6 +691,71 @@ macro_rules! export_exporter {
                 None,
                 Some(export)
             )
+        }
+    };
+}
+
+/// Exports `$t: MaterialFormat` as this library's plugin: the descriptor symbol and C
+/// shims that catch panics and report errors.
+#[macro_export]
+macro_rules! export_material_format {
+    ($t:ty) => {
+        #[unsafe(no_mangle)]
+        pub extern "C" fn kiln_plugin_descriptor() -> *const $crate::PluginDescriptor {
+            unsafe extern "C" fn import_material(
+                path: *const ::std::ffi::c_char,
+                sink: *const $crate::MaterialSink,
+                error: *mut $crate::ErrorBuffer,
+            ) -> i32 {
+                let run = || {
+                    let path = unsafe { $crate::path_from_c(path) }?;
+                    if sink.is_null() {
+                        return Err("null material sink".into());
+                    }
+                    let mut m = unsafe { $crate::Materials::from_raw(&*sink) };
+                    <$t as $crate::MaterialFormat>::import(&path, &mut m)
+                };
+                unsafe { $crate::guarded(error, run) }
+            }
+            unsafe extern "C" fn export_material(
+                path: *const ::std::ffi::c_char,
+                name: *const ::std::ffi::c_char,
+                kmat: *const ::std::ffi::c_char,
+                library: *const ::std::ffi::c_char,
+                error: *mut $crate::ErrorBuffer,
+            ) -> i32 {
+                let run = || {
+                    let path = unsafe { $crate::path_from_c(path) }?;
+                    let text = |p: *const ::std::ffi::c_char, what: &str| {
+                        if p.is_null() {
+                            return Err(format!("null {what}"));
+                        }
+                        unsafe { ::std::ffi::CStr::from_ptr(p) }
+                            .to_str()
+                            .map_err(|_| format!("the {what} is not UTF-8"))
+                    };
+                    let (name, kmat) = (text(name, "name")?, text(kmat, "material")?);
+                    let library = text(library, "node library")?;
+                    <$t as $crate::MaterialFormat>::export(&path, name, kmat, library)
+                };
+                unsafe { $crate::guarded(error, run) }
+            }
+            static DESCRIPTOR: ::std::sync::OnceLock<$crate::StaticDescriptor> =
+                ::std::sync::OnceLock::new();
+            &DESCRIPTOR
+                .get_or_init(|| {
+                    $crate::StaticDescriptor::with_materials(
+                        $crate::KIND_MATERIAL,
+                        <$t as $crate::MaterialFormat>::NAME,
+                        <$t as $crate::MaterialFormat>::VERSION,
+                        <$t as $crate::MaterialFormat>::EXTENSIONS,
+                        None,
+                        None,
+                        <$t as $crate::MaterialFormat>::READS.then_some(import_material as _),
+                        <$t as $crate::MaterialFormat>::WRITES.then_some(export_material as _),
+                    )
+                })
+                .descriptor
         }
     };
 }

@@ -1,0 +1,647 @@
+//! MaterialX through the bundled material-format plugin: the MaterialX project's 50
+//! example materials import (all but the hair shader, which is refused by name) and
+//! compile and render; Kiln's bundled materials and the imported corpus survive a trip
+//! out and back as equal graphs; Standard Surface and OpenPBR constants become the
+//! Principled BSDF parameters the documented formulas give.
+
+mod common;
+
+use std::collections::BTreeMap;
+use std::path::{Path, PathBuf};
+
+use common::{bundled_plugins, gpu, mean, render, rmse, settings};
+use glam::{Affine3A, Vec3};
+use kiln::material::graph::{GROUP_INPUT, REROUTE};
+use kiln::material::nodes::{self, ParamKind};
+use kiln::material::texture::TextureImage;
+use kiln::material::{Graph, Input, Link, Param, Value};
+use kiln::plugin::PluginHost;
+use kiln::scene::{Camera, Light, Material, Scene, shapes};
+use kiln::shader::principled::{ParamValue, Principled};
+
+fn corpus() -> Vec<PathBuf> {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("../shared/corpus/materialx");
+    let mut files: Vec<PathBuf> = std::fs::read_dir(&dir)
+        .unwrap_or_else(|e| panic!("{}: {e}", dir.display()))
+        .flat_map(|d| std::fs::read_dir(d.unwrap().path()).into_iter().flatten())
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().is_some_and(|e| e == "mtlx"))
+        .collect();
+    files.sort();
+    assert_eq!(files.len(), 50, "the corpus holds the 50 examples");
+    files
+}
+
+fn is_hair(file: &Path) -> bool {
+    file.to_string_lossy().contains("simple_hair")
+}
+
+/// A 2×2 grey image for every texture the corpus names (its images are not included).
+fn placeholder(_: &str) -> Result<TextureImage, String> {
+    Ok(TextureImage {
+        width: 2,
+        height: 2,
+        format: 0,
+        texels: vec![0xff80_8080, 0xff40_4040, 0xff40_4040, 0xff80_8080],
+    })
+}
+
+#[test]
+fn the_corpus_imports_compiles_and_names_what_it_cannot_read() {
+    let host = bundled_plugins();
+    let mut count = 0;
+    for file in corpus() {
+        let imported = host.import_materials(&file);
+        if is_hair(&file) {
+            let message = imported
+                .expect_err("the hair shader is refused")
+                .to_string();
+            assert!(
+                message.contains("chiang_hair_bsdf") && message.contains("cannot render"),
+                "{message}"
+            );
+            continue;
+        }
+        let imported = imported.unwrap_or_else(|e| panic!("{}: {e}", file.display()));
+        assert!(!imported.materials.is_empty(), "{}", file.display());
+        let text = std::fs::read_to_string(&file).unwrap();
+        if text.contains("type=\"filename\"") {
+            assert!(
+                imported
+                    .warnings
+                    .iter()
+                    .any(|w| w.contains("texture") && w.contains("is not found")),
+                "{}: no warning names the missing textures: {:?}",
+                file.display(),
+                imported.warnings
+            );
+        }
+        for (name, graph) in imported.materials {
+            let material = Material::from_graph_with(&name, graph, &placeholder)
+                .unwrap_or_else(|e| panic!("{}: {name}: {e}", file.display()));
+            let compiled = kiln::material::compile(&name, &graph_of(&material), "material_0")
+                .unwrap_or_else(|e| panic!("{}: {name}: {e}", file.display()));
+            let kernel = kiln::render::kernel::path_tracing_kernel(
+                &kiln::shader::KernelFeatures::default(),
+                &kiln::material::materials_wgsl(&[(0, &compiled)]),
+            );
+            kernel
+                .validate()
+                .unwrap_or_else(|e| panic!("{}: {name}: the kernel: {e}", file.display()));
+            count += 1;
+        }
+    }
+    eprintln!("{count} materials imported, compiled and validated");
+    assert!(count >= 60, "only {count} materials");
+}
+
+fn graph_of(m: &Material) -> Graph {
+    m.graph.as_ref().expect("a graph material").graph.clone()
+}
+
+/// Spheres of the given materials in a grid under a lamp and a sky.
+fn spheres(materials: Vec<Material>, columns: usize) -> Scene {
+    let rows = materials.len().div_ceil(columns);
+    let mut scene = Scene::empty(Camera::look_at(
+        Vec3::new(0.0, 0.0, 2.2 * columns as f32),
+        Vec3::ZERO,
+        40.0,
+    ));
+    scene.environment = Vec3::new(0.3, 0.35, 0.4);
+    scene.add_light(Light::Point {
+        position: Vec3::new(3.0, 4.0, 6.0),
+        intensity: Vec3::splat(60.0),
+        radius: 0.3,
+    });
+    let ball = scene.add_mesh(shapes::uv_sphere(24, 12, true));
+    for (i, m) in materials.into_iter().enumerate() {
+        let id = scene.add_material(m);
+        let (c, r) = ((i % columns) as f32, (i / columns) as f32);
+        let at = Vec3::new(
+            (c - (columns - 1) as f32 / 2.0) * 1.1,
+            ((rows - 1) as f32 / 2.0 - r) * 1.1,
+            0.0,
+        );
+        scene.add_instance(
+            ball,
+            id,
+            Affine3A::from_scale_rotation_translation(Vec3::splat(0.5), Default::default(), at),
+        );
+    }
+    scene
+}
+
+#[test]
+fn the_corpus_renders_finite_images() {
+    let host = bundled_plugins();
+    let mut materials = Vec::new();
+    for file in corpus().into_iter().filter(|f| !is_hair(f)) {
+        for (name, graph) in host.import_materials(&file).unwrap().materials {
+            materials.push(Material::from_graph_with(&name, graph, &placeholder).unwrap());
+        }
+    }
+    let n = materials.len();
+    // `render` fails on any non-finite sample.
+    let film = render(&gpu(), &spheres(materials, 9), settings(144, 128, 4));
+    let radiance = film.radiance();
+    assert!(radiance.iter().all(|p| p.is_finite()));
+    assert!(mean(&radiance).max_element() > 0.01, "the spheres are lit");
+    eprintln!("{n} corpus materials rendered");
+}
+
+/// `graph` in a form two graphs computing the same share: reroutes bypassed, inputs and
+/// parameters left at their defaults written out, group inputs' nodes one id, the output
+/// node `output`, image files by name, positions, previews and frames dropped.
+fn canonical(graph: &Graph) -> BTreeMap<String, String> {
+    let mut out = BTreeMap::new();
+    let mut add = |prefix: &str, nodes: &BTreeMap<String, kiln::material::Node>| {
+        let rename = |id: &str| -> String {
+            match nodes.get(id).map(|n| n.kind.as_str()) {
+                Some(GROUP_INPUT) => "group_input".into(),
+                Some("material_output") => "output".into(),
+                _ => id.into(),
+            }
+        };
+        // A link through reroutes, to its source.
+        let source = |l: &Link| -> String {
+            let mut l = l.clone();
+            while let Some(Input::Link(next)) = nodes
+                .get(&l.node)
+                .filter(|n| n.kind == REROUTE)
+                .and_then(|n| n.inputs.get("input"))
+            {
+                l = next.clone();
+            }
+            format!("{}.{}", rename(&l.node), l.socket)
+        };
+        for (id, node) in nodes {
+            if node.kind == REROUTE {
+                continue;
+            }
+            let mut params: BTreeMap<String, String> = BTreeMap::new();
+            let mut inputs: BTreeMap<String, String> = BTreeMap::new();
+            if let Some(def) = nodes::find(&node.kind) {
+                for p in &def.params {
+                    let default = match p.kind {
+                        ParamKind::Enum(options) => format!("{:?}", Param::Text(options[0].into())),
+                        ParamKind::Bool(b) => format!("{:?}", Param::Bool(b)),
+                        _ => continue,
+                    };
+                    params.insert(p.name.into(), default);
+                }
+                for s in &def.inputs {
+                    if let nodes::Default::Value(v) = &s.default {
+                        inputs.insert(s.name.into(), value(v, s.ty));
+                    }
+                }
+            }
+            for (k, p) in &node.params {
+                let p = match p {
+                    Param::Text(t) if k == "file" => {
+                        Param::Text(Path::new(t).file_name().unwrap().to_string_lossy().into())
+                    }
+                    p => p.clone(),
+                };
+                params.insert(k.clone(), format!("{p:?}"));
+            }
+            for (k, i) in &node.inputs {
+                let ty = nodes::find(&node.kind)
+                    .and_then(|d| d.input(k))
+                    .map_or(kiln::material::SocketType::Float, |s| s.ty);
+                inputs.insert(
+                    k.clone(),
+                    match i {
+                        Input::Link(l) => source(l),
+                        Input::Value(v) => value(v, ty),
+                    },
+                );
+            }
+            out.insert(
+                format!("{prefix}{}", rename(id)),
+                format!("{} {params:?} {inputs:?} muted={}", node.kind, node.muted),
+            );
+        }
+    };
+    add("", &graph.nodes);
+    let mut interfaces = Vec::new();
+    for (name, group) in &graph.groups {
+        add(&format!("{name}/"), &group.nodes);
+        let links: BTreeMap<_, _> = group
+            .links
+            .iter()
+            .map(|(k, l)| (k, l.to_string()))
+            .collect();
+        interfaces.push((
+            format!("{name}/"),
+            format!("{:?} {:?} {links:?}", group.inputs, group.outputs),
+        ));
+    }
+    out.extend(interfaces);
+    out
+}
+
+/// A constant as its input reads it (a float fed to a colour is grey).
+fn value(v: &Value, ty: kiln::material::SocketType) -> String {
+    use kiln::material::SocketType::*;
+    match ty {
+        Float => format!("{:?}", v.as_f32()),
+        _ => format!("{:?}", v.as_vec3()),
+    }
+}
+
+fn assert_same(a: &Graph, b: &Graph, what: &str) {
+    let (a, b) = (canonical(a), canonical(b));
+    for (k, v) in &a {
+        assert_eq!(Some(v), b.get(k), "{what}: node {k} differs");
+    }
+    for k in b.keys() {
+        assert!(a.contains_key(k), "{what}: node {k} is new");
+    }
+}
+
+/// `graph` written by the exporter to `dir` and read back.
+fn round_trip(host: &PluginHost, dir: &Path, name: &str, graph: &Graph) -> Graph {
+    let file = dir.join(format!("{}.mtlx", name.replace(['/', ' '], "_")));
+    host.export_material(&file, name, graph)
+        .unwrap_or_else(|e| panic!("{name}: export: {e}"));
+    let mut back = host
+        .import_materials(&file)
+        .unwrap_or_else(|e| panic!("{name}: import of {}: {e}", file.display()))
+        .materials;
+    assert_eq!(back.len(), 1, "{name}: one material written, one read");
+    back.remove(0).1
+}
+
+#[test]
+fn bundled_materials_survive_export_and_import() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
+    let mut count = 0;
+    for entry in std::fs::read_dir(folder).unwrap() {
+        let (name, graph) = kiln::material::load_material(&entry.unwrap().path()).unwrap();
+        let back = round_trip(&host, dir.path(), &name, &graph);
+        assert_same(&graph, &back, &name);
+        count += 1;
+    }
+    assert!(count >= 17);
+}
+
+#[test]
+fn the_corpus_survives_import_export_import() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    for file in corpus().into_iter().filter(|f| !is_hair(f)) {
+        for (name, graph) in host.import_materials(&file).unwrap().materials {
+            let back = round_trip(&host, dir.path(), &name, &graph);
+            assert_same(&graph, &back, &format!("{}: {name}", file.display()));
+        }
+    }
+}
+
+/// A MaterialX document of one `category` shader with constant `inputs`.
+fn shader_document(category: &str, inputs: &[(&str, &str, &str)]) -> String {
+    let mut text = format!(
+        "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n  <{category} name=\"S\" type=\"surfaceshader\">\n"
+    );
+    for (name, ty, value) in inputs {
+        text.push_str(&format!(
+            "    <input name=\"{name}\" type=\"{ty}\" value=\"{value}\" />\n"
+        ));
+    }
+    text.push_str(&format!(
+        "  </{category}>\n  <surfacematerial name=\"M\" type=\"material\">\n    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"S\" />\n  </surfacematerial>\n</materialx>\n"
+    ));
+    text
+}
+
+/// Standard Surface and OpenPBR materials of constants, and the Principled BSDF the
+/// formulas of docs/MATERIALX.md give for each.
+fn mapping_cases() -> Vec<(&'static str, String, Principled)> {
+    let p = Principled::default();
+    let standard = |inputs: &[(&str, &str, &str)]| shader_document("standard_surface", inputs);
+    let open_pbr = |inputs: &[(&str, &str, &str)]| shader_document("open_pbr_surface", inputs);
+    // Standard Surface's defaults as the Principled BSDF (the translation of
+    // standard_surface_to_open_pbr, then OpenPBR's names).
+    let ss = Principled {
+        base_color: Vec3::splat(0.8),
+        roughness: 0.2,
+        coat_roughness: 0.1,
+        coat_ior: 1.5,
+        sheen_roughness: 0.3f32.powf(0.4),
+        subsurface_radius: Vec3::ONE,
+        subsurface_scale: 1.0,
+        ..p
+    };
+    // OpenPBR's defaults.
+    let op = Principled {
+        roughness: 0.3,
+        coat_roughness: 0.0,
+        coat_ior: 1.6,
+        sheen_roughness: 0.5,
+        subsurface_radius: Vec3::new(1.0, 0.5, 0.25),
+        subsurface_scale: 1.0,
+        ..p
+    };
+    vec![
+        (
+            "standard metal",
+            standard(&[
+                ("base_color", "color3", "0.95, 0.64, 0.54"),
+                ("metalness", "float", "1"),
+                ("specular", "float", "0.5"),
+                ("specular_roughness", "float", "0.25"),
+            ]),
+            // A metal's specular weight is 1 in the translation.
+            Principled {
+                base_color: Vec3::new(0.95, 0.64, 0.54),
+                metallic: 1.0,
+                roughness: 0.25,
+                ..ss
+            },
+        ),
+        (
+            "standard glass",
+            standard(&[
+                ("base", "float", "0"),
+                ("transmission", "float", "1"),
+                ("transmission_color", "color3", "0.8, 0.9, 1"),
+                ("specular_IOR", "float", "1.45"),
+                ("specular_roughness", "float", "0.05"),
+            ]),
+            Principled {
+                base_weight: 0.0,
+                transmission_weight: 1.0,
+                transmission_color: Vec3::new(0.8, 0.9, 1.0),
+                ior: 1.45,
+                roughness: 0.05,
+                ..ss
+            },
+        ),
+        (
+            "standard coat",
+            standard(&[
+                ("base_color", "color3", "0.1, 0.2, 0.6"),
+                ("coat", "float", "0.5"),
+                ("coat_color", "color3", "0.9, 0.8, 0.7"),
+                ("coat_roughness", "float", "0.02"),
+            ]),
+            // The base is tinted by mix(1, coat_color, coat).
+            Principled {
+                base_color: Vec3::new(0.1 * 0.95, 0.2 * 0.9, 0.6 * 0.85),
+                coat_weight: 0.5,
+                coat_color: Vec3::new(0.9, 0.8, 0.7),
+                coat_roughness: 0.02,
+                ..ss
+            },
+        ),
+        (
+            "standard sheen",
+            standard(&[
+                ("sheen", "float", "1"),
+                ("sheen_color", "color3", "0.5, 0.2, 0.8"),
+                ("sheen_roughness", "float", "0.5"),
+            ]),
+            Principled {
+                sheen_weight: 1.0,
+                sheen_color: Vec3::new(0.5, 0.2, 0.8),
+                sheen_roughness: 0.5f32.powf(0.4),
+                ..ss
+            },
+        ),
+        (
+            "standard subsurface",
+            standard(&[
+                ("base_color", "color3", "0.8, 0.8, 0.8"),
+                ("subsurface", "float", "1"),
+                ("subsurface_color", "color3", "0.9, 0.5, 0.4"),
+                ("subsurface_radius", "color3", "1, 0.4, 0.2"),
+                ("subsurface_scale", "float", "0.1"),
+            ]),
+            // Kiln's subsurface scatters the base colour: the subsurface colour here.
+            Principled {
+                base_color: Vec3::new(0.9, 0.5, 0.4),
+                subsurface_weight: 1.0,
+                subsurface_radius: Vec3::new(1.0, 0.4, 0.2),
+                subsurface_scale: 0.1,
+                ..ss
+            },
+        ),
+        (
+            "OpenPBR metal",
+            open_pbr(&[
+                ("base_color", "color3", "0.9, 0.7, 0.3"),
+                ("base_metalness", "float", "1"),
+                ("specular_roughness", "float", "0.35"),
+                ("specular_color", "color3", "1, 0.9, 0.8"),
+            ]),
+            Principled {
+                base_color: Vec3::new(0.9, 0.7, 0.3),
+                metallic: 1.0,
+                roughness: 0.35,
+                specular_color: Vec3::new(1.0, 0.9, 0.8),
+                ..op
+            },
+        ),
+        (
+            "OpenPBR glass",
+            open_pbr(&[
+                ("transmission_weight", "float", "1"),
+                ("transmission_color", "color3", "0.7, 0.9, 0.8"),
+                ("transmission_depth", "float", "0.5"),
+                ("specular_ior", "float", "1.6"),
+                ("specular_roughness", "float", "0.1"),
+            ]),
+            Principled {
+                transmission_weight: 1.0,
+                transmission_color: Vec3::new(0.7, 0.9, 0.8),
+                transmission_depth: 0.5,
+                ior: 1.6,
+                roughness: 0.1,
+                ..op
+            },
+        ),
+        (
+            "OpenPBR coat",
+            open_pbr(&[
+                ("base_color", "color3", "0.6, 0.1, 0.1"),
+                ("coat_weight", "float", "1"),
+                ("coat_roughness", "float", "0.1"),
+                ("coat_ior", "float", "1.5"),
+            ]),
+            Principled {
+                base_color: Vec3::new(0.6, 0.1, 0.1),
+                coat_weight: 1.0,
+                coat_roughness: 0.1,
+                coat_ior: 1.5,
+                ..op
+            },
+        ),
+        (
+            "OpenPBR sheen",
+            open_pbr(&[
+                ("fuzz_weight", "float", "0.8"),
+                ("fuzz_color", "color3", "0.3, 0.6, 0.9"),
+                ("fuzz_roughness", "float", "0.4"),
+            ]),
+            Principled {
+                sheen_weight: 0.8,
+                sheen_color: Vec3::new(0.3, 0.6, 0.9),
+                sheen_roughness: 0.4,
+                ..op
+            },
+        ),
+        (
+            "OpenPBR subsurface",
+            open_pbr(&[
+                ("base_color", "color3", "0.9, 0.6, 0.5"),
+                ("subsurface_weight", "float", "1"),
+                ("subsurface_radius", "float", "0.2"),
+                ("subsurface_radius_scale", "color3", "1, 0.5, 0.3"),
+                ("subsurface_scatter_anisotropy", "float", "0.3"),
+            ]),
+            Principled {
+                base_color: Vec3::new(0.9, 0.6, 0.5),
+                subsurface_weight: 1.0,
+                subsurface_scale: 0.2,
+                subsurface_radius: Vec3::new(1.0, 0.5, 0.3),
+                subsurface_anisotropy: 0.3,
+                ..op
+            },
+        ),
+    ]
+}
+
+#[test]
+fn standard_surface_and_open_pbr_constants_become_the_documented_principled_bsdf() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    let mut imported = Vec::new();
+    let mut expected = Vec::new();
+    for (what, document, want) in mapping_cases() {
+        let file = dir.path().join(format!("{}.mtlx", what.replace(' ', "_")));
+        std::fs::write(&file, document).unwrap();
+        let (_, graph) = host.import_materials(&file).unwrap().materials.remove(0);
+        // The surface's parameters: every input a constant, each the formula's value.
+        let surface = graph
+            .nodes
+            .values()
+            .find(|n| n.kind == "principled_bsdf")
+            .expect("a principled node");
+        for p in &kiln::shader::principled::PARAMETERS {
+            let Some(input) = surface.inputs.get(p.name) else {
+                continue;
+            };
+            let Input::Value(v) = input else {
+                panic!("{what}: {} is not a constant: {input:?}", p.name);
+            };
+            let (got, want) = match want.get(p.name).unwrap() {
+                ParamValue::Float(x) => (Vec3::splat(v.as_f32()), Vec3::splat(x)),
+                ParamValue::Color(c) => (Vec3::from(v.as_vec3()), c),
+                ParamValue::Bool(_) => continue,
+            };
+            assert!(
+                (got - want).abs().max_element() < 1e-5,
+                "{what}: {} is {got}, the formula gives {want}",
+                p.name
+            );
+        }
+        imported.push(Material::from_graph(what, graph).unwrap());
+        expected.push(Material {
+            name: what.into(),
+            principled: want,
+            ..Material::default()
+        });
+    }
+    // And they render as the hand-written materials do.
+    let s = settings(100, 48, 32);
+    let a = render(&gpu(), &spheres(expected, 5), s).radiance();
+    let b = render(&gpu(), &spheres(imported, 5), s).radiance();
+    let error = rmse(&a, &b) / mean(&a).max_element() as f64;
+    eprintln!("relative RMSE, imported vs hand-written: {error:e}");
+    assert!(
+        error < 1e-3,
+        "imported materials render differently: {error}"
+    );
+}
+
+/// Runs MaterialX's own validation (`Document.validate()` with the standard libraries)
+/// on `files`, in a virtual environment with the `MaterialX` package from PyPI made in
+/// the target folder on first use.
+fn materialx_validate(files: &[PathBuf]) {
+    let target = Path::new(env!("CARGO_MANIFEST_DIR")).join("target/materialx-venv");
+    let python = target.join("bin/python");
+    if !python.exists() {
+        let made = std::process::Command::new("python3")
+            .args(["-m", "venv"])
+            .arg(&target)
+            .status()
+            .expect("python3 runs");
+        assert!(
+            made.success(),
+            "cannot make a virtual environment at {}",
+            target.display()
+        );
+    }
+    let has = std::process::Command::new(&python)
+        .args(["-c", "import MaterialX"])
+        .status()
+        .unwrap();
+    if !has.success() {
+        let pip = std::process::Command::new(target.join("bin/pip"))
+            .args(["install", "--quiet", "MaterialX==1.39.5"])
+            .status()
+            .unwrap();
+        assert!(pip.success(), "pip cannot install MaterialX from PyPI");
+    }
+    let script = r#"
+import sys, MaterialX as mx
+lib = mx.createDocument()
+mx.loadLibraries(mx.getDefaultDataLibraryFolders(), mx.getDefaultDataSearchPath(), lib)
+bad = 0
+for f in sys.argv[1:]:
+    doc = mx.createDocument()
+    mx.readFromXmlFile(doc, f)
+    doc.importLibrary(lib)
+    ok, message = doc.validate()
+    if not ok:
+        bad += 1
+        print(f"{f}: {message}")
+sys.exit(1 if bad else 0)
+"#;
+    let out = std::process::Command::new(&python)
+        .arg("-c")
+        .arg(script)
+        .args(files)
+        .output()
+        .unwrap();
+    assert!(
+        out.status.success(),
+        "MaterialX finds invalid files:\n{}{}",
+        String::from_utf8_lossy(&out.stdout),
+        String::from_utf8_lossy(&out.stderr)
+    );
+}
+
+#[test]
+fn every_file_the_exporter_writes_passes_materialx_validation() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    let mut files = Vec::new();
+    let folder = Path::new(env!("CARGO_MANIFEST_DIR")).join("assets/materials");
+    let mut graphs = Vec::new();
+    for entry in std::fs::read_dir(folder).unwrap() {
+        graphs.push(kiln::material::load_material(&entry.unwrap().path()).unwrap());
+    }
+    for file in corpus().into_iter().filter(|f| !is_hair(f)) {
+        graphs.extend(host.import_materials(&file).unwrap().materials);
+    }
+    for (i, (name, graph)) in graphs.iter().enumerate() {
+        let file = dir.path().join(format!("{i}.mtlx"));
+        host.export_material(&file, name, graph)
+            .unwrap_or_else(|e| panic!("{name}: {e}"));
+        files.push(file);
+    }
+    eprintln!("{} exported files", files.len());
+    materialx_validate(&files);
+}
