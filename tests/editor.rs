@@ -646,6 +646,74 @@ fn an_import_adds_to_the_scene_as_one_undo_step() {
     assert_eq!(*harness.state().document().scene(), start);
 }
 
+/// The material list's Import… adds a MaterialX file's materials as one undo step (one
+/// whose image is missing keeps its graph, with the error, and the import says which
+/// file); Export… writes the shown material, which reads back as the same graph.
+#[test]
+fn the_material_list_imports_and_exports_materialx() {
+    let dir = tempfile::tempdir().unwrap();
+    let brass = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/corpus/materialx/StandardSurface/standard_surface_brass_tiled.mtlx");
+    let gold = Path::new(env!("CARGO_MANIFEST_DIR"))
+        .join("../shared/corpus/materialx/StandardSurface/standard_surface_gold.mtlx");
+    let out = dir.path().join("gold.mtlx");
+    let mut dialogs = ScriptedDialogs::default();
+    dialogs.material_import.push_back(brass);
+    dialogs.material_import.push_back(gold);
+    dialogs.material_export.push_back(out.clone());
+    let mut harness = harness_with(dialogs, bundled_plugins());
+    harness.step();
+    let start = harness.state().document().scene().clone();
+    let before = start.materials.len();
+
+    harness.get_by_label("Import…").click();
+    harness.step();
+    let app = harness.state();
+    assert_eq!(app.error(), None);
+    let materials = &app.document().scene().materials;
+    assert_eq!(materials.len(), before + 1);
+    assert_eq!(materials[before].name, "Tiled_Brass");
+    // Its images are not in the corpus: the graph is kept, with the error naming one.
+    let error = app
+        .document()
+        .graph_error(before)
+        .expect("the missing image's error");
+    assert!(error.to_string().contains("brass_"), "{error}");
+    let (title, text) = app.notice().expect("the warnings are shown");
+    assert!(
+        title.contains("warnings") && text.contains("brass_color.jpg"),
+        "{text}"
+    );
+    harness.step();
+    harness.get_by_label("OK").click();
+    harness.step();
+    harness.step();
+    assert_eq!(harness.state().notice(), None);
+    harness.key_press_modifiers(egui::Modifiers::COMMAND, egui::Key::Z);
+    harness.step();
+    assert_eq!(*harness.state().document().scene(), start);
+
+    harness.get_by_label("Import…").click();
+    harness.step();
+    let app = harness.state();
+    assert_eq!((app.error(), app.notice()), (None, None));
+    let shown = app.document().material_graph(before).unwrap();
+    assert_eq!(app.document().scene().materials[before].name, "Gold");
+    harness.get_by_label("Export…").click();
+    harness.step();
+    assert_eq!(harness.state().error(), None);
+    let back = bundled_plugins().import_materials(&out).unwrap().materials;
+    assert_eq!(back.len(), 1);
+    assert_eq!(back[0].0, "Gold");
+    let principled = |g: &kiln::material::Graph| {
+        g.nodes
+            .values()
+            .find(|n| n.kind == "principled_bsdf")
+            .map(|n| n.inputs.clone())
+    };
+    assert_eq!(principled(&back[0].1), principled(&shown));
+}
+
 /// File ▸ Import… (the dialog answers with the file queued), which must succeed.
 fn import_through_the_menu(harness: &mut Harness<'_, EditorApp>) {
     harness.get_by_label("File").click();

@@ -84,6 +84,118 @@ static const KilnPluginDescriptor D = { KILN_ABI_VERSION, KILN_KIND_IMPORTER, "t
 const KilnPluginDescriptor *kiln_plugin_descriptor(void) { return &D; }
 "#;
 
+/// An importer built against ABI version 1, whose descriptor ends before version 2's
+/// material functions: the host still loads it and reads nothing past its end.
+const VERSION_1_IMPORTER: &str = r#"
+#include "kiln_plugin.h"
+typedef struct V1Descriptor {
+    uint32_t abi_version; uint32_t kind; const char *name; const char *version;
+    const char *extensions; KilnImportFn import; KilnExportFn export_;
+} V1Descriptor;
+static int32_t import(const char *path, const KilnSceneBuilder *b, KilnErrorBuffer *e) {
+    (void)path; (void)b; (void)e; return KILN_STATUS_OK;
+}
+static const V1Descriptor D = { 1u, KILN_KIND_IMPORTER, "old", "1", "old", import, 0 };
+const V1Descriptor *kiln_plugin_descriptor(void) { return &D; }
+"#;
+
+/// The smallest material format in C (docs/PLUGINS.md): reads a `.cmat` file holding
+/// an RGB colour into a principled material, and writes a material's name.
+const C_MATERIAL_FORMAT: &str = r#"
+#include <stdio.h>
+#include "kiln_plugin.h"
+static int32_t import_material(const char *path, const KilnMaterialSink *sink, KilnErrorBuffer *e) {
+    float r, g, b;
+    FILE *f = fopen(path, "r");
+    if (!f || fscanf(f, "%f %f %f", &r, &g, &b) != 3) {
+        if (f) fclose(f);
+        snprintf(e->data, e->capacity, "%s holds no colour", path);
+        return KILN_STATUS_ERROR;
+    }
+    fclose(f);
+    char kmat[512];
+    snprintf(kmat, sizeof kmat,
+        "(version: 1, nodes: {"
+        " \"s\": (type: \"principled_bsdf\", inputs: { \"base_color\": (%f, %f, %f) }),"
+        " \"out\": (type: \"material_output\", inputs: { \"surface\": \"s.bsdf\" }) })",
+        r, g, b);
+    if (sink->add_material(sink->ctx, "painted", kmat) == KILN_INVALID_ID) {
+        snprintf(e->data, e->capacity, "Kiln refused the material");
+        return KILN_STATUS_ERROR;
+    }
+    sink->warn(sink->ctx, "colours only");
+    return KILN_STATUS_OK;
+}
+static int32_t export_material(const char *path, const char *name, const char *kmat,
+                               const char *library, KilnErrorBuffer *e) {
+    (void)kmat; (void)library;
+    FILE *f = fopen(path, "w");
+    if (!f) { snprintf(e->data, e->capacity, "cannot write %s", path); return KILN_STATUS_ERROR; }
+    fprintf(f, "%s\n", name);
+    fclose(f);
+    return KILN_STATUS_OK;
+}
+static const KilnPluginDescriptor D = {
+    KILN_ABI_VERSION, KILN_KIND_MATERIAL, "colour", "1", "cmat", 0, 0, import_material, export_material,
+};
+const KilnPluginDescriptor *kiln_plugin_descriptor(void) { return &D; }
+"#;
+
+#[test]
+fn version_1_plugins_load_and_c_material_formats_work() {
+    let dir = tempfile::tempdir().unwrap();
+    compile_c(dir.path(), "old", VERSION_1_IMPORTER);
+    compile_c(dir.path(), "colour", C_MATERIAL_FORMAT);
+    let mut host = PluginHost::default();
+    host.load_dir(dir.path(), false);
+    assert!(host.rejected.is_empty(), "{:?}", host.rejected);
+    assert!(host.handles(PluginKind::Importer, Path::new("x.old")));
+    assert!(host.handles(PluginKind::Material, Path::new("x.cmat")));
+
+    let file = dir.path().join("red.cmat");
+    std::fs::write(&file, "0.8 0.1 0.1\n").unwrap();
+    let imported = host.import_materials(&file).unwrap();
+    assert_eq!(imported.warnings, ["colours only"]);
+    let (name, graph) = &imported.materials[0];
+    assert_eq!(name, "painted");
+    kiln::material::compile(name, graph, "m").unwrap();
+    let out = dir.path().join("back.cmat");
+    host.export_material(&out, name, graph).unwrap();
+    assert_eq!(std::fs::read_to_string(&out).unwrap(), "painted\n");
+
+    // Through the CLI, and a bad file is an error naming it.
+    let folder = dir.path().join("mats");
+    let plugin_dir = dir.path().to_str().unwrap();
+    let (code, out, err) = kiln(&[
+        "--plugin-dir",
+        plugin_dir,
+        "material",
+        "import",
+        file.to_str().unwrap(),
+        "-o",
+        folder.to_str().unwrap(),
+    ]);
+    assert_eq!(code, 0, "{err}");
+    assert!(
+        out.contains("painted.kmat") && err.contains("warning: colours only"),
+        "{out}{err}"
+    );
+    assert!(folder.join("painted.kmat").is_file());
+    let empty = dir.path().join("empty.cmat");
+    std::fs::write(&empty, "").unwrap();
+    let (code, _, err) = kiln(&[
+        "--plugin-dir",
+        plugin_dir,
+        "material",
+        "import",
+        empty.to_str().unwrap(),
+        "-o",
+        folder.to_str().unwrap(),
+    ]);
+    assert_ne!(code, 0);
+    assert!(err.contains("empty.cmat holds no colour"), "{err}");
+}
+
 /// The panicking Rust plugin (plugins/test-panic), built by cargo as a dev-dependency.
 fn panicking_plugin() -> PathBuf {
     let exe = std::env::current_exe().unwrap();

@@ -13,7 +13,7 @@ use glam::Vec3;
 
 use crate::plugin::PluginHost;
 use crate::render::{GpuContext, KernelKind};
-use crate::scene::{Camera, Scene, lookdev};
+use crate::scene::{Camera, Material, Scene, lookdev};
 
 use super::document::{Command, Document, GestureId, Selection};
 use super::files::{FileDialogs, open_document, save_document};
@@ -21,7 +21,7 @@ use super::final_render::{FinalRender, RenderState};
 use super::gizmo::{self, Constraint, Mode, Orientation, ViewProjection};
 use super::inspector::{InspectorAction, inspector_ui};
 use super::navigation;
-use super::node_editor::MaterialDrag;
+use super::node_editor::{MaterialDrag, MaterialFileRequest};
 use super::node_previews::NodePreviews;
 use super::outliner::{Outliner, OutlinerAction};
 use super::pick::{Picker, camera_ray};
@@ -224,6 +224,9 @@ pub struct EditorApp {
     /// The active tool, whose gizmo the selection shows (the viewport's toolbar).
     gizmo_mode: Mode,
     error: Option<String>,
+    /// A message that is not an error (what an import could not represent): its title
+    /// and text.
+    notice: Option<(String, String)>,
     pending: Option<Pending>,
     allow_close: bool,
     title: String,
@@ -371,6 +374,7 @@ impl EditorApp {
             add_menu_at: None,
             gizmo_mode: Mode::Move,
             error,
+            notice: None,
             pending: None,
             allow_close: false,
             title: String::new(),
@@ -630,6 +634,95 @@ impl EditorApp {
         ];
         if let Err(e) = self.document.apply_all(commands) {
             self.error = Some(e.to_string());
+        }
+    }
+
+    /// The material list's Import…: the materials of a file a material-format plugin
+    /// reads, added as one undo step (one whose graph does not compile, for a missing
+    /// image, is added with its graph kept and the error shown, as an edit that does not
+    /// compile is); the first is shown. Warnings are shown after.
+    fn import_materials(&mut self) {
+        let extensions = self.plugins.material_extensions(false);
+        if extensions.is_empty() {
+            self.error = Some("no material-format plugin is loaded (see `kiln plugins`)".into());
+            return;
+        }
+        let Some(path) = self.dialogs.material_import_path(&extensions) else {
+            return;
+        };
+        let imported = match self.plugins.import_materials(&path) {
+            Ok(imported) => imported,
+            Err(e) => {
+                self.error = Some(format!("cannot import {}: {e}", path.display()));
+                return;
+            }
+        };
+        let first = self.document.scene().materials.len();
+        let mut commands = Vec::new();
+        let mut names: Vec<String> = Vec::new();
+        for (name, graph) in imported.materials {
+            let mut unique = self.document.unique_material_name(&name);
+            for n in 2.. {
+                if !names.contains(&unique) {
+                    break;
+                }
+                unique = self.document.unique_material_name(&format!("{name} {n}"));
+            }
+            names.push(unique.clone());
+            let (material, pending) = match Material::from_graph(&unique, graph.clone()) {
+                Ok(m) => (m, None),
+                Err(e) => (
+                    Material::with(&unique, Default::default()),
+                    Some(Box::new((graph, e))),
+                ),
+            };
+            commands.push(Command::AddMaterial {
+                index: first + commands.len(),
+                material: Box::new(material),
+                pending,
+            });
+        }
+        if let Err(e) = self.document.apply_all(commands) {
+            self.error = Some(e.to_string());
+            return;
+        }
+        self.node_editor.show_material(first);
+        if !imported.warnings.is_empty() {
+            self.notice = Some((
+                "Imported with warnings".into(),
+                format!(
+                    "{} imported from {}:\n\n{}",
+                    names.join(", "),
+                    path.display(),
+                    imported.warnings.join("\n")
+                ),
+            ));
+        }
+    }
+
+    /// The material list's Export…: material `material`'s graph (as edited) written
+    /// through a material-format plugin, its images named relative to the file.
+    fn export_material(&mut self, material: usize) {
+        let extensions = self.plugins.material_extensions(true);
+        if extensions.is_empty() {
+            self.error =
+                Some("no material-format plugin writes materials (see `kiln plugins`)".into());
+            return;
+        }
+        let Some(mut graph) = self.document.material_graph(material) else {
+            return;
+        };
+        let name = self.document.scene().materials[material].name.clone();
+        let Some(path) = self.dialogs.material_export_path(&name, &extensions) else {
+            return;
+        };
+        let folder = match path.parent() {
+            Some(p) if !p.as_os_str().is_empty() => p.to_owned(),
+            _ => std::path::PathBuf::from("."),
+        };
+        crate::material::relative_files(&mut graph, &folder);
+        if let Err(e) = self.plugins.export_material(&path, &name, &graph) {
+            self.error = Some(format!("cannot export {name}: {e}"));
         }
     }
 
@@ -1931,7 +2024,26 @@ impl EditorApp {
             if close {
                 self.error = None;
             }
+        } else if let Some((title, message)) = self.notice.clone() {
+            let mut close = false;
+            egui::Modal::new(egui::Id::new("notice")).show(ctx, |ui| {
+                ui.set_max_width(560.0);
+                ui.heading(title);
+                egui::ScrollArea::vertical()
+                    .max_height(320.0)
+                    .show(ui, |ui| ui.label(message));
+                ui.add_space(8.0);
+                close = ui.button("OK").clicked();
+            });
+            if close {
+                self.notice = None;
+            }
         }
+    }
+
+    /// The notice shown to the user (title and text), if any.
+    pub fn notice(&self) -> Option<(&str, &str)> {
+        self.notice.as_ref().map(|(t, m)| (t.as_str(), m.as_str()))
     }
 
     /// Offers the autosave a crashed session left.
@@ -2164,6 +2276,11 @@ impl EditorApp {
                         .ui(ui, &self.document, thumbnails, previews, dialogs)
                 {
                     self.apply(command, gesture);
+                }
+                match self.node_editor.take_file_request() {
+                    Some(MaterialFileRequest::Import) => self.import_materials(),
+                    Some(MaterialFileRequest::Export(m)) => self.export_material(m),
+                    None => {}
                 }
             });
         egui::CentralPanel::no_frame().show(ui, |ui| self.viewport_ui(ui));

@@ -23,6 +23,10 @@ pub trait FileDialogs {
     fn environment_path(&mut self) -> Option<PathBuf>;
     /// An image for an image-texture node (any of [`IMAGE_EXTENSIONS`]).
     fn image_path(&mut self) -> Option<PathBuf>;
+    /// A material file (MaterialX, …) a material-format plugin reads, in `extensions`.
+    fn material_import_path(&mut self, extensions: &[String]) -> Option<PathBuf>;
+    /// Where to write material `name`, in one of `extensions`.
+    fn material_export_path(&mut self, name: &str, extensions: &[String]) -> Option<PathBuf>;
 }
 
 /// The extensions of the images a texture reads, as dialogs offer them and a file
@@ -114,6 +118,30 @@ impl FileDialogs for NativeDialogs {
             .add_filter("Radiance HDR", &["hdr"])
             .pick_file()
     }
+
+    fn material_import_path(&mut self, extensions: &[String]) -> Option<PathBuf> {
+        rfd::FileDialog::new()
+            .set_title("Import Materials")
+            .add_filter("Material files", extensions)
+            .pick_file()
+    }
+
+    fn material_export_path(&mut self, name: &str, extensions: &[String]) -> Option<PathBuf> {
+        let first = extensions.first().map_or("mtlx", String::as_str);
+        let mut dialog = rfd::FileDialog::new()
+            .set_title("Export Material")
+            .set_file_name(format!("{name}.{first}"));
+        for extension in extensions {
+            dialog = dialog.add_filter(extension.to_uppercase(), &[extension]);
+        }
+        dialog.save_file().map(|p| {
+            if p.extension().is_none() {
+                p.with_extension(first)
+            } else {
+                p
+            }
+        })
+    }
 }
 
 /// Dialogs that answer from a queue of paths, for tests and scripted sessions; an empty
@@ -126,6 +154,8 @@ pub struct ScriptedDialogs {
     pub export: std::collections::VecDeque<PathBuf>,
     pub environment: std::collections::VecDeque<PathBuf>,
     pub image: std::collections::VecDeque<PathBuf>,
+    pub material_import: std::collections::VecDeque<PathBuf>,
+    pub material_export: std::collections::VecDeque<PathBuf>,
 }
 
 impl FileDialogs for ScriptedDialogs {
@@ -151,6 +181,14 @@ impl FileDialogs for ScriptedDialogs {
 
     fn image_path(&mut self) -> Option<PathBuf> {
         self.image.pop_front()
+    }
+
+    fn material_import_path(&mut self, _extensions: &[String]) -> Option<PathBuf> {
+        self.material_import.pop_front()
+    }
+
+    fn material_export_path(&mut self, _name: &str, _extensions: &[String]) -> Option<PathBuf> {
+        self.material_export.pop_front()
     }
 }
 

@@ -215,6 +215,8 @@ struct Scope<'f> {
     indent: &'static str,
     /// Attributes every node written gets (spare nodes name their material).
     mark: String,
+    /// Nodes written as part of another (a tiled image's mapping).
+    consumed: BTreeSet<String>,
 }
 
 impl<'f> Scope<'f> {
@@ -227,6 +229,7 @@ impl<'f> Scope<'f> {
             text: String::new(),
             indent: if interface.is_some() { "    " } else { "  " },
             mark: String::new(),
+            consumed: BTreeSet::new(),
         }
     }
 
@@ -311,6 +314,7 @@ impl<'f> Document<'f> {
                 node.kind.as_str(),
                 "material_output" | "group_input" | "reroute"
             ) || scope.done.keys().any(|(n, _)| n == id)
+                || scope.consumed.contains(id)
             {
                 continue;
             }
@@ -410,6 +414,13 @@ impl<'f> Document<'f> {
         if let Some(row) = self.row_for(node, output_ty) {
             let name = scope.unique(id);
             let mut inputs = Vec::new();
+            for (mx, value) in row.mx_fixed {
+                inputs.push((
+                    mx.to_string(),
+                    output_ty.to_owned(),
+                    format!("value=\"{}\"", number(*value)),
+                ));
+            }
             for (mx, kiln, _) in row.inputs {
                 let ty = table::mx_input_type(row, mx).unwrap_or_else(|| {
                     node_type
@@ -454,8 +465,17 @@ impl<'f> Document<'f> {
     /// values of the inputs the row fixes.
     fn row_for(&self, node: &Node, output_ty: &str) -> Option<&'static table::Row> {
         table::ROWS.iter().find(|row| {
+            // A node with several outputs is told apart by its first input's type.
+            let ty = match row.inputs.first() {
+                Some((_, kiln, _)) if row.outputs.len() > 1 => self
+                    .library
+                    .get(&node.kind)
+                    .and_then(|t| t.inputs.iter().find(|s| s.name == *kiln))
+                    .map_or(output_ty, |s| table::mx_type(s.ty.name())),
+                _ => output_ty,
+            };
             row.kiln == node.kind
-                && row.types.contains(&output_ty)
+                && row.types.contains(&ty)
                 && row.params.iter().all(|(p, v)| {
                     let want = match v {
                         Fixed::Text(t) => Param::Text(t.to_string()),
@@ -709,17 +729,85 @@ impl<'f> Document<'f> {
                 format!("value=\"{filter}\""),
             ),
         ];
-        if node.inputs.contains_key("vector") {
+        let mut category = "image";
+        if let Some((mapping, tiling, offset)) = self.tiling(scope, id, node) {
+            // A Mapping node only this image reads, scaling and moving its UVs: the
+            // tiling and offset of MaterialX's tiled image.
+            category = "tiledimage";
+            inputs.retain(|(n, _, _)| n == "file" || n == "filtertype");
+            inputs.push(self.input_xml(scope, mapping, "texcoord", "vector", "vector2")?);
+            inputs.push((
+                "uvtiling".into(),
+                "vector2".into(),
+                format!("value=\"{}, {}\"", number(tiling[0]), number(tiling[1])),
+            ));
+            inputs.push((
+                "uvoffset".into(),
+                "vector2".into(),
+                format!("value=\"{}, {}\"", number(offset[0]), number(offset[1])),
+            ));
+        } else if node.inputs.contains_key("vector") {
             inputs.push(self.input_xml(scope, node, "texcoord", "vector", "vector2")?);
         }
         let name = scope.unique(id);
-        scope.write("image", &name, "color3", position, &inputs);
+        scope.write(category, &name, "color3", position, &inputs);
         Ok(Out {
             node: name,
             output: None,
             interface: false,
             ty: "color3".into(),
         })
+    }
+
+    /// The Mapping node feeding image `id`'s coordinates, when it is a tiled image's
+    /// tiling and offset (a point mapping of linked coordinates by constant scale and
+    /// location, no rotation, read by nothing else; address modes stay periodic), with
+    /// the tiling and offset; the node is then part of the image.
+    fn tiling(
+        &self,
+        scope: &mut Scope<'f>,
+        id: &str,
+        node: &Node,
+    ) -> Option<(&'f Node, [f32; 2], [f32; 2])> {
+        let (mapping_id, _) = node.inputs.get("vector").and_then(Input::link)?;
+        let mapping = scope
+            .nodes
+            .get(mapping_id)
+            .filter(|m| m.kind == "mapping" && !m.muted)?;
+        let readers = scope
+            .nodes
+            .values()
+            .flat_map(|n| n.inputs.values())
+            .filter(|i| i.link().is_some_and(|(n, _)| n == mapping_id))
+            .count();
+        let point = self.param(mapping, "vector_type") == Some(Param::Text("point".into()));
+        let constant = |name: &str, default: [f32; 3]| match self.input(mapping, name) {
+            None => Some(default),
+            Some(Input::Vec3(v)) => Some(v),
+            Some(Input::Float(x)) => Some([x; 3]),
+            _ => None,
+        };
+        let scale = constant("scale", [1.0; 3])?;
+        let location = constant("location", [0.0; 3])?;
+        let rotation = constant("rotation", [0.0; 3])?;
+        let repeat = self.param(node, "extension") == Some(Param::Text("repeat".into()));
+        let linked = mapping
+            .inputs
+            .get("vector")
+            .is_some_and(|v| v.link().is_some());
+        if readers != 1
+            || !point
+            || !linked
+            || !repeat
+            || rotation != [0.0; 3]
+            || scale[2] != 1.0
+            || location[2] != 0.0
+        {
+            return None;
+        }
+        let _ = id;
+        scope.consumed.insert(mapping_id.to_owned());
+        Some((mapping, [scale[0], scale[1]], [-location[0], -location[1]]))
     }
 
     /// A group's instance, and (once) its node definition and node graph.

@@ -699,7 +699,21 @@ impl<'a> Build<'_, 'a> {
         if e.attribute("kiln_conversion") == Some("true") {
             return out(get!("in").or(get!("in1"))?);
         }
-        if let Some(row) = table::for_materialx(category, ty) {
+        // A node with several outputs is told apart by its input's type.
+        let key = if ty == "multioutput" {
+            elements(e)
+                .find(|i| i.tag_name().name() == "input")
+                .and_then(|i| i.attribute("type"))
+                .unwrap_or("color3")
+        } else {
+            ty
+        };
+        let fixed = |name: &str| {
+            input(e, name)
+                .and_then(|i| i.attribute("value"))
+                .and_then(|v| v.trim().parse::<f32>().ok())
+        };
+        if let Some(row) = table::for_materialx(category, key, fixed) {
             let mut node = Node::new(row.kiln);
             for (param, value) in row.params {
                 node = match value {

@@ -144,10 +144,13 @@ impl Ops<'_> {
                 Value::Color(std::array::from_fn(|i| x[i] + (y[i] - x[i]) * t))
             }
             _ => {
+                // MaterialX's mix does not clamp its factor.
                 let node = if color {
-                    Node::new("mix_color").text("blend", "mix")
+                    Node::new("mix_color")
+                        .text("blend", "mix")
+                        .flag("clamp_result", false)
                 } else {
-                    Node::new("mix_float")
+                    Node::new("mix_float").flag("clamp_factor", false)
                 };
                 let (a, b) = if color {
                     (as_color(a), as_color(b))
@@ -481,10 +484,12 @@ pub fn to_open_pbr(
                 "specular_roughness_anisotropy".into(),
                 r.get("specular_anisotropy"),
             );
-            out.insert(
-                "kiln:anisotropy_rotation".into(),
-                r.get("specular_rotation"),
-            );
+            if r.set("specular_rotation") {
+                out.insert(
+                    "kiln:anisotropy_rotation".into(),
+                    r.get("specular_rotation"),
+                );
+            }
             out.insert("transmission_weight".into(), r.get("transmission"));
             out.insert("transmission_color".into(), r.get("transmission_color"));
             out.insert("transmission_depth".into(), r.get("transmission_depth"));
@@ -600,13 +605,15 @@ pub fn to_open_pbr(
                 "specular_roughness_anisotropy".into(),
                 r.get("anisotropy_strength"),
             );
-            let rotation = ops.multiply(
-                "anisotropy_rotation",
-                false,
-                r.get("anisotropy_rotation"),
-                Value::Float(1.0 / std::f32::consts::TAU),
-            );
-            out.insert("kiln:anisotropy_rotation".into(), rotation);
+            if r.set("anisotropy_rotation") {
+                let rotation = ops.multiply(
+                    "anisotropy_rotation",
+                    false,
+                    r.get("anisotropy_rotation"),
+                    Value::Float(1.0 / std::f32::consts::TAU),
+                );
+                out.insert("kiln:anisotropy_rotation".into(), rotation);
+            }
             if let Some(n) = inputs.values.get("normal") {
                 out.insert(OPEN_PBR_NORMAL.into(), n.clone());
             }

@@ -7,7 +7,8 @@
 pub struct Row {
     /// The MaterialX node category.
     pub mx: &'static str,
-    /// The MaterialX output types the row covers.
+    /// The MaterialX types the row covers: of the output, or for a node with several
+    /// outputs, of its first input.
     pub types: &'static [&'static str],
     /// The Kiln node type and the parameters that make it this node.
     pub kiln: &'static str,
@@ -19,6 +20,9 @@ pub struct Row {
     pub inputs: &'static [(&'static str, &'static str, f32)],
     /// MaterialX output, Kiln output; a single-output MaterialX node's is `out`.
     pub outputs: &'static [(&'static str, &'static str)],
+    /// MaterialX inputs the Kiln node has no counterpart for, and the values that make
+    /// the MaterialX node compute what the Kiln node does.
+    pub mx_fixed: &'static [(&'static str, f32)],
 }
 
 /// A parameter value a row sets.
@@ -53,6 +57,7 @@ macro_rules! math {
             fixed: &[],
             inputs: $inputs,
             outputs: VALUE,
+            mx_fixed: &[],
         }
     };
 }
@@ -67,11 +72,23 @@ macro_rules! vector_math {
             fixed: &[],
             inputs: $inputs,
             outputs: VECTOR_OUT,
+            mx_fixed: &[],
         }
     };
 }
 
 pub const ROWS: &[Row] = &[
+    // Kiln's comparison is MaterialX's conditional choosing 1 or 0.
+    Row {
+        mx: "ifgreater",
+        types: FLOAT,
+        kiln: "math",
+        params: &op("greater_than"),
+        fixed: &[],
+        inputs: &[("value1", "a", 1.0), ("value2", "b", 0.0)],
+        outputs: VALUE,
+        mx_fixed: &[("in1", 1.0), ("in2", 0.0)],
+    },
     math!("add", "add", BINARY_0),
     math!("subtract", "subtract", BINARY_0),
     math!("multiply", "multiply", BINARY_1),
@@ -126,6 +143,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: BINARY_0,
         outputs: VALUE,
+        mx_fixed: &[],
     },
     Row {
         mx: "magnitude",
@@ -135,6 +153,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: UNARY,
         outputs: VALUE,
+        mx_fixed: &[],
     },
     Row {
         mx: "distance",
@@ -144,6 +163,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: BINARY_0,
         outputs: VALUE,
+        mx_fixed: &[],
     },
     Row {
         mx: "mix",
@@ -153,6 +173,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("fg", "b", 0.0), ("bg", "a", 0.0), ("mix", "factor", 0.0)],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "mix",
@@ -162,6 +183,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("fg", "b", 0.0), ("bg", "a", 0.0), ("mix", "factor", 0.0)],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "mix",
@@ -174,6 +196,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("fg", "b", 0.0), ("bg", "a", 0.0), ("mix", "factor", 0.0)],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "clamp",
@@ -187,6 +210,7 @@ pub const ROWS: &[Row] = &[
             ("high", "max", 1.0),
         ],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "smoothstep",
@@ -203,6 +227,7 @@ pub const ROWS: &[Row] = &[
             ("high", "from_max", 1.0),
         ],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "remap",
@@ -221,6 +246,7 @@ pub const ROWS: &[Row] = &[
             ("outhigh", "to_max", 1.0),
         ],
         outputs: &[("out", "result")],
+        mx_fixed: &[],
     },
     Row {
         mx: "normalmap",
@@ -230,6 +256,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("in", "color", 0.5), ("scale", "strength", 1.0)],
         outputs: &[("out", "normal")],
+        mx_fixed: &[],
     },
     Row {
         mx: "constant",
@@ -239,6 +266,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("value", "value", 0.0)],
         outputs: VALUE,
+        mx_fixed: &[],
     },
     Row {
         mx: "constant",
@@ -248,6 +276,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("value", "color", 0.0)],
         outputs: &[("out", "color")],
+        mx_fixed: &[],
     },
     Row {
         mx: "constant",
@@ -257,6 +286,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("value", "vector", 0.0)],
         outputs: VECTOR_OUT,
+        mx_fixed: &[],
     },
     Row {
         mx: "separate3",
@@ -266,6 +296,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("in", "color", 0.0)],
         outputs: &[("outr", "red"), ("outg", "green"), ("outb", "blue")],
+        mx_fixed: &[],
     },
     Row {
         mx: "separate3",
@@ -275,6 +306,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("in", "vector", 0.0)],
         outputs: &[("outx", "x"), ("outy", "y"), ("outz", "z")],
+        mx_fixed: &[],
     },
     Row {
         mx: "combine3",
@@ -288,6 +320,7 @@ pub const ROWS: &[Row] = &[
             ("in3", "blue", 0.0),
         ],
         outputs: &[("out", "color")],
+        mx_fixed: &[],
     },
     Row {
         mx: "combine3",
@@ -297,6 +330,7 @@ pub const ROWS: &[Row] = &[
         fixed: &[],
         inputs: &[("in1", "x", 0.0), ("in2", "y", 0.0), ("in3", "z", 0.0)],
         outputs: VECTOR_OUT,
+        mx_fixed: &[],
     },
 ];
 
@@ -321,10 +355,18 @@ pub fn mx_input_type(row: &Row, mx: &str) -> Option<&'static str> {
     }
 }
 
-/// The row for MaterialX node `category` of output type `ty`.
-pub fn for_materialx(category: &str, ty: &str) -> Option<&'static Row> {
-    ROWS.iter()
-        .find(|r| r.mx == category && r.types.contains(&ty))
+/// The row for MaterialX node `category` of type `ty` (see [`Row::types`]) whose fixed
+/// inputs have the values `mx_input` gives (`None`: not a constant).
+pub fn for_materialx(
+    category: &str,
+    ty: &str,
+    mx_input: impl Fn(&str) -> Option<f32>,
+) -> Option<&'static Row> {
+    ROWS.iter().find(|r| {
+        r.mx == category
+            && r.types.contains(&ty)
+            && r.mx_fixed.iter().all(|(i, v)| mx_input(i) == Some(*v))
+    })
 }
 
 /// The MaterialX type of a Kiln socket type.

@@ -172,6 +172,17 @@ pub struct NodeEditor {
     stats: Option<Result<CompileStats, String>>,
     /// The node the viewport shows instead of its material (Ctrl+Shift+click).
     viewport_preview: Option<ViewportPreview>,
+    /// The material list's Import… or Export…, for the app to answer.
+    file_request: Option<MaterialFileRequest>,
+}
+
+/// What the material list asks the app to do with material files.
+#[derive(Clone, Copy, Debug, PartialEq, Eq)]
+pub enum MaterialFileRequest {
+    /// Add the materials of a file a material-format plugin reads.
+    Import,
+    /// Write material `.0` through a material-format plugin.
+    Export(usize),
 }
 
 /// What compiling a material's graph gave (the material list's statistics).
@@ -226,6 +237,7 @@ impl Default for NodeEditor {
             keep_view: false,
             stats: None,
             viewport_preview: None,
+            file_request: None,
         }
     }
 }
@@ -338,6 +350,18 @@ impl NodeEditor {
     /// The rectangle the canvas took in the last frame.
     pub fn canvas_rect(&self) -> Option<egui::Rect> {
         self.rect
+    }
+
+    /// What the material list's Import… or Export… asked for since the last call: the
+    /// app answers it, with its dialogs and plugins.
+    pub fn take_file_request(&mut self) -> Option<MaterialFileRequest> {
+        self.file_request.take()
+    }
+
+    /// Shows material `material`'s graph (what picking it in the list does).
+    pub fn show_material(&mut self, material: usize) {
+        self.world = false;
+        self.material = Some(material);
     }
 
     /// Draws the material list (with `thumbnails`, when the app renders them) and the
@@ -672,6 +696,13 @@ impl NodeEditor {
                 })
                 .response
                 .labelled_by(label.id);
+            if ui
+                .button("Import…")
+                .on_hover_text("Add the materials of a material file (MaterialX .mtlx, …)")
+                .clicked()
+            {
+                self.file_request = Some(MaterialFileRequest::Import);
+            }
             if ui.button("New").clicked() {
                 let name = document.unique_material_name("Material");
                 commands.push((
@@ -711,6 +742,13 @@ impl NodeEditor {
             }
             if ui.button("Delete").clicked() {
                 commands.push((Command::RemoveMaterial { index: m }, None));
+            }
+            if ui
+                .button("Export…")
+                .on_hover_text("Write this material as a material file (MaterialX .mtlx, …)")
+                .clicked()
+            {
+                self.file_request = Some(MaterialFileRequest::Export(m));
             }
             if let Some(Selection::Object(object)) = document.selection {
                 let assigned = document
