@@ -158,8 +158,9 @@ pub fn nodes_markdown() -> String {
 
 /// The declarations of node types `kinds` as RON, for material exporters that must type
 /// every socket they write (`kiln_plugin_api::kmat::read::parse_library`): per type its
-/// inputs with their types and constant defaults, its outputs, and the defaults of its
-/// choice and flag parameters. Unknown kinds (group
+/// inputs with their types and constant defaults (or the WGSL of the shading-point
+/// property an unconnected one reads, `sp.generated`), its outputs, and the defaults of
+/// its choice and flag parameters. Unknown kinds (group
 /// nodes, reroutes, outputs) are left out.
 pub fn library_text<'a>(kinds: impl IntoIterator<Item = &'a str>) -> String {
     let mut kinds: Vec<&str> = kinds.into_iter().collect();
@@ -173,7 +174,7 @@ pub fn library_text<'a>(kinds: impl IntoIterator<Item = &'a str>) -> String {
             .map(|s| {
                 let default = match &s.default {
                     Default::Value(v) => format!(", default: {}", value_text(v)),
-                    Default::Implicit(..) => String::new(),
+                    Default::Implicit(expr, _) => format!(", implicit: {expr:?}"),
                 };
                 format!("(name: {:?}, type: {}{default})", s.name, s.ty.name())
             })

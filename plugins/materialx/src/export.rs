@@ -12,6 +12,7 @@ use std::fmt::Write as _;
 
 use kiln_plugin_api::kmat::read::{self, File, Input, Node, NodeType, Param, SocketType};
 
+use crate::implement::{self, Src};
 use crate::import::{
     KILN_GROUP_PREFIX, KILN_NODE_PREFIX, POSITION_SCALE, SPARE_OF, VOLUME_MATERIAL, WITH_SURFACE,
 };
@@ -52,6 +53,7 @@ pub fn export(name: &str, kmat: &str, library: &str) -> Result<String, String> {
         file: &file,
         library: &library,
         definitions: BTreeMap::new(),
+        implementations: BTreeMap::new(),
         groups_written: BTreeSet::new(),
         group_text: String::new(),
     };
@@ -74,6 +76,9 @@ pub fn export(name: &str, kmat: &str, library: &str) -> Result<String, String> {
     );
     for definition in doc.definitions.values() {
         text.push_str(definition);
+    }
+    for implementation in doc.implementations.values() {
+        text.push_str(implementation);
     }
     text.push_str(&doc.group_text);
     text.push_str(&scope.text);
@@ -277,6 +282,8 @@ struct Document<'f> {
     library: &'f HashMap<String, NodeType>,
     /// Node definitions of `kiln_*` categories, by category.
     definitions: BTreeMap<String, String>,
+    /// Their node-graph implementations, where Kiln's node has one.
+    implementations: BTreeMap<String, String>,
     groups_written: BTreeSet<String>,
     group_text: String,
 }
@@ -935,7 +942,45 @@ impl<'f> Document<'f> {
         position: &str,
     ) -> Result<Out, String> {
         let node_type = self.node_type(&node.kind)?;
-        let category = format!("{KILN_NODE_PREFIX}{}", node.kind);
+        // Every parameter, defaults included: the implementation depends on them.
+        let mut all_params: Vec<(String, Param)> = node_type
+            .params
+            .iter()
+            .map(|p| {
+                let value = node.params.get(&p.name).cloned();
+                (p.name.clone(), value.unwrap_or(p.default.clone()))
+            })
+            .collect();
+        for (k, p) in &node.params {
+            if !all_params.iter().any(|(n, _)| n == k) {
+                all_params.push((k.clone(), p.clone()));
+            }
+        }
+        let (kiln_outputs, _) = type_outputs(node_type);
+        let implementation =
+            implement::implement(&node.kind, &all_params, &node.inputs, &kiln_outputs);
+        // One definition per implementation: parameters that change the graph (a
+        // ramp's stops: the node) name a variant.
+        let mut variant: Vec<String> = all_params
+            .iter()
+            .filter(|(name, _)| name != "file")
+            .map(|(name, p)| match p {
+                Param::Text(t) => sanitize(t),
+                Param::Bool(b) => format!("{}{b}", sanitize(name)),
+                Param::Number(x) => sanitize(&number(*x)),
+                Param::Ramp(_) => sanitize(id),
+            })
+            .collect();
+        if let Some(g) = &implementation
+            && !g.variant.is_empty()
+        {
+            variant.push(g.variant.clone());
+        }
+        let category = if implementation.is_some() && !variant.is_empty() {
+            format!("{KILN_NODE_PREFIX}{}__{}", node.kind, variant.join("_"))
+        } else {
+            format!("{KILN_NODE_PREFIX}{}", node.kind)
+        };
         let name = scope.unique(id);
         let mut inputs = Vec::new();
         for s in &node_type.inputs {
@@ -980,6 +1025,21 @@ impl<'f> Document<'f> {
             &inputs,
         );
         self.declare(&category, node_type, &params);
+        if let Some(g) = implementation {
+            let mut text = format!(
+                "  <nodegraph name=\"NG_{category}\" nodedef=\"ND_{category}\">\n{}",
+                g.text
+            );
+            for (name, ty, src) in &g.outputs {
+                let _ = writeln!(
+                    text,
+                    "    <output name=\"{name}\" type=\"{ty}\" {} />",
+                    src_reference(src)
+                );
+            }
+            text.push_str("  </nodegraph>\n");
+            self.implementations.insert(category.clone(), text);
+        }
         let multi = outputs.len() > 1;
         for (mx, kiln, t) in outputs {
             let out = Out {
@@ -1012,6 +1072,22 @@ impl<'f> Document<'f> {
                 continue;
             }
             let ty = table::mx_type(s.ty.name());
+            // What an unconnected input reads: MaterialX's geometric property where it
+            // has one (object position for Kiln's generated coordinates, whose bounding
+            // box MaterialX does not know).
+            let geomprop = match (s.implicit.as_deref(), ty) {
+                (Some("sp.n"), "vector3") => Some("Nworld"),
+                (Some("sp.generated"), "vector3") => Some("Pobject"),
+                _ => None,
+            };
+            if let Some(geomprop) = geomprop {
+                let _ = writeln!(
+                    def,
+                    "    <input name=\"{}\" type=\"{ty}\" defaultgeomprop=\"{geomprop}\" />",
+                    s.name
+                );
+                continue;
+            }
             let value = s
                 .default
                 .as_ref()
@@ -1082,4 +1158,14 @@ fn type_outputs(node_type: &NodeType) -> (Vec<(String, String, String)>, String)
         .collect();
     let inputs: Vec<&str> = node_type.inputs.iter().map(|s| s.name.as_str()).collect();
     output_names(&outputs, &inputs)
+}
+
+/// A node graph output's connection attributes.
+fn src_reference(src: &Src) -> String {
+    match src {
+        Src::N(node) => format!("nodename=\"{node}\""),
+        Src::O(node, output) => format!("nodename=\"{node}\" output=\"{output}\""),
+        Src::I(name) => format!("interfacename=\"{name}\""),
+        Src::V(value) => format!("value=\"{value}\""),
+    }
 }

@@ -1065,9 +1065,12 @@ impl<'a> Build<'_, 'a> {
         let category = e.tag_name().name();
         let name = name_of(e).to_owned();
         let group_name = category.strip_prefix(KILN_GROUP_PREFIX);
+        // `kiln_TYPE`, or `kiln_TYPE__VARIANT` where the implementation depends on
+        // the parameters.
         let kiln_kind = category
             .strip_prefix(KILN_NODE_PREFIX)
-            .filter(|_| group_name.is_none());
+            .filter(|_| group_name.is_none())
+            .map(|rest| rest.split("__").next().unwrap_or(rest));
         let mut node = if let Some(kind) = kiln_kind {
             Node::new(kind)
         } else if let Some((nodedef, ng)) = self.doc.definition(category) {

@@ -3,6 +3,7 @@
 //! lists what maps to what.
 
 pub mod export;
+pub mod implement;
 pub mod import;
 pub mod surface;
 pub mod table;

@@ -105,6 +105,10 @@ pub struct Socket {
     pub ty: SocketType,
     #[serde(default)]
     pub default: Option<Input>,
+    /// In a node type's declaration: what an unconnected input reads instead of a
+    /// constant, as Kiln's WGSL names it (`sp.generated`, `sp.n`, `sp.uv`).
+    #[serde(default)]
+    pub implicit: Option<String>,
 }
 
 /// A node group: inner nodes, exposed sockets, and which inner socket feeds each output.

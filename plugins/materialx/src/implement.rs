@@ -1,0 +1,860 @@
+//! Node-graph implementations of Kiln nodes in MaterialX's standard nodes, so that other
+//! tools render the `kiln_TYPE` nodes the exporter writes ([`crate::export`]): for each
+//! Kiln node (with its parameters; a colour ramp with its stops), a graph computing what
+//! Kiln's WGSL does, reading the node definition's inputs by `interfacename`. Kiln nodes
+//! without one (its noises, Brick, Wave, volumes, …) are declared without an
+//! implementation (docs/MATERIALX.md lists them).
+
+use std::fmt::Write as _;
+
+use std::collections::BTreeMap;
+
+use kiln_plugin_api::kmat::read::{Input, Param};
+
+/// What feeds a node input in the graph.
+#[derive(Clone, Debug)]
+pub enum Src {
+    /// The node definition's input.
+    I(&'static str),
+    /// A node's (only) output.
+    N(String),
+    /// A node's named output.
+    O(String, &'static str),
+    /// A constant, as MaterialX writes it.
+    V(String),
+}
+
+fn v(x: f32) -> Src {
+    Src::V(format!("{x}"))
+}
+
+fn v3(x: f32) -> Src {
+    Src::V(format!("{x}, {x}, {x}"))
+}
+
+impl Src {
+    fn attribute(&self) -> String {
+        match self {
+            Src::I(name) => format!("interfacename=\"{name}\""),
+            Src::N(node) => format!("nodename=\"{node}\""),
+            Src::O(node, output) => format!("nodename=\"{node}\" output=\"{output}\""),
+            Src::V(value) => format!("value=\"{value}\""),
+        }
+    }
+}
+
+/// A node graph being written.
+#[derive(Default)]
+pub struct Graph {
+    pub text: String,
+    count: usize,
+    /// MaterialX output name, type, source.
+    pub outputs: Vec<(String, String, Src)>,
+    /// What besides the parameters the graph depends on (a noise's octave count, from
+    /// its constant detail), for the definition's name.
+    pub variant: String,
+}
+
+impl Graph {
+    /// Adds a node of `category` and type `ty` with `inputs` (name, type, source).
+    fn node(&mut self, category: &str, ty: &str, inputs: &[(&str, &str, Src)]) -> Src {
+        self.count += 1;
+        let name = format!("{category}_{}", self.count);
+        let _ = writeln!(self.text, "    <{category} name=\"{name}\" type=\"{ty}\">");
+        for (input, ty, src) in inputs {
+            let _ = writeln!(
+                self.text,
+                "      <input name=\"{input}\" type=\"{ty}\" {} />",
+                src.attribute()
+            );
+        }
+        let _ = writeln!(self.text, "    </{category}>");
+        Src::N(name)
+    }
+
+    fn binary(&mut self, category: &str, ty: &str, a: Src, b: Src) -> Src {
+        self.node(category, ty, &[("in1", ty, a), ("in2", ty, b)])
+    }
+
+    fn unary(&mut self, category: &str, ty: &str, a: Src) -> Src {
+        self.node(category, ty, &[("in", ty, a)])
+    }
+
+    /// `value1 > value2 ? in1 : in2`.
+    fn ifgreater(&mut self, ty: &str, value1: Src, value2: Src, in1: Src, in2: Src) -> Src {
+        self.node(
+            "ifgreater",
+            ty,
+            &[
+                ("value1", "float", value1),
+                ("value2", "float", value2),
+                ("in1", ty, in1),
+                ("in2", ty, in2),
+            ],
+        )
+    }
+
+    /// `bg + (fg - bg) mix`.
+    fn mix(&mut self, ty: &str, bg: Src, fg: Src, mix: Src) -> Src {
+        self.node(
+            "mix",
+            ty,
+            &[("fg", ty, fg), ("bg", ty, bg), ("mix", "float", mix)],
+        )
+    }
+
+    fn clamp(&mut self, ty: &str, x: Src, low: Src, high: Src) -> Src {
+        self.node(
+            "clamp",
+            ty,
+            &[("in", ty, x), ("low", ty, low), ("high", ty, high)],
+        )
+    }
+
+    fn output(&mut self, name: &str, ty: &str, src: Src) {
+        // An output reads a node (an interface input passes through a `dot`).
+        let src = match src {
+            Src::I(_) | Src::V(_) => self.unary("dot", ty, src),
+            s => s,
+        };
+        self.outputs.push((name.to_owned(), ty.to_owned(), src));
+    }
+}
+
+fn text<'a>(params: &'a [(String, Param)], name: &str) -> &'a str {
+    params
+        .iter()
+        .find(|(n, _)| n == name)
+        .and_then(|(_, p)| match p {
+            Param::Text(t) => Some(t.as_str()),
+            _ => None,
+        })
+        .unwrap_or("")
+}
+
+fn flag(params: &[(String, Param)], name: &str) -> bool {
+    params
+        .iter()
+        .any(|(n, p)| n == name && *p == Param::Bool(true))
+}
+
+/// The implementation of Kiln node `kind` with `params` (every parameter, defaults
+/// included), whose MaterialX outputs are `outputs` (MaterialX name, Kiln name, type);
+/// `None` where there is none.
+pub fn implement(
+    kind: &str,
+    params: &[(String, Param)],
+    inputs: &BTreeMap<String, Input>,
+    outputs: &[(String, String, String)],
+) -> Option<Graph> {
+    let mut g = Graph::default();
+    let out_name = |kiln: &str| {
+        outputs
+            .iter()
+            .find(|(_, k, _)| k == kind_output(kiln))
+            .map(|(m, _, _)| m.clone())
+    };
+    match kind {
+        "math" => {
+            let r = math(&mut g, text(params, "operation"))?;
+            let r = if flag(params, "clamp") {
+                g.clamp("float", r, v(0.0), v(1.0))
+            } else {
+                r
+            };
+            g.output(&out_name("value")?, "float", r);
+        }
+        "vector_math" => {
+            let (vector, value) = vector_math(&mut g, text(params, "operation"))?;
+            g.output(&out_name("vector")?, "vector3", vector);
+            g.output(&out_name("value")?, "float", value);
+        }
+        "mix_float" | "mix_vector" => {
+            let ty = if kind == "mix_float" {
+                "float"
+            } else {
+                "vector3"
+            };
+            let factor = if flag(params, "clamp_factor") {
+                g.clamp("float", Src::I("factor"), v(0.0), v(1.0))
+            } else {
+                Src::I("factor")
+            };
+            let r = g.mix(ty, Src::I("a"), Src::I("b"), factor);
+            g.output(&out_name("result")?, ty, r);
+        }
+        "mix_color" => {
+            let (a, b, c) = (Src::I("a"), Src::I("b"), "color3");
+            let blended = match text(params, "blend") {
+                "mix" => Src::I("b"),
+                "multiply" => g.binary("multiply", c, a.clone(), b),
+                "add" => g.binary("add", c, a.clone(), b),
+                "subtract" => g.binary("subtract", c, a.clone(), b),
+                "divide" => g.binary("divide", c, a.clone(), b),
+                "darken" => g.binary("min", c, a.clone(), b),
+                "lighten" => g.binary("max", c, a.clone(), b),
+                "difference" => {
+                    let d = g.binary("subtract", c, a.clone(), b);
+                    g.unary("absval", c, d)
+                }
+                "screen" => {
+                    let ia = g.binary("subtract", c, v3(1.0), a.clone());
+                    let ib = g.binary("subtract", c, v3(1.0), b);
+                    let p = g.binary("multiply", c, ia, ib);
+                    g.binary("subtract", c, v3(1.0), p)
+                }
+                "exclusion" => {
+                    let s = g.binary("add", c, a.clone(), b.clone());
+                    let p = g.binary("multiply", c, a.clone(), b);
+                    let p2 = g.binary("multiply", c, p, v3(2.0));
+                    g.binary("subtract", c, s, p2)
+                }
+                "linear_light" => {
+                    let b2 = g.binary("multiply", c, b, v3(2.0));
+                    let s = g.binary("add", c, a.clone(), b2);
+                    g.binary("subtract", c, s, v3(1.0))
+                }
+                _ => return None,
+            };
+            let r = g.mix(c, a, blended, Src::I("factor"));
+            let r = if flag(params, "clamp_result") {
+                g.clamp(c, r, v3(0.0), v3(1.0))
+            } else {
+                r
+            };
+            g.output(&out_name("result")?, c, r);
+        }
+        "map_range" => {
+            let interpolation = text(params, "interpolation");
+            let span = g.binary("subtract", "float", Src::I("from_max"), Src::I("from_min"));
+            let offset = g.binary("subtract", "float", Src::I("value"), Src::I("from_min"));
+            let t = g.binary("divide", "float", offset, span);
+            let t = match interpolation {
+                "linear" => t,
+                "stepped" => {
+                    let steps1 = g.binary("add", "float", Src::I("steps"), v(1.0));
+                    let scaled = g.binary("multiply", "float", t, steps1);
+                    let floored = g.unary("floor", "float", scaled);
+                    g.binary("divide", "float", floored, Src::I("steps"))
+                }
+                "smoothstep" => {
+                    let t = g.clamp("float", t, v(0.0), v(1.0));
+                    // t² (3 − 2t)
+                    let t2 = g.binary("multiply", "float", t.clone(), t.clone());
+                    let two_t = g.binary("multiply", "float", t, v(2.0));
+                    let k = g.binary("subtract", "float", v(3.0), two_t);
+                    g.binary("multiply", "float", t2, k)
+                }
+                "smootherstep" => {
+                    let t = g.clamp("float", t, v(0.0), v(1.0));
+                    // t³ (t (6t − 15) + 10)
+                    let six_t = g.binary("multiply", "float", t.clone(), v(6.0));
+                    let a = g.binary("subtract", "float", six_t, v(15.0));
+                    let b = g.binary("multiply", "float", a, t.clone());
+                    let k = g.binary("add", "float", b, v(10.0));
+                    let t2 = g.binary("multiply", "float", t.clone(), t.clone());
+                    let t3 = g.binary("multiply", "float", t2, t);
+                    g.binary("multiply", "float", t3, k)
+                }
+                _ => return None,
+            };
+            let r = g.mix("float", Src::I("to_min"), Src::I("to_max"), t);
+            // Blender clamps the linear and stepped maps only.
+            let r = if flag(params, "clamp") && matches!(interpolation, "linear" | "stepped") {
+                let low = g.binary("min", "float", Src::I("to_min"), Src::I("to_max"));
+                let high = g.binary("max", "float", Src::I("to_min"), Src::I("to_max"));
+                g.clamp("float", r, low, high)
+            } else {
+                r
+            };
+            g.output(&out_name("result")?, "float", r);
+        }
+        "separate_color" => {
+            let color = match text(params, "mode") {
+                "hsv" => g.unary("rgbtohsv", "color3", Src::I("color")),
+                _ => Src::I("color"),
+            };
+            let split = g.node("separate3", "multioutput", &[("in", "color3", color)]);
+            let Src::N(split) = split else { return None };
+            for (kiln, mx) in [("red", "outr"), ("green", "outg"), ("blue", "outb")] {
+                let channel = g.unary("dot", "float", Src::O(split.clone(), mx));
+                g.output(&out_name(kiln)?, "float", channel);
+            }
+        }
+        "combine_color" => {
+            let joined = g.node(
+                "combine3",
+                "color3",
+                &[
+                    ("in1", "float", Src::I("red")),
+                    ("in2", "float", Src::I("green")),
+                    ("in3", "float", Src::I("blue")),
+                ],
+            );
+            let r = match text(params, "mode") {
+                "hsv" => g.unary("hsvtorgb", "color3", joined),
+                _ => joined,
+            };
+            g.output(&out_name("color")?, "color3", r);
+        }
+        "color_ramp" => {
+            let Some((_, Param::Ramp(stops))) = params.iter().find(|(n, _)| n == "stops") else {
+                return None;
+            };
+            let mut stops = stops.clone();
+            stops.sort_by(|a, b| a.position.total_cmp(&b.position));
+            let first = stops.first()?;
+            let interpolation = text(params, "interpolation");
+            let rgb = |s: &kiln_plugin_api::kmat::read::Stop| {
+                Src::V(format!("{}, {}, {}", s.color[0], s.color[1], s.color[2]))
+            };
+            let mut color = rgb(first);
+            let mut alpha = v(first.color[3]);
+            for pair in stops.windows(2) {
+                let (p0, p1) = (&pair[0], &pair[1]);
+                let t = match interpolation {
+                    "constant" => {
+                        g.ifgreater("float", Src::I("fac"), v(p1.position), v(1.0), v(0.0))
+                    }
+                    _ => {
+                        let offset = g.binary("subtract", "float", Src::I("fac"), v(p0.position));
+                        let span = (p1.position - p0.position).max(1e-6);
+                        let t = g.binary("divide", "float", offset, v(span));
+                        let t = g.clamp("float", t, v(0.0), v(1.0));
+                        if interpolation == "ease" {
+                            // t² (3 − 2t)
+                            let t2 = g.binary("multiply", "float", t.clone(), t.clone());
+                            let two_t = g.binary("multiply", "float", t, v(2.0));
+                            let k = g.binary("subtract", "float", v(3.0), two_t);
+                            g.binary("multiply", "float", t2, k)
+                        } else {
+                            t
+                        }
+                    }
+                };
+                color = g.mix("color3", color, rgb(p1), t.clone());
+                alpha = g.mix("float", alpha, v(p1.color[3]), t);
+            }
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("alpha")?, "float", alpha);
+        }
+        "checker_texture" => {
+            // In colour 1 where floor(p) sums to an odd number (shaders/nodes/textures.wgsl).
+            let scaled = g.node(
+                "multiply",
+                "vector3",
+                &[
+                    ("in1", "vector3", Src::I("vector")),
+                    ("in2", "float", Src::I("scale")),
+                ],
+            );
+            let nudged = g.binary(
+                "add",
+                "vector3",
+                scaled,
+                Src::V("0.000001, 0.000001, 0.000001".into()),
+            );
+            let q = g.binary(
+                "multiply",
+                "vector3",
+                nudged,
+                Src::V("0.999999, 0.999999, 0.999999".into()),
+            );
+            let cells = g.unary("floor", "vector3", q);
+            let sum = g.node(
+                "dotproduct",
+                "float",
+                &[("in1", "vector3", cells), ("in2", "vector3", v3(1.0))],
+            );
+            let parity = g.binary("modulo", "float", sum, v(2.0));
+            let color = g.ifgreater(
+                "color3",
+                parity.clone(),
+                v(0.5),
+                Src::I("color1"),
+                Src::I("color2"),
+            );
+            let fac = g.ifgreater("float", parity, v(0.5), v(1.0), v(0.0));
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("fac")?, "float", fac);
+        }
+        "mapping" => {
+            let r = mapping(&mut g, text(params, "vector_type"))?;
+            g.output(&out_name("vector")?, "vector3", r);
+        }
+        "gradient_texture" => {
+            let t = "vector3";
+            let split = g.node("separate3", "multioutput", &[("in", t, Src::I("vector"))]);
+            let Src::N(split) = split else { return None };
+            let (x, y) = (Src::O(split.clone(), "outx"), Src::O(split, "outy"));
+            let f = "float";
+            let length = || ("in", t, Src::I("vector"));
+            let fac = match text(params, "gradient_type") {
+                "linear" => g.unary("dot", f, x),
+                "quadratic" => {
+                    let r = g.binary("max", f, x, v(0.0));
+                    g.binary("multiply", f, r.clone(), r)
+                }
+                "easing" => {
+                    let r = g.clamp(f, x, v(0.0), v(1.0));
+                    let t2 = g.binary("multiply", f, r.clone(), r.clone());
+                    let a = g.binary("multiply", f, t2.clone(), v(3.0));
+                    let b = g.binary("multiply", f, t2, r);
+                    let b2 = g.binary("multiply", f, b, v(2.0));
+                    g.binary("subtract", f, a, b2)
+                }
+                "diagonal" => {
+                    let s = g.binary("add", f, x, y);
+                    g.binary("multiply", f, s, v(0.5))
+                }
+                "radial" => {
+                    let angle = g.node("atan2", f, &[("iny", f, y), ("inx", f, x)]);
+                    let turns = g.binary("divide", f, angle, v(std::f32::consts::TAU));
+                    g.binary("add", f, turns, v(0.5))
+                }
+                kind @ ("quadratic_sphere" | "spherical") => {
+                    let l = g.node("magnitude", f, &[length()]);
+                    let d = g.binary("subtract", f, v(0.999999), l);
+                    let r = g.binary("max", f, d, v(0.0));
+                    if kind == "spherical" {
+                        r
+                    } else {
+                        g.binary("multiply", f, r.clone(), r)
+                    }
+                }
+                _ => return None,
+            };
+            let fac = g.clamp(f, fac, v(0.0), v(1.0));
+            let color = g.unary_typed("convert", "color3", f, fac.clone());
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("fac")?, f, fac);
+        }
+        "layer_weight" => {
+            // shaders/nodes/inputs.wgsl nd_layer_weight; the view direction points at
+            // the surface, Kiln's `wo` away from it.
+            let (f, t) = ("float", "vector3");
+            let view = g.node(
+                "viewdirection",
+                t,
+                &[("space", "string", Src::V("world".into()))],
+            );
+            let c = g.node(
+                "dotproduct",
+                f,
+                &[("in1", t, view), ("in2", t, Src::I("normal"))],
+            );
+            let c = g.binary("multiply", f, c, v(-1.0));
+            let b = g.clamp(f, Src::I("blend"), v(0.0), v(0.99999));
+            let one_minus = g.binary("subtract", f, v(1.0), b.clone());
+            let eta = g.binary("max", f, one_minus.clone(), v(1e-5));
+            let inverse = g.binary("divide", f, v(1.0), eta.clone());
+            let eta = g.ifgreater(f, v(0.0), c.clone(), eta, inverse);
+            let cos = g.unary("absval", f, c);
+            // fresnel_dielectric(cos, eta)
+            let c2 = g.binary("multiply", f, cos.clone(), cos.clone());
+            let e2 = g.binary("multiply", f, eta.clone(), eta);
+            let g2 = g.binary("add", f, e2, c2);
+            let g2 = g.binary("subtract", f, g2, v(1.0));
+            let root = g.binary("max", f, g2.clone(), v(0.0));
+            let root = g.unary("sqrt", f, root);
+            let gm = g.binary("subtract", f, root.clone(), cos.clone());
+            let gp = g.binary("add", f, root, cos.clone());
+            let a = g.binary("divide", f, gm.clone(), gp.clone());
+            let num = g.binary("multiply", f, cos.clone(), gp);
+            let num = g.binary("subtract", f, num, v(1.0));
+            let den = g.binary("multiply", f, cos.clone(), gm);
+            let den = g.binary("add", f, den, v(1.0));
+            let bb = g.binary("divide", f, num, den);
+            let a2 = g.binary("multiply", f, a.clone(), a);
+            let b2 = g.binary("multiply", f, bb.clone(), bb);
+            let b2 = g.binary("add", f, b2, v(1.0));
+            let fr = g.binary("multiply", f, a2, b2);
+            let fr = g.binary("multiply", f, fr, v(0.5));
+            // Total internal reflection: 1.
+            let fresnel = g.ifgreater(f, g2, v(0.0), fr, v(1.0));
+            // facing = 1 − |c|^e, e = b < 0.5 ? 2b : 0.5 / (1 − b)
+            let twice = g.binary("multiply", f, b.clone(), v(2.0));
+            let half = g.binary("divide", f, v(0.5), one_minus);
+            let e = g.ifgreater(f, v(0.5), b, twice, half);
+            let p = g.binary("power", f, cos, e);
+            let facing = g.binary("subtract", f, v(1.0), p);
+            g.output(&out_name("fresnel")?, f, fresnel);
+            g.output(&out_name("facing")?, f, facing);
+        }
+        "noise_texture" => {
+            // An approximation: MaterialX's fractal noise with Kiln's frequency, octave
+            // count, roughness and lacunarity, mapped from [-1, 1] onto [0, 1] as Kiln's
+            // noise lies; not Kiln's values, and without distortion.
+            let detail = match inputs.get("detail") {
+                Some(Input::Float(d)) => *d,
+                None => 2.0,
+                _ => return None,
+            };
+            let octaves = detail.clamp(0.0, 15.0).floor() as i32 + 1;
+            g.variant = format!("octaves{octaves}");
+            let t = "vector3";
+            let p = g.node(
+                "multiply",
+                t,
+                &[
+                    ("in1", t, Src::I("vector")),
+                    ("in2", "float", Src::I("scale")),
+                ],
+            );
+            let noise = |g: &mut Graph, ty: &str, amplitude: Src| {
+                g.node(
+                    "fractal3d",
+                    ty,
+                    &[
+                        (
+                            "amplitude",
+                            if ty == "float" { "float" } else { t },
+                            amplitude,
+                        ),
+                        ("octaves", "integer", Src::V(octaves.to_string())),
+                        ("lacunarity", "float", Src::I("lacunarity")),
+                        ("diminish", "float", Src::I("roughness")),
+                        ("position", t, p.clone()),
+                    ],
+                )
+            };
+            let fac = noise(&mut g, "float", v(0.5));
+            let fac = g.binary("add", "float", fac, v(0.5));
+            let fac = g.clamp("float", fac, v(0.0), v(1.0));
+            let color = noise(&mut g, "color3", v3(0.5));
+            let color = g.binary("add", "color3", color, v3(0.5));
+            let color = g.clamp("color3", color, v3(0.0), v3(1.0));
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("fac")?, "float", fac);
+        }
+        "texture_coordinate" => {
+            let t = "vector3";
+            let position = |g: &mut Graph, space: &str| {
+                g.node("position", t, &[("space", "string", Src::V(space.into()))])
+            };
+            let uv = |g: &mut Graph, index: &str| {
+                let uv = g.node(
+                    "texcoord",
+                    "vector2",
+                    &[("index", "integer", Src::V(index.into()))],
+                );
+                g.unary_typed("convert", t, "vector2", uv)
+            };
+            // Generated coordinates are the object position in the mesh's bounding
+            // box, which MaterialX does not know: the object position stands for them.
+            let generated = position(&mut g, "object");
+            g.output(&out_name("generated")?, t, generated);
+            let normal = g.node("normal", t, &[("space", "string", Src::V("object".into()))]);
+            g.output(&out_name("normal")?, t, normal);
+            let uv0 = uv(&mut g, "0");
+            g.output(&out_name("uv")?, t, uv0);
+            let uv1 = uv(&mut g, "1");
+            g.output(&out_name("uv1")?, t, uv1);
+            let object = position(&mut g, "object");
+            g.output(&out_name("object")?, t, object);
+            let world = position(&mut g, "world");
+            g.output(&out_name("world")?, t, world);
+            let view = g.node(
+                "viewdirection",
+                t,
+                &[("space", "string", Src::V("world".into()))],
+            );
+            let reflection = g.node("reflect", t, &[("in", t, view)]);
+            g.output(&out_name("reflection")?, t, reflection);
+        }
+        "voronoi_texture"
+            if text(params, "feature") == "f1" && text(params, "distance") == "euclidean" =>
+        {
+            // An approximation: MaterialX's Worley noise (the distance to the nearest
+            // jittered point) at Kiln's frequency and randomness; a cell noise of the
+            // coordinates stands for the nearest point's colour, the cell's centre for
+            // its position.
+            let t = "vector3";
+            let p = g.node(
+                "multiply",
+                t,
+                &[
+                    ("in1", t, Src::I("vector")),
+                    ("in2", "float", Src::I("scale")),
+                ],
+            );
+            let distance = g.node(
+                "worleynoise3d",
+                "float",
+                &[
+                    ("position", t, p.clone()),
+                    ("jitter", "float", Src::I("randomness")),
+                ],
+            );
+            let cell = g.unary("floor", t, p);
+            let random = g.node("cellnoise3d", "float", &[("position", t, cell.clone())]);
+            let color = g.unary_typed("convert", "color3", "float", random);
+            let centre = g.binary("add", t, cell, v3(0.5));
+            let position = g.node(
+                "divide",
+                t,
+                &[("in1", t, centre), ("in2", "float", Src::I("scale"))],
+            );
+            g.output(&out_name("distance")?, "float", distance);
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("position")?, t, position);
+        }
+        "bump" => {
+            // An approximation: MaterialX derives the slope of the height in texture
+            // space (heighttonormal), Kiln in world space by two extra evaluations.
+            let f = "float";
+            let scale = if flag(params, "invert") {
+                g.binary("multiply", f, Src::I("distance"), v(-1.0))
+            } else {
+                Src::I("distance")
+            };
+            let tangent = g.node(
+                "heighttonormal",
+                "vector3",
+                &[("in", f, Src::I("height")), ("scale", f, scale)],
+            );
+            let n = g.node(
+                "normalmap",
+                "vector3",
+                &[
+                    ("in", "vector3", tangent),
+                    ("scale", f, Src::I("strength")),
+                    ("normal", "vector3", Src::I("normal")),
+                ],
+            );
+            g.output(&out_name("normal")?, "vector3", n);
+        }
+        _ => return None,
+    }
+    Some(g)
+}
+
+/// Kiln's output names are the node's own; this is where a table would rename them.
+fn kind_output(kiln: &str) -> &str {
+    kiln
+}
+
+/// Blender's scalar math (shaders/nodes/math.wgsl) on inputs `a`, `b`, `c`.
+fn math(g: &mut Graph, op: &str) -> Option<Src> {
+    let f = "float";
+    let (a, b, c) = (Src::I("a"), Src::I("b"), Src::I("c"));
+    Some(match op {
+        "add" => g.binary("add", f, a, b),
+        "subtract" => g.binary("subtract", f, a, b),
+        "multiply" => g.binary("multiply", f, a, b),
+        // Division by zero gives 0.
+        "divide" => {
+            let q = g.binary("divide", f, a, b.clone());
+            g.node(
+                "ifequal",
+                f,
+                &[
+                    ("value1", f, b),
+                    ("value2", f, v(0.0)),
+                    ("in1", f, v(0.0)),
+                    ("in2", f, q),
+                ],
+            )
+        }
+        "multiply_add" => {
+            let p = g.binary("multiply", f, a, b);
+            g.binary("add", f, p, c)
+        }
+        "power" => g.binary("power", f, a, b),
+        "logarithm" => {
+            let la = g.unary("ln", f, a);
+            let lb = g.unary("ln", f, b);
+            g.binary("divide", f, la, lb)
+        }
+        "sqrt" => g.unary("sqrt", f, a),
+        "inverse_sqrt" => {
+            let s = g.unary("sqrt", f, a);
+            g.binary("divide", f, v(1.0), s)
+        }
+        "absolute" => g.unary("absval", f, a),
+        "exponent" => g.unary("exp", f, a),
+        "minimum" => g.binary("min", f, a, b),
+        "maximum" => g.binary("max", f, a, b),
+        "less_than" => g.ifgreater(f, b, a, v(1.0), v(0.0)),
+        "greater_than" => g.ifgreater(f, a, b, v(1.0), v(0.0)),
+        "sign" => g.unary("sign", f, a),
+        "compare" => {
+            let d = g.binary("subtract", f, a, b);
+            let d = g.unary("absval", f, d);
+            g.ifgreater(f, d, c, v(0.0), v(1.0))
+        }
+        "round" => {
+            let h = g.binary("add", f, a, v(0.5));
+            g.unary("floor", f, h)
+        }
+        "floor" => g.unary("floor", f, a),
+        "ceil" => g.unary("ceil", f, a),
+        "truncate" => trunc(g, a),
+        "fraction" => {
+            let fl = g.unary("floor", f, a.clone());
+            g.binary("subtract", f, a, fl)
+        }
+        "truncated_modulo" => {
+            let q = g.binary("divide", f, a.clone(), b.clone());
+            let t = trunc(g, q);
+            let p = g.binary("multiply", f, b, t);
+            g.binary("subtract", f, a, p)
+        }
+        "floored_modulo" => g.binary("modulo", f, a, b),
+        "snap" => {
+            let q = g.binary("divide", f, a, b.clone());
+            let fl = g.unary("floor", f, q);
+            g.binary("multiply", f, fl, b)
+        }
+        "sine" => g.unary("sin", f, a),
+        "cosine" => g.unary("cos", f, a),
+        "tangent" => g.unary("tan", f, a),
+        "arcsine" => g.unary("asin", f, a),
+        "arccosine" => g.unary("acos", f, a),
+        "arctangent" => g.node("atan2", f, &[("iny", f, a), ("inx", f, v(1.0))]),
+        "arctan2" => g.node("atan2", f, &[("iny", f, a), ("inx", f, b)]),
+        "radians" => g.binary("multiply", f, a, v(std::f32::consts::PI / 180.0)),
+        "degrees" => g.binary("multiply", f, a, v(180.0 / std::f32::consts::PI)),
+        _ => return None,
+    })
+}
+
+/// `sign(x) floor(|x|)`.
+fn trunc(g: &mut Graph, x: Src) -> Src {
+    let s = g.unary("sign", "float", x.clone());
+    let m = g.unary("absval", "float", x);
+    let fl = g.unary("floor", "float", m);
+    g.binary("multiply", "float", s, fl)
+}
+
+/// Blender's vector math: the vector and the value output.
+fn vector_math(g: &mut Graph, op: &str) -> Option<(Src, Src)> {
+    let t = "vector3";
+    let (a, b, c) = (Src::I("a"), Src::I("b"), Src::I("c"));
+    let zero = || v(0.0);
+    let zero3 = || Src::V("0, 0, 0".into());
+    Some(match op {
+        "add" => (g.binary("add", t, a, b), zero()),
+        "subtract" => (g.binary("subtract", t, a, b), zero()),
+        "multiply" => (g.binary("multiply", t, a, b), zero()),
+        "divide" => (g.binary("divide", t, a, b), zero()),
+        "multiply_add" => {
+            let p = g.binary("multiply", t, a, b);
+            (g.binary("add", t, p, c), zero())
+        }
+        "cross" => (g.binary("crossproduct", t, a, b), zero()),
+        "dot" => (
+            zero3(),
+            g.node("dotproduct", "float", &[("in1", t, a), ("in2", t, b)]),
+        ),
+        "distance" => (
+            zero3(),
+            g.node("distance", "float", &[("in1", t, a), ("in2", t, b)]),
+        ),
+        "length" => (zero3(), g.unary_typed("magnitude", "float", t, a)),
+        "scale" => (
+            g.node(
+                "multiply",
+                t,
+                &[("in1", t, a), ("in2", "float", Src::I("scale"))],
+            ),
+            zero(),
+        ),
+        "normalize" => (g.unary("normalize", t, a), zero()),
+        "absolute" => (g.unary("absval", t, a), zero()),
+        "minimum" => (g.binary("min", t, a, b), zero()),
+        "maximum" => (g.binary("max", t, a, b), zero()),
+        "floor" => (g.unary("floor", t, a), zero()),
+        "ceil" => (g.unary("ceil", t, a), zero()),
+        "fraction" => {
+            let fl = g.unary("floor", t, a.clone());
+            (g.binary("subtract", t, a, fl), zero())
+        }
+        "sine" => (g.unary("sin", t, a), zero()),
+        "cosine" => (g.unary("cos", t, a), zero()),
+        "tangent" => (g.unary("tan", t, a), zero()),
+        _ => return None,
+    })
+}
+
+impl Graph {
+    /// A one-input node whose input type differs from its output's.
+    fn unary_typed(&mut self, category: &str, ty: &str, input_ty: &str, a: Src) -> Src {
+        self.node(category, ty, &[("in", input_ty, a)])
+    }
+}
+
+/// Blender's Mapping node: point (scale, rotate X then Y then Z, translate), texture
+/// (the inverse), vector (no translation), normal (the inverse transpose, normalised).
+fn mapping(g: &mut Graph, vector_type: &str) -> Option<Src> {
+    let t = "vector3";
+    let degrees = g.node(
+        "multiply",
+        t,
+        &[
+            ("in1", t, Src::I("rotation")),
+            ("in2", "float", v(180.0 / std::f32::consts::PI)),
+        ],
+    );
+    let Src::N(deg) = degrees else { return None };
+    let split = g.node("separate3", "multioutput", &[("in", t, Src::N(deg))]);
+    let Src::N(split) = split else { return None };
+    let angle = |g: &mut Graph, axis: &'static str, sign: f32| {
+        let a = Src::O(split.clone(), axis);
+        g.binary("multiply", "float", a, v(sign))
+    };
+    let rotate = |g: &mut Graph, x: Src, axis: &'static str, amount: Src| {
+        let axis_vector = match axis {
+            "outx" => "1, 0, 0",
+            "outy" => "0, 1, 0",
+            _ => "0, 0, 1",
+        };
+        g.node(
+            "rotate3d",
+            t,
+            &[
+                ("in", t, x),
+                ("amount", "float", amount),
+                ("axis", t, Src::V(axis_vector.into())),
+            ],
+        )
+    };
+    let forward = |g: &mut Graph, x: Src| {
+        let mut x = x;
+        for axis in ["outx", "outy", "outz"] {
+            let a = angle(g, axis, 1.0);
+            x = rotate(g, x, axis, a);
+        }
+        x
+    };
+    let inverse = |g: &mut Graph, x: Src| {
+        let mut x = x;
+        for axis in ["outz", "outy", "outx"] {
+            let a = angle(g, axis, -1.0);
+            x = rotate(g, x, axis, a);
+        }
+        x
+    };
+    Some(match vector_type {
+        "point" => {
+            let s = g.binary("multiply", t, Src::I("vector"), Src::I("scale"));
+            let r = forward(g, s);
+            g.binary("add", t, r, Src::I("location"))
+        }
+        "texture" => {
+            let d = g.binary("subtract", t, Src::I("vector"), Src::I("location"));
+            let r = inverse(g, d);
+            g.binary("divide", t, r, Src::I("scale"))
+        }
+        "vector" => {
+            let s = g.binary("multiply", t, Src::I("vector"), Src::I("scale"));
+            forward(g, s)
+        }
+        "normal" => {
+            let s = g.binary("divide", t, Src::I("vector"), Src::I("scale"));
+            let r = forward(g, s);
+            g.unary("normalize", t, r)
+        }
+        _ => return None,
+    })
+}
