@@ -129,18 +129,6 @@ impl Node {
         &self.kind
     }
 
-    pub fn has_position(&self) -> bool {
-        self.position.is_some()
-    }
-
-    /// The ids of the nodes its inputs link to.
-    pub fn links(&self) -> impl Iterator<Item = &str> {
-        self.inputs.iter().filter_map(|(_, v)| match v {
-            Value::Link(l) => Some(l.rsplit_once('.').map_or(l.as_str(), |(n, _)| n)),
-            _ => None,
-        })
-    }
-
     /// Sets a text parameter.
     pub fn text(self, name: &str, value: &str) -> Self {
         self.param(name, Param::Text(value.to_owned()))
@@ -217,11 +205,6 @@ impl Graph {
 
     pub fn nodes(&self) -> &[(String, Node)] {
         &self.nodes
-    }
-
-    /// The node `id`, to change in place.
-    pub fn node_mut(&mut self, id: &str) -> Option<&mut Node> {
-        self.nodes.iter_mut().find(|(k, _)| k == id).map(|(_, n)| n)
     }
 
     /// Adds `node` as `id` (or `id_2`, `id_3`, … if taken) and returns the id used.

@@ -6,7 +6,7 @@
 //! default; a material whose shader cannot be mapped is left out with a warning, and a
 //! file none of whose materials can be read is an error.
 
-use std::collections::{BTreeMap, HashMap};
+use std::collections::HashMap;
 use std::path::Path;
 
 use kiln_plugin_api::kmat::{Graph, Group, Node, Param, Socket, Value};
@@ -371,7 +371,6 @@ impl<'a> Build<'_, 'a> {
         for (name, group) in std::mem::take(&mut self.groups) {
             scope.graph.add_group(&name, group);
         }
-        layout(&mut scope.graph);
         Ok(scope.graph)
     }
 
@@ -619,7 +618,6 @@ impl<'a> Build<'_, 'a> {
         for e in elements(ng).filter(|e| !matches!(e.tag_name().name(), "input" | "output")) {
             self.map_node(&mut scope, e);
         }
-        layout(&mut scope.graph);
         let group = Group {
             inputs,
             outputs,
@@ -1296,54 +1294,5 @@ fn position(e: Element, node: Node) -> Node {
     match (get("xpos"), get("ypos")) {
         (Some(x), Some(y)) => node.at(x * POSITION_SCALE, y * POSITION_SCALE),
         _ => node,
-    }
-}
-
-/// Places the nodes without a position in columns by their distance from the graph's
-/// end (the material output, or what nothing reads), right to left, so that wires run
-/// left to right as in Blender.
-pub fn layout(graph: &mut Graph) {
-    const COLUMN: f32 = 260.0;
-    const ROW: f32 = 180.0;
-    let ids: Vec<String> = graph.nodes().iter().map(|(id, _)| id.clone()).collect();
-    // What each node feeds.
-    let mut readers: BTreeMap<String, Vec<String>> = BTreeMap::new();
-    for (id, node) in graph.nodes() {
-        for source in node.links() {
-            readers
-                .entry(source.to_owned())
-                .or_default()
-                .push(id.clone());
-        }
-    }
-    // Depth: the longest path to a node nothing reads (bounded: cycles stop there).
-    let mut depth: BTreeMap<String, usize> = ids.iter().map(|id| (id.clone(), 0)).collect();
-    for _ in 0..ids.len() {
-        let mut changed = false;
-        for id in &ids {
-            let d = readers
-                .get(id)
-                .map(|r| r.iter().map(|x| depth[x] + 1).max().unwrap_or(0))
-                .unwrap_or(0);
-            if d != depth[id] {
-                depth.insert(id.clone(), d);
-                changed = true;
-            }
-        }
-        if !changed {
-            break;
-        }
-    }
-    let mut rows: BTreeMap<usize, usize> = BTreeMap::new();
-    for id in &ids {
-        let d = depth[id];
-        let row = rows.entry(d).or_default();
-        let at = (-(d as f32) * COLUMN, *row as f32 * ROW);
-        *row += 1;
-        if let Some(node) = graph.node_mut(id)
-            && !node.has_position()
-        {
-            *node = node.clone().at(at.0, at.1);
-        }
     }
 }
