@@ -737,7 +737,7 @@ impl<'f> Document<'f> {
             ),
         ];
         let mut category = "image";
-        if let Some((mapping, tiling, offset)) = self.tiling(scope, id, node) {
+        if let Some((mapping, tiling, offset)) = self.tiling(scope, node) {
             // A Mapping node only this image reads, scaling and moving its UVs: the
             // tiling and offset of MaterialX's tiled image.
             category = "tiledimage";
@@ -770,12 +770,7 @@ impl<'f> Document<'f> {
     /// tiling and offset (a point mapping of linked coordinates by constant scale and
     /// location, no rotation, read by nothing else; address modes stay periodic), with
     /// the tiling and offset; the node is then part of the image.
-    fn tiling(
-        &self,
-        scope: &mut Scope<'f>,
-        id: &str,
-        node: &Node,
-    ) -> Option<(&'f Node, [f32; 2], [f32; 2])> {
+    fn tiling(&self, scope: &mut Scope<'f>, node: &Node) -> Option<(&'f Node, [f32; 2], [f32; 2])> {
         let (mapping_id, _) = node.inputs.get("vector").and_then(Input::link)?;
         let mapping = scope
             .nodes
@@ -812,7 +807,6 @@ impl<'f> Document<'f> {
         {
             return None;
         }
-        let _ = id;
         scope.consumed.insert(mapping_id.to_owned());
         Some((mapping, [scale[0], scale[1]], [-location[0], -location[1]]))
     }

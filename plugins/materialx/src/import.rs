@@ -693,6 +693,22 @@ impl<'a> Build<'_, 'a> {
                 input(e, $input).and_then(|i| self.resolve(scope, i))
             };
         }
+        // A procedural node's coordinates: its position (3D) or texture coordinates
+        // (2D), by default the object position or the UVs, as MaterialX's.
+        macro_rules! coords {
+            () => {{
+                let three_d = category.ends_with("3d");
+                let given = if three_d {
+                    get!("position")
+                } else {
+                    get!("texcoord")
+                };
+                given.unwrap_or_else(|| {
+                    let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
+                    Value::link(&id, if three_d { "object" } else { "uv" })
+                })
+            }};
+        }
         // The exporter's stand-ins for Kiln's implicit conversions are plain connections.
         if e.attribute("kiln_conversion") == Some("true") {
             return out(get!("in").or(get!("in1"))?);
@@ -873,16 +889,7 @@ impl<'a> Build<'_, 'a> {
                 out(Value::link(&id, "result"))
             }
             "noise2d" | "noise3d" | "fractal3d" | "fractal2d" => {
-                let three_d = category.ends_with("3d");
-                let coords = if three_d {
-                    get!("position")
-                } else {
-                    get!("texcoord")
-                };
-                let coords = coords.unwrap_or_else(|| {
-                    let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
-                    Value::link(&id, if three_d { "object" } else { "uv" })
-                });
+                let coords = coords!();
                 let fractal = category.starts_with("fractal");
                 let mut noise = Node::new("noise_texture")
                     .input("vector", coords)
@@ -932,22 +939,7 @@ impl<'a> Build<'_, 'a> {
                 out(Value::link(&id, "result"))
             }
             "cellnoise2d" | "cellnoise3d" => {
-                let coords = if category.ends_with("3d") {
-                    get!("position")
-                } else {
-                    get!("texcoord")
-                };
-                let coords = coords.unwrap_or_else(|| {
-                    let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
-                    Value::link(
-                        &id,
-                        if category.ends_with("3d") {
-                            "object"
-                        } else {
-                            "uv"
-                        },
-                    )
-                });
+                let coords = coords!();
                 let floor = Node::new("vector_math")
                     .text("operation", "floor")
                     .input("a", coords);
@@ -961,22 +953,7 @@ impl<'a> Build<'_, 'a> {
                 ))
             }
             "worleynoise2d" | "worleynoise3d" => {
-                let coords = if category.ends_with("3d") {
-                    get!("position")
-                } else {
-                    get!("texcoord")
-                };
-                let coords = coords.unwrap_or_else(|| {
-                    let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
-                    Value::link(
-                        &id,
-                        if category.ends_with("3d") {
-                            "object"
-                        } else {
-                            "uv"
-                        },
-                    )
-                });
+                let coords = coords!();
                 let node = Node::new("voronoi_texture")
                     .text("feature", "f1")
                     .text("distance", "euclidean")
