@@ -646,9 +646,9 @@ fn an_import_adds_to_the_scene_as_one_undo_step() {
     assert_eq!(*harness.state().document().scene(), start);
 }
 
-/// The material list's Import… adds a MaterialX file's materials as one undo step (one
+/// The material list's Import Materials… adds a MaterialX file's materials as one undo step (one
 /// whose image is missing keeps its graph, with the error, and the import says which
-/// file); Export… writes the shown material, which reads back as the same graph.
+/// file); Export Material… writes the shown material, which reads back as the same graph.
 #[test]
 fn the_material_list_imports_and_exports_materialx() {
     let dir = tempfile::tempdir().unwrap();
@@ -666,7 +666,7 @@ fn the_material_list_imports_and_exports_materialx() {
     let start = harness.state().document().scene().clone();
     let before = start.materials.len();
 
-    harness.get_by_label("Import…").click();
+    harness.get_by_label("Import Materials…").click();
     harness.step();
     let app = harness.state();
     assert_eq!(app.error(), None);
@@ -693,13 +693,13 @@ fn the_material_list_imports_and_exports_materialx() {
     harness.step();
     assert_eq!(*harness.state().document().scene(), start);
 
-    harness.get_by_label("Import…").click();
+    harness.get_by_label("Import Materials…").click();
     harness.step();
     let app = harness.state();
     assert_eq!((app.error(), app.notice()), (None, None));
     let shown = app.document().material_graph(before).unwrap();
     assert_eq!(app.document().scene().materials[before].name, "Gold");
-    harness.get_by_label("Export…").click();
+    harness.get_by_label("Export Material…").click();
     harness.step();
     assert_eq!(harness.state().error(), None);
     let back = bundled_plugins().import_materials(&out).unwrap().materials;

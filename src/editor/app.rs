@@ -637,7 +637,7 @@ impl EditorApp {
         }
     }
 
-    /// The material list's Import…: the materials of a file a material-format plugin
+    /// The material list's Import Materials…: the materials of a file a material-format plugin
     /// reads, added as one undo step (one whose graph does not compile, for a missing
     /// image, is added with its graph kept and the error shown, as an edit that does not
     /// compile is); the first is shown. Warnings are shown after.
@@ -700,7 +700,7 @@ impl EditorApp {
         }
     }
 
-    /// The material list's Export…: material `material`'s graph (as edited) written
+    /// The material list's Export Material…: material `material`'s graph (as edited) written
     /// through a material-format plugin, its images named relative to the file.
     fn export_material(&mut self, material: usize) {
         let extensions = self.plugins.material_extensions(true);

@@ -599,6 +599,126 @@ pub fn implement(
             g.output(&out_name("color")?, "color3", color);
             g.output(&out_name("position")?, t, position);
         }
+        "invert" => {
+            let c = "color3";
+            let inverse = g.binary("subtract", c, v3(1.0), Src::I("color"));
+            let r = g.mix(c, Src::I("color"), inverse, Src::I("fac"));
+            g.output(&out_name("color")?, c, r);
+        }
+        "gamma" => {
+            // Only positive channels are raised; gamma 0 gives white.
+            let c = "color3";
+            let base = g.binary("max", c, Src::I("color"), v3(1e-30));
+            let raised = g.node(
+                "power",
+                c,
+                &[("in1", c, base), ("in2", "float", Src::I("gamma"))],
+            );
+            let split = |g: &mut Graph, x: Src| {
+                let s = g.node("separate3", "multioutput", &[("in", c, x)]);
+                let Src::N(s) = s else { unreachable!("a node") };
+                s
+            };
+            let (color, powered) = (split(&mut g, Src::I("color")), split(&mut g, raised));
+            let mut channels = Vec::new();
+            for o in ["outr", "outg", "outb"] {
+                channels.push(g.ifgreater(
+                    "float",
+                    Src::O(color.clone(), o),
+                    v(0.0),
+                    Src::O(powered.clone(), o),
+                    Src::O(color.clone(), o),
+                ));
+            }
+            let joined = g.node(
+                "combine3",
+                c,
+                &[
+                    ("in1", "float", channels[0].clone()),
+                    ("in2", "float", channels[1].clone()),
+                    ("in3", "float", channels[2].clone()),
+                ],
+            );
+            let r = g.node(
+                "ifequal",
+                c,
+                &[
+                    ("value1", "float", Src::I("gamma")),
+                    ("value2", "float", v(0.0)),
+                    ("in1", c, v3(1.0)),
+                    ("in2", c, joined),
+                ],
+            );
+            g.output(&out_name("color")?, c, r);
+        }
+        "brightness_contrast" => {
+            // max((1 + contrast) c + bright − contrast / 2, 0)
+            let (c, f) = ("color3", "float");
+            let a = g.binary("add", f, Src::I("contrast"), v(1.0));
+            let half = g.binary("multiply", f, Src::I("contrast"), v(0.5));
+            let b = g.binary("subtract", f, Src::I("bright"), half);
+            let scaled = g.node("multiply", c, &[("in1", c, Src::I("color")), ("in2", f, a)]);
+            let shifted = g.node("add", c, &[("in1", c, scaled), ("in2", f, b)]);
+            let r = g.binary("max", c, shifted, v3(0.0));
+            g.output(&out_name("color")?, c, r);
+        }
+        "rgb_to_bw" => {
+            let c = g.unary_typed("convert", "vector3", "color3", Src::I("color"));
+            let r = g.node(
+                "dotproduct",
+                "float",
+                &[
+                    ("in1", "vector3", c),
+                    ("in2", "vector3", Src::V("0.2126, 0.7152, 0.0722".into())),
+                ],
+            );
+            g.output(&out_name("value")?, "float", r);
+        }
+        "hue_saturation_value" => {
+            let (c, f) = ("color3", "float");
+            let hsv = g.unary("rgbtohsv", c, Src::I("color"));
+            let s = g.node("separate3", "multioutput", &[("in", c, hsv)]);
+            let Src::N(s) = s else { return None };
+            let h = g.binary("add", f, Src::O(s.clone(), "outr"), Src::I("hue"));
+            let h = g.binary("add", f, h, v(0.5));
+            let fl = g.unary("floor", f, h.clone());
+            let h = g.binary("subtract", f, h, fl);
+            let sat = g.binary(
+                "multiply",
+                f,
+                Src::O(s.clone(), "outg"),
+                Src::I("saturation"),
+            );
+            let sat = g.clamp(f, sat, v(0.0), v(1.0));
+            let val = g.binary("multiply", f, Src::O(s, "outb"), Src::I("value"));
+            let joined = g.node(
+                "combine3",
+                c,
+                &[("in1", f, h), ("in2", f, sat), ("in3", f, val)],
+            );
+            let shifted = g.unary("hsvtorgb", c, joined);
+            let r = g.mix(c, Src::I("color"), shifted, Src::I("fac"));
+            let r = g.binary("max", c, r, v3(0.0));
+            g.output(&out_name("color")?, c, r);
+        }
+        "vertex_color" => {
+            let colour = g.node(
+                "geomcolor",
+                "color4",
+                &[("index", "integer", Src::V("0".into()))],
+            );
+            let rgb = g.unary_typed("convert", "color3", "color4", colour.clone());
+            let alpha = g.node(
+                "extract",
+                "float",
+                &[
+                    ("in", "color4", colour),
+                    ("index", "integer", Src::V("3".into())),
+                ],
+            );
+            g.output(&out_name("color")?, "color3", rgb);
+            g.output(&out_name("alpha")?, "float", alpha);
+        }
         "bump" => {
             // An approximation: MaterialX derives the slope of the height in texture
             // space (heighttonormal), Kiln in world space by two extra evaluations.
@@ -714,9 +834,101 @@ fn math(g: &mut Graph, op: &str) -> Option<Src> {
         "arctangent" => g.node("atan2", f, &[("iny", f, a), ("inx", f, v(1.0))]),
         "arctan2" => g.node("atan2", f, &[("iny", f, a), ("inx", f, b)]),
         "radians" => g.binary("multiply", f, a, v(std::f32::consts::PI / 180.0)),
+        // value − range · floor((value − min) / range); min where the range is empty.
+        "wrap" => {
+            let range = g.binary("subtract", f, b, c.clone());
+            let from = g.binary("subtract", f, a.clone(), c.clone());
+            let q = g.binary("divide", f, from, range.clone());
+            let fl = g.unary("floor", f, q);
+            let p = g.binary("multiply", f, range.clone(), fl);
+            let wrapped = g.binary("subtract", f, a, p);
+            g.node(
+                "ifequal",
+                f,
+                &[
+                    ("value1", f, range),
+                    ("value2", f, v(0.0)),
+                    ("in1", f, c),
+                    ("in2", f, wrapped),
+                ],
+            )
+        }
+        // |fract((a − b) / 2b) · 2b − b|; 0 where b is 0.
+        "pingpong" => {
+            let twice = g.binary("multiply", f, b.clone(), v(2.0));
+            let d = g.binary("subtract", f, a, b.clone());
+            let t = g.binary("divide", f, d, twice.clone());
+            let fl = g.unary("floor", f, t.clone());
+            let fr = g.binary("subtract", f, t, fl);
+            let s = g.binary("multiply", f, fr, twice);
+            let s = g.binary("subtract", f, s, b.clone());
+            let r = g.unary("absval", f, s);
+            g.node(
+                "ifequal",
+                f,
+                &[
+                    ("value1", f, b),
+                    ("value2", f, v(0.0)),
+                    ("in1", f, v(0.0)),
+                    ("in2", f, r),
+                ],
+            )
+        }
+        "smooth_min" => smooth_min(g, a, b, c),
+        "smooth_max" => {
+            let na = g.binary("multiply", f, a, v(-1.0));
+            let nb = g.binary("multiply", f, b, v(-1.0));
+            let m = smooth_min(g, na, nb, c);
+            g.binary("multiply", f, m, v(-1.0))
+        }
+        op @ ("sinh" | "cosh" | "tanh") => {
+            // From exponentials; tanh of |x| > 10 is its sign (as Kiln's).
+            let x = if op == "tanh" {
+                g.clamp(f, a, v(-10.0), v(10.0))
+            } else {
+                a
+            };
+            let ep = g.unary("exp", f, x.clone());
+            let nx = g.binary("multiply", f, x, v(-1.0));
+            let en = g.unary("exp", f, nx);
+            let sinh = g.binary("subtract", f, ep.clone(), en.clone());
+            let cosh = g.binary("add", f, ep, en);
+            match op {
+                "sinh" => g.binary("multiply", f, sinh, v(0.5)),
+                "cosh" => g.binary("multiply", f, cosh, v(0.5)),
+                _ => g.binary("divide", f, sinh, cosh),
+            }
+        }
         "degrees" => g.binary("multiply", f, a, v(180.0 / std::f32::consts::PI)),
         _ => return None,
     })
+}
+
+/// Blender's smooth minimum: `min(a, b) − h³ k / 6`, `h = max(k − |a − b|, 0) / k`;
+/// the minimum where k is 0.
+fn smooth_min(g: &mut Graph, a: Src, b: Src, k: Src) -> Src {
+    let f = "float";
+    let d = g.binary("subtract", f, a.clone(), b.clone());
+    let d = g.unary("absval", f, d);
+    let h = g.binary("subtract", f, k.clone(), d);
+    let h = g.binary("max", f, h, v(0.0));
+    let h = g.binary("divide", f, h, k.clone());
+    let h2 = g.binary("multiply", f, h.clone(), h.clone());
+    let h3 = g.binary("multiply", f, h2, h);
+    let t = g.binary("multiply", f, h3, k.clone());
+    let t = g.binary("multiply", f, t, v(1.0 / 6.0));
+    let m = g.binary("min", f, a, b);
+    let smooth = g.binary("subtract", f, m.clone(), t);
+    g.node(
+        "ifequal",
+        f,
+        &[
+            ("value1", f, k),
+            ("value2", f, v(0.0)),
+            ("in1", f, m),
+            ("in2", f, smooth),
+        ],
+    )
 }
 
 /// `sign(x) floor(|x|)`.
@@ -773,6 +985,43 @@ fn vector_math(g: &mut Graph, op: &str) -> Option<(Src, Src)> {
         "sine" => (g.unary("sin", t, a), zero()),
         "cosine" => (g.unary("cos", t, a), zero()),
         "tangent" => (g.unary("tan", t, a), zero()),
+        // b · dot(a, b) / dot(b, b)
+        "project" => {
+            let ab = g.node(
+                "dotproduct",
+                "float",
+                &[("in1", t, a), ("in2", t, b.clone())],
+            );
+            let bb = g.node(
+                "dotproduct",
+                "float",
+                &[("in1", t, b.clone()), ("in2", t, b.clone())],
+            );
+            let k = g.binary("divide", "float", ab, bb);
+            (
+                g.node("multiply", t, &[("in1", t, b), ("in2", "float", k)]),
+                zero(),
+            )
+        }
+        // a − 2 dot(a, n) n, n = normalize(b)
+        "reflect" => {
+            let n = g.unary("normalize", t, b);
+            (
+                g.node("reflect", t, &[("in", t, a), ("normal", t, n)]),
+                zero(),
+            )
+        }
+        // dot(c, b) < 0 ? a : −a
+        "faceforward" => {
+            let d = g.node("dotproduct", "float", &[("in1", t, c), ("in2", t, b)]);
+            let neg = g.binary("multiply", t, a.clone(), v3(-1.0));
+            (g.ifgreater(t, v(0.0), d, a, neg), zero())
+        }
+        "snap" => {
+            let q = g.binary("divide", t, a, b.clone());
+            let fl = g.unary("floor", t, q);
+            (g.binary("multiply", t, fl, b), zero())
+        }
         _ => return None,
     })
 }

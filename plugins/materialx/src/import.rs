@@ -963,6 +963,70 @@ impl<'a> Build<'_, 'a> {
                 let id = scope.graph.add(&name, position(e, node));
                 out(Value::link(&id, "distance"))
             }
+            "place2d" => {
+                // MaterialX's NG_place2d: scale, rotate (clockwise by `rotate` degrees),
+                // offset, about the pivot (order SRT), or offset, rotate, scale (TRS).
+                let texcoord = get!("texcoord").unwrap_or_else(|| {
+                    let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
+                    Value::link(&id, "uv")
+                });
+                let pivot = get!("pivot").unwrap_or(Value::Vector([0.0; 3]));
+                let offset = get!("offset").unwrap_or(Value::Vector([0.0; 3]));
+                let scale = match get!("scale") {
+                    Some(Value::Vector([x, y, _])) => Value::Vector([x, y, 1.0]),
+                    Some(v) => v,
+                    None => Value::Vector([1.0; 3]),
+                };
+                let rotation = match get!("rotate") {
+                    Some(Value::Float(degrees)) => Value::Vector([0.0, 0.0, -degrees.to_radians()]),
+                    Some(v) => {
+                        let radians = Node::new("math")
+                            .text("operation", "multiply")
+                            .input("a", v)
+                            .input("b", Value::Float(-std::f32::consts::PI / 180.0));
+                        let radians = scope.graph.add(&format!("{name}_radians"), radians);
+                        let z = Node::new("combine_xyz").input("z", Value::link(&radians, "value"));
+                        Value::link(&scope.graph.add(&format!("{name}_angle"), z), "vector")
+                    }
+                    None => Value::Vector([0.0; 3]),
+                };
+                let trs = self
+                    .uniform(scope, e, "operationorder")
+                    .is_some_and(|o| o.trim() == "1");
+                let step = |scope: &mut Scope<'a>, what: &str, node: Node, socket: &str| {
+                    Value::link(&scope.graph.add(&format!("{name}_{what}"), node), socket)
+                };
+                let math = |op: &str, a: Value, b: Value| {
+                    Node::new("vector_math")
+                        .text("operation", op)
+                        .input("a", a)
+                        .input("b", b)
+                };
+                let rotate = |v: Value| {
+                    Node::new("mapping")
+                        .text("vector_type", "vector")
+                        .input("vector", v)
+                        .input("rotation", rotation.clone())
+                };
+                let centred = step(
+                    scope,
+                    "centred",
+                    math("subtract", texcoord, pivot.clone()),
+                    "vector",
+                );
+                let placed = if trs {
+                    let moved = step(scope, "offset", math("subtract", centred, offset), "vector");
+                    let turned = step(scope, "rotated", rotate(moved), "vector");
+                    step(scope, "scaled", math("divide", turned, scale), "vector")
+                } else {
+                    let scaled = step(scope, "scaled", math("divide", centred, scale), "vector");
+                    let turned = step(scope, "rotated", rotate(scaled), "vector");
+                    step(scope, "offset", math("subtract", turned, offset), "vector")
+                };
+                let node = math("add", placed, pivot);
+                let id = scope.graph.add(&name, position(e, node));
+                out(Value::link(&id, "vector"))
+            }
             "ramplr" | "ramptb" => {
                 let coords = get!("texcoord").unwrap_or_else(|| {
                     let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");

@@ -213,6 +213,11 @@ fn evaluate(g: &implement::Graph, interface: &HashMap<String, V>) -> HashMap<(St
                 map(&v, |x| x / l)
             }
             "rotate3d" => rotate(&get("in"), get("amount")[0], &get("axis")),
+            "reflect" => {
+                let (i, n) = (get("in"), get("normal"));
+                let d = 2.0 * dot(&i, &n);
+                zip(&i, &n, |x, y| x - d * y)
+            }
             "rgbtohsv" => rgb_to_hsv(&get("in")),
             "hsvtorgb" => hsv_to_rgb(&get("in")),
             "combine3" => vec![get("in1")[0], get("in2")[0], get("in3")[0]],
@@ -468,6 +473,13 @@ fn math_implementations_compute_what_kiln_does() {
         "arctan2",
         "radians",
         "degrees",
+        "wrap",
+        "pingpong",
+        "smooth_min",
+        "smooth_max",
+        "sinh",
+        "cosh",
+        "tanh",
     ];
     let mut cases = Vec::new();
     for operation in ops {
@@ -516,6 +528,10 @@ fn vector_and_mix_implementations_compute_what_kiln_does() {
         "sine",
         "cosine",
         "tangent",
+        "project",
+        "reflect",
+        "faceforward",
+        "snap",
     ] {
         let node = op("vector_math", operation)
             .input("a", a)
@@ -580,6 +596,46 @@ fn vector_and_mix_implementations_compute_what_kiln_does() {
                 "result",
             ));
         }
+    }
+    let color = [0.2, 0.7, 0.4];
+    for fac in [0.0, 0.4, 1.0] {
+        cases.push((
+            Node::new("invert").input("fac", fac).input("color", color),
+            "color",
+        ));
+    }
+    for gamma in [0.45, 1.0, 2.2] {
+        cases.push((
+            Node::new("gamma")
+                .input("gamma", gamma)
+                .input("color", [0.2, 0.0, 0.8]),
+            "color",
+        ));
+    }
+    for (bright, contrast) in [(0.1, 0.5), (-0.3, -0.4)] {
+        cases.push((
+            Node::new("brightness_contrast")
+                .input("bright", bright)
+                .input("contrast", contrast)
+                .input("color", color),
+            "color",
+        ));
+    }
+    cases.push((Node::new("rgb_to_bw").input("color", color), "value"));
+    for (hue, saturation, value, fac) in [
+        (0.5, 1.0, 1.0, 1.0),
+        (0.8, 1.5, 0.7, 0.6),
+        (0.1, 0.3, 1.2, 1.0),
+    ] {
+        cases.push((
+            Node::new("hue_saturation_value")
+                .input("hue", hue)
+                .input("saturation", saturation)
+                .input("value", value)
+                .input("fac", fac)
+                .input("color", color),
+            "color",
+        ));
     }
     for mode in ["rgb", "hsv"] {
         for socket in ["red", "green", "blue"] {

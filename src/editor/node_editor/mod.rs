@@ -172,7 +172,7 @@ pub struct NodeEditor {
     stats: Option<Result<CompileStats, String>>,
     /// The node the viewport shows instead of its material (Ctrl+Shift+click).
     viewport_preview: Option<ViewportPreview>,
-    /// The material list's Import… or Export…, for the app to answer.
+    /// The material list's Import Materials… or Export Material…, for the app to answer.
     file_request: Option<MaterialFileRequest>,
 }
 
@@ -352,7 +352,7 @@ impl NodeEditor {
         self.rect
     }
 
-    /// What the material list's Import… or Export… asked for since the last call: the
+    /// What the material list's Import Materials… or Export Material… asked for since the last call: the
     /// app answers it, with its dialogs and plugins.
     pub fn take_file_request(&mut self) -> Option<MaterialFileRequest> {
         self.file_request.take()
@@ -697,7 +697,7 @@ impl NodeEditor {
                 .response
                 .labelled_by(label.id);
             if ui
-                .button("Import…")
+                .button("Import Materials…")
                 .on_hover_text("Add the materials of a material file (MaterialX .mtlx, …)")
                 .clicked()
             {
@@ -744,7 +744,7 @@ impl NodeEditor {
                 commands.push((Command::RemoveMaterial { index: m }, None));
             }
             if ui
-                .button("Export…")
+                .button("Export Material…")
                 .on_hover_text("Write this material as a material file (MaterialX .mtlx, …)")
                 .clicked()
             {
