@@ -432,46 +432,15 @@ pub fn implement(
         "layer_weight" => {
             // shaders/nodes/inputs.wgsl nd_layer_weight; the view direction points at
             // the surface, Kiln's `wo` away from it.
-            let (f, t) = ("float", "vector3");
-            let view = g.node(
-                "viewdirection",
-                t,
-                &[("space", "string", Src::V("world".into()))],
-            );
-            let c = g.node(
-                "dotproduct",
-                f,
-                &[("in1", t, view), ("in2", t, Src::I("normal"))],
-            );
-            let c = g.binary("multiply", f, c, v(-1.0));
+            let f = "float";
+            let c = view_cosine(&mut g, Src::I("normal"));
             let b = g.clamp(f, Src::I("blend"), v(0.0), v(0.99999));
             let one_minus = g.binary("subtract", f, v(1.0), b.clone());
             let eta = g.binary("max", f, one_minus.clone(), v(1e-5));
             let inverse = g.binary("divide", f, v(1.0), eta.clone());
             let eta = g.ifgreater(f, v(0.0), c.clone(), eta, inverse);
             let cos = g.unary("absval", f, c);
-            // fresnel_dielectric(cos, eta)
-            let c2 = g.binary("multiply", f, cos.clone(), cos.clone());
-            let e2 = g.binary("multiply", f, eta.clone(), eta);
-            let g2 = g.binary("add", f, e2, c2);
-            let g2 = g.binary("subtract", f, g2, v(1.0));
-            let root = g.binary("max", f, g2.clone(), v(0.0));
-            let root = g.unary("sqrt", f, root);
-            let gm = g.binary("subtract", f, root.clone(), cos.clone());
-            let gp = g.binary("add", f, root, cos.clone());
-            let a = g.binary("divide", f, gm.clone(), gp.clone());
-            let num = g.binary("multiply", f, cos.clone(), gp);
-            let num = g.binary("subtract", f, num, v(1.0));
-            let den = g.binary("multiply", f, cos.clone(), gm);
-            let den = g.binary("add", f, den, v(1.0));
-            let bb = g.binary("divide", f, num, den);
-            let a2 = g.binary("multiply", f, a.clone(), a);
-            let b2 = g.binary("multiply", f, bb.clone(), bb);
-            let b2 = g.binary("add", f, b2, v(1.0));
-            let fr = g.binary("multiply", f, a2, b2);
-            let fr = g.binary("multiply", f, fr, v(0.5));
-            // Total internal reflection: 1.
-            let fresnel = g.ifgreater(f, g2, v(0.0), fr, v(1.0));
+            let fresnel = fresnel_dielectric(&mut g, cos.clone(), eta);
             // facing = 1 − |c|^e, e = b < 0.5 ? 2b : 0.5 / (1 − b)
             let twice = g.binary("multiply", f, b.clone(), v(2.0));
             let half = g.binary("divide", f, v(0.5), one_minus);
@@ -598,6 +567,18 @@ pub fn implement(
             g.output(&out_name("distance")?, "float", distance);
             g.output(&out_name("color")?, "color3", color);
             g.output(&out_name("position")?, t, position);
+        }
+        "fresnel" => {
+            // shaders/nodes/inputs.wgsl nd_fresnel: seen from behind, the interface is
+            // crossed the other way.
+            let f = "float";
+            let c = view_cosine(&mut g, Src::I("normal"));
+            let eta = g.binary("max", f, Src::I("ior"), v(1e-5));
+            let inverse = g.binary("divide", f, v(1.0), eta.clone());
+            let eta = g.ifgreater(f, v(0.0), c.clone(), inverse, eta);
+            let cos = g.unary("absval", f, c);
+            let r = fresnel_dielectric(&mut g, cos, eta);
+            g.output(&out_name("fac")?, f, r);
         }
         "invert" => {
             let c = "color3";
@@ -929,6 +910,45 @@ fn smooth_min(g: &mut Graph, a: Src, b: Src, k: Src) -> Src {
             ("in2", f, smooth),
         ],
     )
+}
+
+/// The cosine between `normal` and the direction toward the viewer (Kiln's `wo`; the
+/// view direction points at the surface).
+fn view_cosine(g: &mut Graph, normal: Src) -> Src {
+    let (f, t) = ("float", "vector3");
+    let view = g.node(
+        "viewdirection",
+        t,
+        &[("space", "string", Src::V("world".into()))],
+    );
+    let c = g.node("dotproduct", f, &[("in1", t, view), ("in2", t, normal)]);
+    g.binary("multiply", f, c, v(-1.0))
+}
+
+/// The Fresnel reflectance of a dielectric at cosine `cos` and relative index `eta`
+/// (Kiln's `fresnel_dielectric`); 1 past total internal reflection.
+fn fresnel_dielectric(g: &mut Graph, cos: Src, eta: Src) -> Src {
+    let f = "float";
+    let c2 = g.binary("multiply", f, cos.clone(), cos.clone());
+    let e2 = g.binary("multiply", f, eta.clone(), eta);
+    let g2 = g.binary("add", f, e2, c2);
+    let g2 = g.binary("subtract", f, g2, v(1.0));
+    let root = g.binary("max", f, g2.clone(), v(0.0));
+    let root = g.unary("sqrt", f, root);
+    let gm = g.binary("subtract", f, root.clone(), cos.clone());
+    let gp = g.binary("add", f, root, cos.clone());
+    let a = g.binary("divide", f, gm.clone(), gp.clone());
+    let num = g.binary("multiply", f, cos.clone(), gp);
+    let num = g.binary("subtract", f, num, v(1.0));
+    let den = g.binary("multiply", f, cos, gm);
+    let den = g.binary("add", f, den, v(1.0));
+    let b = g.binary("divide", f, num, den);
+    let a2 = g.binary("multiply", f, a.clone(), a);
+    let b2 = g.binary("multiply", f, b.clone(), b);
+    let b2 = g.binary("add", f, b2, v(1.0));
+    let r = g.binary("multiply", f, a2, b2);
+    let r = g.binary("multiply", f, r, v(0.5));
+    g.ifgreater(f, g2, v(0.0), r, v(1.0))
 }
 
 /// `sign(x) floor(|x|)`.
