@@ -54,6 +54,7 @@ pub fn export(name: &str, kmat: &str, library: &str) -> Result<String, String> {
         library: &library,
         definitions: BTreeMap::new(),
         implementations: BTreeMap::new(),
+        declared_params: BTreeMap::new(),
         groups_written: BTreeSet::new(),
         group_text: String::new(),
     };
@@ -284,6 +285,9 @@ struct Document<'f> {
     definitions: BTreeMap<String, String>,
     /// Their node-graph implementations, where Kiln's node has one.
     implementations: BTreeMap<String, String>,
+    /// The parameters each `kiln_*` definition declares (name → MaterialX type): those
+    /// any node of the category set.
+    declared_params: BTreeMap<String, BTreeMap<String, String>>,
     groups_written: BTreeSet<String>,
     group_text: String,
 }
@@ -1093,24 +1097,11 @@ impl<'f> Document<'f> {
                 s.name
             );
         }
-        let mut all_params: BTreeMap<String, String> = self
-            .definitions
-            .get(category)
-            .map(|d| {
-                d.lines()
-                    .filter(|l| l.contains("uniform=\"true\""))
-                    .filter_map(|l| {
-                        let name = l.split("name=\"").nth(1)?.split('"').next()?;
-                        let ty = l.split("type=\"").nth(1)?.split('"').next()?;
-                        Some((name.to_owned(), ty.to_owned()))
-                    })
-                    .collect()
-            })
-            .unwrap_or_default();
+        let all_params = self.declared_params.entry(category.to_owned()).or_default();
         for (p, ty) in params {
             all_params.insert(p.clone(), ty.clone());
         }
-        for (p, ty) in &all_params {
+        for (p, ty) in all_params.iter() {
             let value = match ty.as_str() {
                 "boolean" => "false",
                 "float" => "0",

@@ -151,7 +151,7 @@ pub fn implement(
     let out_name = |kiln: &str| {
         outputs
             .iter()
-            .find(|(_, k, _)| k == kind_output(kiln))
+            .find(|(_, k, _)| k == kiln)
             .map(|(m, _, _)| m.clone())
     };
     match kind {
@@ -728,11 +728,6 @@ pub fn implement(
         _ => return None,
     }
     Some(g)
-}
-
-/// Kiln's output names are the node's own; this is where a table would rename them.
-fn kind_output(kiln: &str) -> &str {
-    kiln
 }
 
 /// Blender's scalar math (shaders/nodes/math.wgsl) on inputs `a`, `b`, `c`.

@@ -432,6 +432,17 @@ fn compare(cases: &[(Node, &str)]) {
     eprintln!("{} cases agree", cases.len());
 }
 
+/// The options of choice parameter `param` of node type `kind`, as Kiln declares them.
+fn choices(kind: &str, param: &str) -> &'static [&'static str] {
+    match kiln::material::nodes::find(kind)
+        .and_then(|d| d.param(param))
+        .map(|p| &p.kind)
+    {
+        Some(kiln::material::nodes::ParamKind::Enum(options)) => options,
+        _ => panic!("{kind} has no choice {param}"),
+    }
+}
+
 fn op(kind: &str, operation: &str) -> Node {
     Node::new(kind).param("operation", Param::Text(operation.into()))
 }
@@ -645,15 +656,7 @@ fn texture_and_mapping_implementations_compute_what_kiln_does() {
                 socket,
             ));
         }
-        for kind in [
-            "linear",
-            "quadratic",
-            "easing",
-            "diagonal",
-            "radial",
-            "quadratic_sphere",
-            "spherical",
-        ] {
+        for &kind in choices("gradient_texture", "gradient_type") {
             cases.push((
                 Node::new("gradient_texture")
                     .param("gradient_type", Param::Text(kind.into()))
