@@ -6,6 +6,7 @@
 
 use glam::Vec3;
 use kiln::editor::display::DisplayPipeline;
+use kiln::film::ExactFilm;
 use kiln::film::output::ViewSettings;
 use kiln::film::tonemap::{Tonemap, to_srgb8};
 use kiln::render::{GpuContext, map_and_read};
@@ -35,19 +36,28 @@ fn the_display_pass_matches_the_cpu_view_transforms_within_one_code_value() {
     }
     let ctx = GpuContext::new(None).unwrap_or_else(|e| panic!("a GPU adapter: {e}"));
     let height = HUES.len() as u32;
-    // A film of 3 samples per pixel whose mean is `radiance`, with a compensation term
-    // the pass must subtract.
-    let compensation = Vec3::splat(0.25);
-    let mut sums = Vec::new();
-    let mut compensations = Vec::new();
+    // A film of 3 samples per pixel whose mean is `radiance`, as the kernel holds it: the
+    // sums in fixed point, low words and count in one buffer, high words in the other
+    // (nonzero from a sum of about 16 up).
+    let mut lows: Vec<u32> = Vec::new();
+    let mut highs: Vec<u32> = Vec::new();
     for y in 0..height {
         for x in 0..WIDTH {
-            let sum = radiance(x, y) * 3.0 + compensation;
-            sums.extend([sum.x, sum.y, sum.z, 3.0]);
-            compensations.extend([compensation.x, compensation.y, compensation.z, 0.0]);
+            let sum = radiance(x, y) * 3.0;
+            let fixed = sum
+                .to_array()
+                .map(|v| (v as f64 * (ExactFilm::FRACTION_BITS as f64).exp2()).round() as i64);
+            lows.extend(fixed.map(|v| v as u32));
+            lows.push(3);
+            highs.extend(fixed.map(|v| (v >> 32) as u32));
+            highs.push(0);
         }
     }
-    let buffer = |label, data: &[f32]| {
+    assert!(
+        highs.iter().any(|&h| h != 0),
+        "the film exercises the high words"
+    );
+    let buffer = |label, data: &[u32]| {
         ctx.device
             .create_buffer_init(&wgpu::util::BufferInitDescriptor {
                 label: Some(label),
@@ -55,7 +65,7 @@ fn the_display_pass_matches_the_cpu_view_transforms_within_one_code_value() {
                 usage: wgpu::BufferUsages::STORAGE,
             })
     };
-    let (sum, comp) = (buffer("sum", &sums), buffer("compensation", &compensations));
+    let (sum, comp) = (buffer("sum", &lows), buffer("high words", &highs));
     let pipeline = DisplayPipeline::new(&ctx);
     let display = pipeline.bind(&ctx, (&sum, &comp), [WIDTH, height]);
 

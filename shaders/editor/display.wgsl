@@ -1,5 +1,5 @@
-// The editor viewport's display pass: the film's mean radiance (sum minus Kahan
-// compensation, over the sample count) → exposure → view transform → sRGB, written to an
+// The editor viewport's display pass: the film's mean radiance (its fixed-point sum over
+// the sample count) → exposure → view transform → sRGB, written to an
 // rgba8unorm texture that egui draws as it is (egui expects gamma-encoded textures).
 // The view transforms are those of src/film/tonemap.rs, so the viewport shows what
 // `kiln render` writes.
@@ -12,8 +12,8 @@ struct DisplayParams {
     tonemap: u32,
 }
 
-@group(0) @binding(0) var<storage, read> film_sum: array<vec4<f32>>;
-@group(0) @binding(1) var<storage, read> film_compensation: array<vec4<f32>>;
+@group(0) @binding(0) var<storage, read> film_sum: array<vec4<u32>>;
+@group(0) @binding(1) var<storage, read> film_high: array<vec4<u32>>;
 @group(0) @binding(2) var output: texture_storage_2d<rgba8unorm, write>;
 @group(0) @binding(3) var<uniform> display: DisplayParams;
 
@@ -89,10 +89,15 @@ fn display_film(@builtin(global_invocation_id) gid: vec3<u32>) {
         return;
     }
     let pixel = gid.y * display.size.x + gid.x;
-    let sum = film_sum[pixel] - film_compensation[pixel];
+    // The film's 64-bit fixed-point sums (`crate::film::ExactFilm`): low words and the
+    // count in film_sum, high words in film_high.
+    let low = film_sum[pixel];
+    let high = film_high[pixel];
     var radiance = vec3<f32>(0.0);
-    if (sum.w > 0.0) {
-        radiance = max(sum.rgb / sum.w, vec3<f32>(0.0)) * display.exposure_scale;
+    if (low.w > 0u) {
+        let sum = (vec3<f32>(bitcast<vec3<i32>>(high.xyz)) * 4294967296.0 + vec3<f32>(low.xyz))
+            / 268435456.0;
+        radiance = max(sum / f32(low.w), vec3<f32>(0.0)) * display.exposure_scale;
     }
     var shown = clamp(radiance, vec3<f32>(0.0), vec3<f32>(1.0));
     switch display.tonemap {

@@ -21,7 +21,7 @@ const NOISE_CONFIDENCE: f32 = 1.645;
 const NOISE_UNKNOWN: f32 = 3.0e38;
 
 fn noise_estimate(index: u32) -> f32 {
-    let sum = film_sum[index] - film_compensation[index];
+    let sum = film_value(film_sum[index], film_high[index]);
     let n = sum.w;
     if (n < 2.0) {
         return NOISE_UNKNOWN;

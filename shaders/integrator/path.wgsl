@@ -601,6 +601,46 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     return radiance;
 }
 
+// The film's sums are 64-bit two's-complement fixed point (`crate::film::ExactFilm`):
+// low words in `film_sum.xyz` with the sample count in w, high words in `film_high.xyz`.
+// Integer addition is associative, so a pixel's sum is the same bits however its samples
+// are split into dispatches, passes, or the parts of a render merged later (`kiln merge`).
+const FILM_FRACTION_BITS: f32 = 268435456.0; // 2^28
+const FILM_WORD: f32 = 4294967296.0; // 2^32
+/// Samples are clamped to this magnitude (2^34) so that one converts without overflow.
+const FILM_SAMPLE_LIMIT: f32 = 17179869184.0;
+
+struct FilmSum {
+    low: vec3<u32>,
+    high: vec3<u32>,
+}
+
+/// `sum` + `l` rounded to the film's step; saturates at the range's ends.
+fn film_add(sum: FilmSum, l: vec3<f32>) -> FilmSum {
+    let v = round(clamp(l, vec3<f32>(-FILM_SAMPLE_LIMIT), vec3<f32>(FILM_SAMPLE_LIMIT)) * FILM_FRACTION_BITS);
+    // v = high·2^32 + low exactly: both parts are f32 integers below 2^32.
+    let vh = floor(v * (1.0 / FILM_WORD));
+    let add_low = vec3<u32>(v - vh * FILM_WORD);
+    let add_high = bitcast<vec3<u32>>(vec3<i32>(vh));
+    let low = sum.low + add_low;
+    let carry = select(vec3<u32>(0u), vec3<u32>(1u), low < add_low);
+    let high = sum.high + add_high + carry;
+    // Two operands of one sign whose sum has the other overflowed.
+    let a = bitcast<vec3<i32>>(sum.high);
+    let r = bitcast<vec3<i32>>(high);
+    let overflow = ((a ^ r) & (bitcast<vec3<i32>>(add_high) ^ r)) < vec3<i32>(0);
+    let positive = a >= vec3<i32>(0);
+    let saturated_high = select(vec3<u32>(0x80000000u), vec3<u32>(0x7fffffffu), positive);
+    let saturated_low = select(vec3<u32>(0u), vec3<u32>(0xffffffffu), positive);
+    return FilmSum(select(low, saturated_low, overflow), select(high, saturated_high, overflow));
+}
+
+/// A pixel's sums as floating point, and its count in w.
+fn film_value(low: vec4<u32>, high: vec4<u32>) -> vec4<f32> {
+    let sum = (vec3<f32>(bitcast<vec3<i32>>(high.xyz)) * FILM_WORD + vec3<f32>(low.xyz)) / FILM_FRACTION_BITS;
+    return vec4<f32>(sum, f32(low.w));
+}
+
 // `kiln bench --ablation`: the kernel cut down to a part of its work, to measure where
 // the time goes. Each mode returns a value that depends on all the work it did, so the
 // driver cannot drop any of it. ABLATION_FULL is the path tracer above.
@@ -667,8 +707,8 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             return;
         }
     }
-    var sum = film_sum[index];
-    var compensation = film_compensation[index];
+    var low = film_sum[index];
+    var high = film_high[index];
     var non_finite = 0u;
     rays_traced = 0u;
     // The AOV sums are carried from the stored ones and added to sample by sample, as the
@@ -715,14 +755,12 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
             noise.y = (t2 * params.opaque_one - noise.x) - y2;
             noise.x = t2;
         }
-        // Kahan summation; w counts samples.
-        let y = vec4<f32>(l, 1.0) - compensation;
-        let t = sum + y;
-        compensation = (t * params.opaque_one - sum) - y;
-        sum = t;
+        let added = film_add(FilmSum(low.xyz, high.xyz), l);
+        low = vec4<u32>(added.low, low.w + 1u);
+        high = vec4<u32>(added.high, 0u);
     }
-    film_sum[index] = sum;
-    film_compensation[index] = compensation;
+    film_sum[index] = low;
+    film_high[index] = high;
     if (FEATURE_NOISE) {
         film_noise[index] = noise;
     }

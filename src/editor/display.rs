@@ -98,7 +98,7 @@ impl DisplayPipeline {
         Self { pipeline, layout }
     }
 
-    /// Binds a film of `size` pixels (its sum and compensation buffers, see
+    /// Binds a film of `size` pixels (its buffers of the sums' low and high words, see
     /// [`crate::render::Renderer::film_buffers`]) to a new output texture of that size.
     pub fn bind(
         &self,

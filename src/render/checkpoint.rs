@@ -16,7 +16,8 @@ use super::RenderSettings;
 use crate::scene::Scene;
 
 const MAGIC: &[u8; 8] = b"KILNCKPT";
-const VERSION: u32 = 1;
+/// 2: the film's sums are fixed point (`crate::film::ExactFilm`), no longer Kahan sums.
+const VERSION: u32 = 2;
 
 /// What a checkpoint holds.
 #[derive(Debug, PartialEq)]

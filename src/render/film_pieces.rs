@@ -1,5 +1,6 @@
-//! The film on the device, in pieces: per pixel a Kahan sum and its compensation (and,
-//! when asked for, the AOV sums), split into bands of whole rows whose buffers each fit one
+//! The film on the device, in pieces: per pixel the radiance sums as 64-bit fixed point,
+//! their low and high words in two buffers, and the sample count (and, when asked for, the
+//! AOV sums), split into bands of whole rows whose buffers each fit one
 //! storage binding. A film is then bounded by memory, not by the per-binding limit
 //! (128 MiB on lavapipe and on many GPUs, which a 3840×2160 film already fills).
 //!
@@ -17,9 +18,10 @@ use super::context::GpuContext;
 use super::gpu_scene::{FrameBuffers, GpuScene};
 use super::readback::read_buffer_range;
 use super::renderer::{Aovs, RenderError};
-use crate::film::Film;
+use crate::film::{ExactFilm, Film};
 
-/// Bytes per pixel of the film's sum, and of its compensation (one `vec4<f32>` each).
+/// Bytes per pixel of the film's low words and count, and of its high words (one
+/// `vec4<u32>` each; see [`crate::film::ExactFilm`]).
 pub const SUM_BYTES: u64 = 16;
 /// Bytes per pixel of the AOV film (three `vec4<f32>`).
 pub const AOV_BYTES: u64 = 48;
@@ -29,7 +31,8 @@ pub const NOISE_BYTES: u64 = 16;
 pub struct FilmPiece {
     pub rows: Range<u32>,
     pub sum: wgpu::Buffer,
-    pub compensation: wgpu::Buffer,
+    /// The high words of the sums ([`FilmPiece::sum`] holds the low words and the count).
+    pub high: wgpu::Buffer,
     pub aov: Option<wgpu::Buffer>,
     /// The noise estimate's film (`shaders/integrator/adaptive.wgsl`).
     pub noise: Option<wgpu::Buffer>,
@@ -38,12 +41,12 @@ pub struct FilmPiece {
 }
 
 impl FilmPiece {
-    /// The piece's buffers: the sums, their compensation, then the AOV and noise films
+    /// The piece's buffers: the sums' low words and counts, their high words, then the AOV and noise films
     /// when it has them.
     pub fn buffers(&self) -> impl Iterator<Item = &wgpu::Buffer> {
         [
             Some(&self.sum),
-            Some(&self.compensation),
+            Some(&self.high),
             self.aov.as_ref(),
             self.noise.as_ref(),
         ]
@@ -183,7 +186,7 @@ pub fn allocate_pieces(
         .map(|r| {
             let pixels = width as u64 * r.len() as u64;
             let sum = storage("film sum", pixels * SUM_BYTES);
-            let compensation = storage("film compensation", pixels * SUM_BYTES);
+            let high = storage("film sum high words", pixels * SUM_BYTES);
             let aov = film.aovs.then(|| storage("film AOVs", pixels * AOV_BYTES));
             let noise = film
                 .noise
@@ -194,7 +197,7 @@ pub fn allocate_pieces(
                 &FrameBuffers {
                     params: shared.params,
                     film_sum: &sum,
-                    film_compensation: &compensation,
+                    film_high: &high,
                     stats: shared.stats,
                     film_aov: aov.as_ref(),
                     film_noise: noise.as_ref(),
@@ -203,7 +206,7 @@ pub fn allocate_pieces(
             FilmPiece {
                 rows: r.clone(),
                 sum,
-                compensation,
+                high,
                 aov,
                 noise,
                 bind_group,
@@ -252,6 +255,29 @@ fn read_piece_rows(
     )?)
 }
 
+/// Rows `rows` of the film as a film of their own (`width` wide, `rows.len()` high),
+/// exactly as the device holds it.
+pub fn read_exact_film_rows(
+    ctx: &GpuContext,
+    pieces: &[FilmPiece],
+    width: u32,
+    rows: Range<u32>,
+) -> Result<ExactFilm, RenderError> {
+    let mut film = ExactFilm::new(width, rows.len() as u32);
+    for (piece, r) in overlapping(pieces, rows.clone()) {
+        let low = read_piece_rows(ctx, piece, &piece.sum, width, &r, SUM_BYTES)?;
+        let high = read_piece_rows(ctx, piece, &piece.high, width, &r, SUM_BYTES)?;
+        let low: &[[u32; 4]] = bytemuck::cast_slice(&low);
+        let high: &[[u32; 4]] = bytemuck::cast_slice(&high);
+        let first = (r.start - rows.start) as usize * width as usize;
+        for (i, (l, h)) in low.iter().zip(high).enumerate() {
+            film.sums[first + i] = std::array::from_fn(|c| ExactFilm::join(l[c], h[c]));
+            film.counts[first + i] = l[3];
+        }
+    }
+    Ok(film)
+}
+
 /// Rows `rows` of the film as a film of their own (`width` wide, `rows.len()` high).
 pub fn read_film_rows(
     ctx: &GpuContext,
@@ -259,19 +285,7 @@ pub fn read_film_rows(
     width: u32,
     rows: Range<u32>,
 ) -> Result<Film, RenderError> {
-    let mut film = Film::new(width, rows.len() as u32);
-    for (piece, r) in overlapping(pieces, rows.clone()) {
-        let sums = read_piece_rows(ctx, piece, &piece.sum, width, &r, SUM_BYTES)?;
-        let compensation = read_piece_rows(ctx, piece, &piece.compensation, width, &r, SUM_BYTES)?;
-        let sums: &[[f32; 4]] = bytemuck::cast_slice(&sums);
-        let compensation: &[[f32; 4]] = bytemuck::cast_slice(&compensation);
-        let first = (r.start - rows.start) as usize * width as usize;
-        for ((out, s), c) in film.sums[first..].iter_mut().zip(sums).zip(compensation) {
-            // Kahan: the running sum minus the compensation is the better estimate.
-            *out = std::array::from_fn(|i| s[i] as f64 - c[i] as f64);
-        }
-    }
-    Ok(film)
+    Ok(read_exact_film_rows(ctx, pieces, width, rows)?.to_film())
 }
 
 /// Rows `rows` of the AOVs, averaged over each pixel's samples; None without AOVs.

@@ -719,7 +719,7 @@ pub fn scene_bind_group_layout(
 pub struct FrameBuffers<'a> {
     pub params: &'a wgpu::Buffer,
     pub film_sum: &'a wgpu::Buffer,
-    pub film_compensation: &'a wgpu::Buffer,
+    pub film_high: &'a wgpu::Buffer,
     pub stats: &'a wgpu::Buffer,
     /// The AOV film, when AOVs are rendered.
     pub film_aov: Option<&'a wgpu::Buffer>,
@@ -781,7 +781,7 @@ impl GpuScene {
                 let buffer = match b.resource {
                     Resource::Params => frame.params,
                     Resource::FilmSum => frame.film_sum,
-                    Resource::FilmCompensation => frame.film_compensation,
+                    Resource::FilmHigh => frame.film_high,
                     Resource::Stats => frame.stats,
                     Resource::BlasNodes { page } => &self.blas_nodes[page as usize],
                     Resource::Triangles { page } => &self.triangles[page as usize],

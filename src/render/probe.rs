@@ -108,7 +108,7 @@ pub fn run_probe(
         wgpu::BufferUsages::UNIFORM,
     );
     let film = buffer("film", &[0u8; 16], storage);
-    let compensation = buffer("film compensation", &[0u8; 16], storage);
+    let film_high = buffer("film high words", &[0u8; 16], storage);
     let stats = buffer(
         "stats",
         bytemuck::bytes_of(&crate::shader::gpu_types::GpuStats::default()),
@@ -120,7 +120,7 @@ pub fn run_probe(
         &FrameBuffers {
             params: &params_buffer,
             film_sum: &film,
-            film_compensation: &compensation,
+            film_high: &film_high,
             stats: &stats,
             film_aov: None,
             film_noise: None,

@@ -26,14 +26,14 @@ use thiserror::Error;
 use super::context::{GpuContext, GpuError};
 use super::film_pieces::{
     AOV_BYTES, DeviceFilm, FilmPiece, SUM_BYTES, SharedBuffers, allocate_pieces, memory_check,
-    piece_rows, read_aov_rows, read_film_rows, read_noise_rows,
+    piece_rows, read_aov_rows, read_exact_film_rows, read_film_rows, read_noise_rows,
 };
 use super::gpu_scene::{GpuScene, UploadError, scene_bind_group_layout};
 use super::kernel::{KernelError, path_tracing_kernel};
 use super::readback::map_and_read;
 use crate::accel::query::Enclosures;
 use crate::accel::{AccelError, build_scene_accel};
-use crate::film::Film;
+use crate::film::{ExactFilm, Film};
 use crate::scene::Scene;
 use crate::shader::gpu_types::{
     FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, FLAG_SHADOW_CATCHER, GpuParams, GpuStats,
@@ -750,7 +750,7 @@ impl Renderer {
         let mut encoder = self.ctx.device.create_command_encoder(&Default::default());
         for piece in &self.pieces {
             encoder.clear_buffer(&piece.sum, 0, None);
-            encoder.clear_buffer(&piece.compensation, 0, None);
+            encoder.clear_buffer(&piece.high, 0, None);
             for buffer in [&piece.aov, &piece.noise].into_iter().flatten() {
                 encoder.clear_buffer(buffer, 0, None);
             }
@@ -1085,8 +1085,8 @@ impl Renderer {
         Ok(self.take_stats()?.active_pixels)
     }
 
-    /// The film's state on the device, bit for bit: per piece its sums, their
-    /// compensation, and the AOV and noise films it has (a checkpoint's content).
+    /// The film's state on the device, bit for bit: per piece its sums' low words and
+    /// counts, their high words, and the AOV and noise films it has (a checkpoint's content).
     pub fn film_state(&self) -> Result<Vec<Vec<u8>>, RenderError> {
         let mut state = Vec::new();
         for piece in &self.pieces {
@@ -1179,12 +1179,13 @@ impl Renderer {
     }
 
     /// The film on the device, when it is one piece: per pixel (row-major from the
-    /// top-left) a `vec4<f32>` of the radiance sum (rgb) and sample count (w), and its
-    /// Kahan compensation. For passes that show the film without reading it back (the
+    /// top-left) a `vec4<u32>` of the low words of the fixed-point radiance sums (rgb) and
+    /// the sample count (w), and one of their high words ([`crate::film::ExactFilm`]).
+    /// For passes that show the film without reading it back (the
     /// editor's viewport); `None` for a film split into pieces (larger than one binding).
     pub fn film_buffers(&self) -> Option<(&wgpu::Buffer, &wgpu::Buffer)> {
         match self.pieces.as_slice() {
-            [piece] => Some((&piece.sum, &piece.compensation)),
+            [piece] => Some((&piece.sum, &piece.high)),
             _ => None,
         }
     }
@@ -1241,6 +1242,18 @@ impl Renderer {
             &self.pieces,
             self.settings.width,
             self.clamp(rows),
+        )
+        .map_err(|e| self.explain_loss(e))
+    }
+
+    /// The whole film exactly as the device holds it: fixed-point sums and counts (what
+    /// the part of a split render keeps, so that parts merge bit for bit).
+    pub fn read_exact_film(&self) -> Result<ExactFilm, RenderError> {
+        read_exact_film_rows(
+            &self.ctx,
+            &self.pieces,
+            self.settings.width,
+            0..self.settings.height,
         )
         .map_err(|e| self.explain_loss(e))
     }
