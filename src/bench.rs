@@ -516,7 +516,7 @@ fn cached_reference(
     base: RenderSettings,
     half: u32,
 ) -> Result<(Vec<Vec3>, f64)> {
-    let key = crate::render::checkpoint::key(scene, &RenderSettings { seed: 0, ..base });
+    let key = crate::render::checkpoint::key(scene, &RenderSettings { seed: 0, ..base }, 0);
     let path = reference_cache().join(format!("{key:016x}-{half}.bin"));
     let pixels = (base.width * base.height) as usize;
     if let Ok(bytes) = std::fs::read(&path)

@@ -11,6 +11,7 @@
 pub mod accel;
 pub mod bench;
 pub mod editor;
+pub mod farm;
 pub mod film;
 pub mod limits;
 pub mod material;

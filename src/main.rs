@@ -17,6 +17,7 @@ use glam::Vec3;
 use indicatif::{ProgressBar, ProgressStyle};
 use kiln::plugin::{ExportFilm, Isolation, PluginHost, PluginKind};
 
+use kiln::farm::part::PartHeader;
 use kiln::film::output::{ViewSettings, write_image};
 use kiln::film::tonemap::Tonemap;
 use kiln::limits::Limits;
@@ -179,6 +180,81 @@ enum Command {
     /// Check material graphs (.kmat) and show the WGSL they compile to.
     #[command(subcommand)]
     Material(MaterialCommand),
+    /// Merge the parts of a split render (`kiln render --samples A..B -o part.exr`) into
+    /// one image, bit for bit the image one process rendering every sample writes.
+    Merge {
+        /// The parts: OpenEXR files `kiln render --samples` wrote.
+        #[arg(required = true)]
+        parts: Vec<PathBuf>,
+        /// The merged image (any format a writer has: .exr, .png, …).
+        #[arg(short, long)]
+        output: PathBuf,
+        /// Merge the parts there are when sample ranges are missing (and say which).
+        #[arg(long)]
+        allow_partial: bool,
+        /// Options for the image writer, as for `kiln render`.
+        #[arg(long, default_value = "")]
+        export_options: String,
+    },
+    /// Render on a cluster: Slurm job arrays of parts and frames, merged exactly
+    /// (docs/SCALE_OUT.md).
+    #[command(subcommand)]
+    Farm(FarmCommand),
+}
+
+#[derive(Subcommand)]
+enum FarmCommand {
+    /// Write a Slurm job array that renders SCENE in parts (and frames), and a merge job
+    /// that depends on it, into a farm folder; --submit submits both.
+    Slurm {
+        /// A .kiln scene (the bundled Cornell box when none is given).
+        scene: Option<PathBuf>,
+        /// Parts each frame's samples are split into: one array task each.
+        #[arg(long, default_value_t = 1, value_parser = clap::value_parser!(u32).range(1..=100_000))]
+        parts: u32,
+        /// Samples per pixel (default: the scene's).
+        #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
+        spp: Option<u32>,
+        /// Frames of a turntable, A..B (B excluded): one task per frame and part.
+        #[arg(long, value_parser = kiln::farm::part::parse_range, requires = "turntable")]
+        frames: Option<std::ops::Range<u32>>,
+        /// Degrees the camera orbits its target over the frames.
+        #[arg(
+            long,
+            value_name = "DEGREES",
+            allow_hyphen_values = true,
+            requires = "frames"
+        )]
+        turntable: Option<f32>,
+        /// The merged image; with frames, `#`s in its name become the frame number.
+        #[arg(short, long)]
+        output: PathBuf,
+        /// The farm folder, on storage every node sees [default: OUTPUT.farm beside the
+        /// output].
+        #[arg(long)]
+        dir: Option<PathBuf>,
+        /// An #SBATCH option of both jobs (`--partition=gpu`, `--time=2:00:00`); may be
+        /// given several times.
+        #[arg(long = "sbatch-arg", value_name = "OPTION", allow_hyphen_values = true)]
+        sbatch_args: Vec<String>,
+        /// Submit the jobs with sbatch (else print the commands that do).
+        #[arg(long)]
+        submit: bool,
+        /// `kiln render` flags every task passes, after `--` (`-- --size 1920x1080`).
+        #[arg(last = true)]
+        render_args: Vec<String>,
+    },
+    /// Show which parts are rendered, queued, or missing (failed or cancelled tasks, with
+    /// their sample ranges); fails while parts are missing.
+    Status {
+        /// The farm folder `kiln farm slurm` wrote.
+        dir: PathBuf,
+    },
+    /// Submit again only the tasks whose parts are missing, and a new merge job.
+    Resubmit {
+        /// The farm folder `kiln farm slurm` wrote.
+        dir: PathBuf,
+    },
 }
 
 #[derive(Subcommand)]
@@ -265,6 +341,26 @@ struct RenderArgs {
     /// measurements (docs/BENCHMARKS.md); flags given beside it win.
     #[arg(long, value_parser = key_parser(&Quality::ALL, Quality::key), long_help = quality_help())]
     quality: Option<Quality>,
+    /// Render only the sample indices A..B (B excluded) of every pixel, as the part of a
+    /// split render: the output must be .exr and keeps the exact sums and a header for
+    /// `kiln merge`. --spp is the whole render's samples per pixel.
+    #[arg(long, value_name = "A..B", value_parser = kiln::farm::part::parse_range)]
+    samples: Option<std::ops::Range<u32>>,
+    /// Render the frames A..B (B excluded) of a turntable, each to OUTPUT with its frame
+    /// number (`#`s in the name, else `_NNNN` before the extension).
+    #[arg(long, value_name = "A..B", value_parser = kiln::farm::part::parse_range, requires = "turntable")]
+    frames: Option<std::ops::Range<u32>>,
+    /// Render only this frame of --frames.
+    #[arg(long, requires = "frames")]
+    frame: Option<u32>,
+    /// Degrees the camera orbits its target (about its up axis) over --frames.
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        allow_hyphen_values = true,
+        requires = "frames"
+    )]
+    turntable: Option<f32>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -626,6 +722,13 @@ fn main() -> ExitCode {
         Command::Info => info(backend),
         Command::Bench(args) => kiln::bench::run(&args, backend, &mut std::io::stdout()),
         Command::Material(command) => material(command, &plugins()),
+        Command::Merge {
+            parts,
+            output,
+            allow_partial,
+            export_options,
+        } => merge(&parts, &output, allow_partial, &export_options, &plugins()),
+        Command::Farm(command) => farm(command, &plugins()),
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -816,8 +919,38 @@ fn list_plugins(plugins: &PluginHost) -> Result<()> {
 }
 
 fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> Result<()> {
+    // Which frames, and where each goes.
+    let turntable = args.frames.clone().map(|frames| kiln::farm::Turntable {
+        degrees: args.turntable.unwrap_or(0.0),
+        frames,
+    });
+    let frames: Vec<Option<u32>> = match (&turntable, args.frame) {
+        (Some(t), Some(f)) if !t.frames.contains(&f) => bail!(
+            "--frame {f} is not one of --frames {}..{}",
+            t.frames.start,
+            t.frames.end
+        ),
+        (Some(_), Some(f)) => vec![Some(f)],
+        (Some(t), None) => t.frames.clone().map(Some).collect(),
+        (None, _) => vec![None],
+    };
+    let output_of = |frame: Option<u32>| match frame {
+        Some(f) => kiln::farm::frame_path(&args.output, f),
+        None => args.output.clone(),
+    };
+    if args.samples.is_some()
+        && !args
+            .output
+            .extension()
+            .is_some_and(|e| e.eq_ignore_ascii_case("exr"))
+    {
+        bail!(
+            "--samples writes the part of a split render, an OpenEXR file: name the output .exr, not {}",
+            args.output.display()
+        );
+    }
     // Refuse an output that cannot be written before spending minutes on the render.
-    check_output(&args.output, plugins, &args.export_options)?;
+    check_output(&output_of(frames[0]), plugins, &args.export_options)?;
     if let Some(t) = args.time_limit
         && !(t.is_finite() && t > 0.0)
     {
@@ -827,14 +960,14 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         bail!("--exposure must be a finite number of stops");
     }
     let (mut scene, name) = load(args.scene.as_deref(), plugins, args.ground.into())?;
-    match args.environment {
+    match &args.environment {
         Some(EnvironmentArg::Uniform(colour)) => {
-            scene.environment = colour;
+            scene.environment = *colour;
             scene.environment_map = None;
             scene.world = None;
         }
         Some(EnvironmentArg::Map(path)) => {
-            let map = kiln::scene::EnvironmentMap::load(&path).map_err(|e| {
+            let map = kiln::scene::EnvironmentMap::load(path).map_err(|e| {
                 anyhow::anyhow!("cannot load environment map {}: {e}", path.display())
             })?;
             scene.environment_map = Some(map);
@@ -884,6 +1017,9 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         settings.sampling.filter.width = width;
     }
     settings.light_sampling = !args.no_light_sampling;
+    if let Some(range) = &args.samples {
+        part_settings_check(&args, &settings, &scene, range)?;
+    }
     // An EXR gets the AOV layers too (whichever writes it: a plugin or the host's writer,
     // which is the plugin's code).
     let denoiser = args.denoise.unwrap_or(scene.settings.denoiser);
@@ -891,12 +1027,14 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         bail!("cannot denoise with {}: {why}", denoiser.key());
     }
     // A shadow catcher's alpha is an AOV too.
-    settings.aovs = denoiser != Denoiser::None
-        || scene.instances.iter().any(|i| i.shadow_catcher)
-        || args
-            .output
-            .extension()
-            .is_some_and(|e| e.eq_ignore_ascii_case("exr"));
+    // A part keeps the film alone: only its sums merge exactly.
+    settings.aovs = args.samples.is_none()
+        && (denoiser != Denoiser::None
+            || scene.instances.iter().any(|i| i.shadow_catcher)
+            || args
+                .output
+                .extension()
+                .is_some_and(|e| e.eq_ignore_ascii_case("exr")));
 
     if !(args.checkpoint_every.is_finite() && args.checkpoint_every >= 0.0) {
         bail!(
@@ -904,53 +1042,8 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             args.checkpoint_every
         );
     }
-    let checkpoint_path = checkpoint::path_for(&args.output);
-    let key = checkpoint::key(&scene, &settings);
-    // Refused before anything is built: a checkpoint of another scene or other settings.
-    let resumed = if args.resume {
-        let c = Checkpoint::read(&checkpoint_path).map_err(anyhow::Error::msg)?;
-        c.check(&checkpoint_path, key, settings.width, settings.height)
-            .map_err(anyhow::Error::msg)?;
-        Some(c)
-    } else {
-        None
-    };
-
     let ctx = GpuContext::new(backend)?;
     eprintln!("adapter: {}", ctx.describe());
-    // What `write_output` holds whole on the host, per pixel, for a plugin and the host's
-    // writer alike: radiance and display RGBA f32, the sample counts, the AOVs. Refused
-    // before the kernel is built when it cannot fit; docs/BENCHMARKS.md has the peaks.
-    let noise = settings.aovs || settings.noise_threshold > 0.0;
-    // Denoising holds the whole film (32 bytes a pixel), its guides and the filtered image
-    // (72), and the noisy image as a layer (12).
-    let output_bytes = 36
-        + if settings.aovs { 40 } else { 0 }
-        + if noise { 4 } else { 0 }
-        + if denoiser != Denoiser::None { 116 } else { 0 };
-    kiln::render::memory_check(
-        &ctx,
-        settings.width,
-        settings.height,
-        kiln::render::DeviceFilm {
-            aovs: settings.aovs,
-            noise,
-        },
-        output_bytes,
-    )?;
-    let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, settings)
-        .with_context(|| format!("cannot prepare {name} for rendering"))?;
-    let first = Cell::new(0);
-    if let Some(c) = resumed {
-        renderer.restore_film_state(&c.film)?;
-        first.set(c.next_sample);
-        eprintln!(
-            "resuming from {} at {} spp",
-            checkpoint_path.display(),
-            c.next_sample
-        );
-    }
-
     let cancel = Arc::new(AtomicBool::new(false));
     {
         let cancel = Arc::clone(&cancel);
@@ -972,61 +1065,173 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
         })
         .context("cannot install the Ctrl-C handler")?;
     }
-    // Printed once Ctrl-C is handled: from this line on, an interrupt writes the image.
-    let info = renderer.build_info;
-    eprintln!(
-        "scene: {name}: {} triangles, {} instances, {} emissive triangles; BVH {:.0} ms, kernel {:.0} ms",
-        info.triangles,
-        info.instances,
-        info.emissive_triangles,
-        info.accel_build.as_secs_f64() * 1e3,
-        info.kernel_build.as_secs_f64() * 1e3
-    );
-    if info.volume_voxels > 0 {
-        eprintln!(
-            "volumes: {} grid points baked in {:.0} ms (--volume-resolution {})",
-            info.volume_voxels,
-            info.volume_bake.as_secs_f64() * 1e3,
-            settings.volume_resolution
-        );
-    }
-    if info.world_texels > 0 {
-        eprintln!(
-            "world: baked into {} texels in {:.0} ms",
-            info.world_texels,
-            info.world_bake.as_secs_f64() * 1e3
-        );
-    }
-    let pixels = settings.width as u64 * settings.height as u64;
-    let bar = if args.quiet {
-        ProgressBar::hidden()
-    } else {
-        ProgressBar::new(settings.samples_per_pixel as u64)
+    let view = ViewSettings {
+        exposure_ev: args.exposure.unwrap_or(scene.settings.view.exposure_ev),
+        tonemap: args.tonemap.unwrap_or(scene.settings.view.tonemap),
     };
-    bar.set_style(
-        ProgressStyle::with_template(
-            "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}",
-        )
-        .expect("the template is valid"),
-    );
-    let mut on_progress = |p: &kiln::render::Progress| {
-        // The bar counts the samples every pixel has: those of the whole passes.
-        bar.set_position((first.get() + p.whole_pass_samples) as u64);
-        let secs = p.elapsed.as_secs_f64().max(1e-9);
-        let next = if p.pass_fraction > 0.0 {
-            let left = p.pass_elapsed.as_secs_f64() * (1.0 - p.pass_fraction) / p.pass_fraction;
-            format!("{left:.1} s")
+    let job = RenderJob {
+        args: &args,
+        ctx: &ctx,
+        name: &name,
+        settings,
+        denoiser,
+        view,
+        cancel: &cancel,
+        plugins,
+    };
+    for frame in frames {
+        let mut scene = scene.clone();
+        if let (Some(t), Some(f)) = (&turntable, frame) {
+            scene.camera = t.camera(&scene.camera, f);
+            eprintln!("frame {f}");
+        }
+        let part = args.samples.clone().map(|samples| PartHeader {
+            samples,
+            total_samples: settings.samples_per_pixel,
+            seed: settings.seed,
+            sampler: settings.sampling.sampler.key().to_owned(),
+            scene_hash: kiln::farm::part::scene_hash(&scene),
+            settings_hash: kiln::farm::part::settings_hash(&settings),
+            frame,
+            view,
+        });
+        job.render_frame(&scene, &output_of(frame), part)?;
+        if cancel.load(Ordering::SeqCst) {
+            break;
+        }
+    }
+    Ok(())
+}
+
+/// What every frame of a `kiln render` shares.
+struct RenderJob<'a> {
+    args: &'a RenderArgs,
+    ctx: &'a Arc<GpuContext>,
+    name: &'a str,
+    settings: RenderSettings,
+    denoiser: Denoiser,
+    view: ViewSettings,
+    cancel: &'a Arc<AtomicBool>,
+    plugins: &'a PluginHost,
+}
+
+impl RenderJob<'_> {
+    /// Renders `scene` (one frame) to `output`; with `part`, only its samples, written as a
+    /// part for `kiln merge`.
+    fn render_frame(&self, scene: &Scene, output: &Path, part: Option<PartHeader>) -> Result<()> {
+        let RenderJob {
+            args,
+            ctx,
+            name,
+            settings,
+            denoiser,
+            view,
+            cancel,
+            plugins,
+        } = *self;
+        let range = part
+            .as_ref()
+            .map_or(0..settings.samples_per_pixel, |p| p.samples.clone());
+        let checkpoint_path = checkpoint::path_for(output);
+        let key = checkpoint::key(scene, &settings, range.start);
+        // Refused before anything is built: a checkpoint of another scene or other settings.
+        let resumed = if args.resume {
+            let c = Checkpoint::read(&checkpoint_path).map_err(anyhow::Error::msg)?;
+            c.check(&checkpoint_path, key, settings.width, settings.height)
+                .map_err(anyhow::Error::msg)?;
+            Some(c)
         } else {
-            "-".to_owned()
+            None
         };
-        let converged = match p.active_pixels {
-            Some(active) => format!(
-                "  {:.0}% converged",
-                100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
-            ),
-            None => String::new(),
+
+        // What `write_output` holds whole on the host, per pixel, for a plugin and the host's
+        // writer alike: radiance and display RGBA f32, the sample counts, the AOVs. Refused
+        // before the kernel is built when it cannot fit; docs/BENCHMARKS.md has the peaks.
+        let noise = settings.aovs || settings.noise_threshold > 0.0;
+        // Denoising holds the whole film (32 bytes a pixel), its guides and the filtered image
+        // (72), and the noisy image as a layer (12).
+        let output_bytes = 36
+            + if settings.aovs { 40 } else { 0 }
+            + if noise { 4 } else { 0 }
+            + if denoiser != Denoiser::None { 116 } else { 0 };
+        kiln::render::memory_check(
+            ctx,
+            settings.width,
+            settings.height,
+            kiln::render::DeviceFilm {
+                aovs: settings.aovs,
+                noise,
+            },
+            output_bytes,
+        )?;
+        let mut renderer = Renderer::new(Arc::clone(ctx), scene, settings)
+            .with_context(|| format!("cannot prepare {name} for rendering"))?;
+        let first = Cell::new(range.start);
+        if let Some(c) = resumed {
+            renderer.restore_film_state(&c.film)?;
+            first.set(c.next_sample);
+            eprintln!(
+                "resuming from {} at {} spp",
+                checkpoint_path.display(),
+                c.next_sample
+            );
+        }
+
+        // Printed once Ctrl-C is handled: from this line on, an interrupt writes the image.
+        let info = renderer.build_info;
+        eprintln!(
+            "scene: {name}: {} triangles, {} instances, {} emissive triangles; BVH {:.0} ms, kernel {:.0} ms",
+            info.triangles,
+            info.instances,
+            info.emissive_triangles,
+            info.accel_build.as_secs_f64() * 1e3,
+            info.kernel_build.as_secs_f64() * 1e3
+        );
+        if info.volume_voxels > 0 {
+            eprintln!(
+                "volumes: {} grid points baked in {:.0} ms (--volume-resolution {})",
+                info.volume_voxels,
+                info.volume_bake.as_secs_f64() * 1e3,
+                settings.volume_resolution
+            );
+        }
+        if info.world_texels > 0 {
+            eprintln!(
+                "world: baked into {} texels in {:.0} ms",
+                info.world_texels,
+                info.world_bake.as_secs_f64() * 1e3
+            );
+        }
+        let pixels = settings.width as u64 * settings.height as u64;
+        let bar = if args.quiet {
+            ProgressBar::hidden()
+        } else {
+            ProgressBar::new(range.len() as u64)
         };
-        bar.set_message(format!(
+        bar.set_style(
+            ProgressStyle::with_template(
+                "{spinner} [{elapsed_precise}] {bar:30} {pos}/{len} spp  {msg}",
+            )
+            .expect("the template is valid"),
+        );
+        let mut on_progress = |p: &kiln::render::Progress| {
+            // The bar counts the samples every pixel has: those of the whole passes.
+            bar.set_position((first.get() - range.start + p.whole_pass_samples) as u64);
+            let secs = p.elapsed.as_secs_f64().max(1e-9);
+            let next = if p.pass_fraction > 0.0 {
+                let left = p.pass_elapsed.as_secs_f64() * (1.0 - p.pass_fraction) / p.pass_fraction;
+                format!("{left:.1} s")
+            } else {
+                "-".to_owned()
+            };
+            let converged = match p.active_pixels {
+                Some(active) => format!(
+                    "  {:.0}% converged",
+                    100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
+                ),
+                None => String::new(),
+            };
+            bar.set_message(format!(
             "pass {} (+{} spp) {:.0}%, next whole image in {next}  {:.2} Msamples/s  {:.1} Mrays/s{converged}",
             p.passes_done + 1,
             p.pass_samples,
@@ -1034,137 +1239,397 @@ fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> R
             p.pixel_samples_done as f64 / secs / 1e6,
             p.rays as f64 / secs / 1e6
         ));
-    };
-    let deadline = args
-        .time_limit
-        .map(|t| Instant::now() + Duration::from_secs_f64(t));
-    let every =
-        (args.checkpoint_every > 0.0).then(|| Duration::from_secs_f64(args.checkpoint_every));
-    let mut total = RenderStats {
-        completed: true,
-        next_sample: first.get(),
-        ..RenderStats::default()
-    };
-    // One call per checkpoint: each stops at the end of a pass once `every` has passed.
-    let result = loop {
-        let call = renderer.render(
-            first.get()..settings.samples_per_pixel,
-            RenderControl {
-                cancel: Some(&cancel),
-                deadline,
-                progress: Some(&mut on_progress),
-                pass_deadline: every.map(|e| Instant::now() + e),
-                ..RenderControl::default()
-            },
-        );
-        let stats = match call {
-            Ok(stats) => stats,
-            Err(e) => break Err(e),
         };
-        total.merge(&stats);
-        if !stats.checkpoint {
-            break Ok(total);
+        let deadline = args
+            .time_limit
+            .map(|t| Instant::now() + Duration::from_secs_f64(t));
+        let every =
+            (args.checkpoint_every > 0.0).then(|| Duration::from_secs_f64(args.checkpoint_every));
+        let mut total = RenderStats {
+            completed: true,
+            next_sample: first.get(),
+            ..RenderStats::default()
+        };
+        // One call per checkpoint: each stops at the end of a pass once `every` has passed.
+        let result = loop {
+            let call = renderer.render(
+                first.get()..range.end,
+                RenderControl {
+                    cancel: Some(cancel),
+                    deadline,
+                    progress: Some(&mut on_progress),
+                    pass_deadline: every.map(|e| Instant::now() + e),
+                    ..RenderControl::default()
+                },
+            );
+            let stats = match call {
+                Ok(stats) => stats,
+                Err(e) => break Err(e),
+            };
+            total.merge(&stats);
+            if !stats.checkpoint {
+                break Ok(total);
+            }
+            let saved = renderer
+                .film_state()
+                .map_err(|e| e.to_string())
+                .and_then(|film| {
+                    Checkpoint {
+                        key,
+                        width: settings.width,
+                        height: settings.height,
+                        next_sample: stats.next_sample,
+                        film,
+                    }
+                    .write(&checkpoint_path)
+                });
+            // A checkpoint that cannot be written does not stop the render it protects.
+            if let Err(e) = saved {
+                bar.suspend(|| eprintln!("warning: no checkpoint: {e}"));
+            }
+            first.set(stats.next_sample);
+        };
+        bar.finish_and_clear();
+        if let Some(header) = part {
+            return write_part_output(renderer, result, output, &header, &checkpoint_path);
         }
-        let saved = renderer
-            .film_state()
-            .map_err(|e| e.to_string())
-            .and_then(|film| {
-                Checkpoint {
-                    key,
-                    width: settings.width,
-                    height: settings.height,
-                    next_sample: stats.next_sample,
-                    film,
-                }
-                .write(&checkpoint_path)
-            });
-        // A checkpoint that cannot be written does not stop the render it protects.
-        if let Err(e) = saved {
-            bar.suspend(|| eprintln!("warning: no checkpoint: {e}"));
+        let write = |renderer| {
+            write_output(
+                renderer,
+                output,
+                plugins,
+                view,
+                denoiser,
+                &args.export_options,
+            )
+        };
+        let stats = match result {
+            Ok(stats) => stats,
+            // Whole passes rendered before an error still make an image with a sample in
+            // every pixel: write it, then report the error.
+            Err(e) if renderer.has_whole_pass() => {
+                let written = write(renderer);
+                return Err(match written {
+                    Ok(()) => anyhow::anyhow!(
+                        "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
+                        output.display()
+                    ),
+                    Err(w) => anyhow::anyhow!(
+                        "the render stopped with an error: {e}; writing what it had rendered failed too: {w:#}"
+                    ),
+                });
+            }
+            Err(e) => return Err(e.into()),
+        };
+        write(renderer)?;
+        if stats.completed {
+            // The render is whole and written: its checkpoint has served.
+            let _ = std::fs::remove_file(&checkpoint_path);
+        } else if checkpoint_path.exists() {
+            eprintln!(
+                "{} holds the last whole pass: --resume continues from it",
+                checkpoint_path.display()
+            );
         }
-        first.set(stats.next_sample);
-    };
-    bar.finish_and_clear();
-    let view = ViewSettings {
-        exposure_ev: args.exposure.unwrap_or(scene.settings.view.exposure_ev),
-        tonemap: args.tonemap.unwrap_or(scene.settings.view.tonemap),
-    };
-    let write = |renderer| {
-        write_output(
-            renderer,
-            &args.output,
-            plugins,
-            view,
-            denoiser,
-            &args.export_options,
-        )
-    };
-    let stats = match result {
-        Ok(stats) => stats,
-        // Whole passes rendered before an error still make an image with a sample in
-        // every pixel: write it, then report the error.
-        Err(e) if renderer.has_whole_pass() => {
-            let written = write(renderer);
-            return Err(match written {
-                Ok(()) => anyhow::anyhow!(
-                    "the render stopped with an error: {e}; {} holds the whole passes rendered before it",
-                    args.output.display()
-                ),
-                Err(w) => anyhow::anyhow!(
-                    "the render stopped with an error: {e}; writing what it had rendered failed too: {w:#}"
-                ),
-            });
-        }
-        Err(e) => return Err(e.into()),
-    };
-    write(renderer)?;
-    if stats.completed {
-        // The render is whole and written: its checkpoint has served.
-        let _ = std::fs::remove_file(&checkpoint_path);
-    } else if checkpoint_path.exists() {
+        let secs = stats.elapsed.as_secs_f64().max(1e-9);
+        let reason = if stats.completed {
+            ""
+        } else if cancel.load(Ordering::SeqCst) {
+            " (interrupted)"
+        } else {
+            " (time limit reached)"
+        };
+        // A stop waits for the first whole pass; say so when it ran past the time limit.
+        let overrun = match (args.time_limit, stats.first_pass) {
+            (Some(limit), Some(first)) if first.as_secs_f64() > limit => format!(
+                "; the first whole pass took {:.2} s, longer than the {limit} s time limit (it always completes, so that every pixel has a sample)",
+                first.as_secs_f64()
+            ),
+            _ => String::new(),
+        };
+        let adaptive = match stats.active_pixels {
+            Some(active) => format!(
+                "; adaptive sampling: {:.1} % of pixels converged",
+                100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
+            ),
+            None => String::new(),
+        };
         eprintln!(
-            "{} holds the last whole pass: --resume continues from it",
-            checkpoint_path.display()
+            "wrote {}: {:.1} spp average in {:.2} s{reason}, {} whole passes, {:.2} Msamples/s, {:.1} Mrays/s{}{overrun}{adaptive}",
+            output.display(),
+            stats.pixel_samples as f64 / pixels as f64,
+            secs,
+            stats.passes,
+            stats.pixel_samples as f64 / secs / 1e6,
+            stats.rays as f64 / secs / 1e6,
+            if stats.non_finite > 0 {
+                format!(", {} non-finite samples dropped", stats.non_finite)
+            } else {
+                String::new()
+            }
+        );
+        Ok(())
+    }
+}
+
+/// Refuses what a part of a split render cannot hold: anything that makes a pixel's
+/// samples depend on more than their indices, or layers that would not merge exactly.
+fn part_settings_check(
+    args: &RenderArgs,
+    settings: &RenderSettings,
+    scene: &Scene,
+    range: &std::ops::Range<u32>,
+) -> Result<()> {
+    if range.end > settings.samples_per_pixel {
+        bail!(
+            "--samples {}..{} goes past the render's {} samples per pixel (--spp is the whole render's)",
+            range.start,
+            range.end,
+            settings.samples_per_pixel
         );
     }
-    let secs = stats.elapsed.as_secs_f64().max(1e-9);
-    let reason = if stats.completed {
-        ""
-    } else if cancel.load(Ordering::SeqCst) {
-        " (interrupted)"
-    } else {
-        " (time limit reached)"
-    };
-    // A stop waits for the first whole pass; say so when it ran past the time limit.
-    let overrun = match (args.time_limit, stats.first_pass) {
-        (Some(limit), Some(first)) if first.as_secs_f64() > limit => format!(
-            "; the first whole pass took {:.2} s, longer than the {limit} s time limit (it always completes, so that every pixel has a sample)",
-            first.as_secs_f64()
-        ),
-        _ => String::new(),
-    };
-    let adaptive = match stats.active_pixels {
-        Some(active) => format!(
-            "; adaptive sampling: {:.1} % of pixels converged",
-            100.0 * (pixels - active.min(pixels)) as f64 / pixels as f64
-        ),
-        None => String::new(),
-    };
-    eprintln!(
-        "wrote {}: {:.1} spp average in {:.2} s{reason}, {} whole passes, {:.2} Msamples/s, {:.1} Mrays/s{}{overrun}{adaptive}",
-        args.output.display(),
-        stats.pixel_samples as f64 / pixels as f64,
-        secs,
-        stats.passes,
-        stats.pixel_samples as f64 / secs / 1e6,
-        stats.rays as f64 / secs / 1e6,
-        if stats.non_finite > 0 {
-            format!(", {} non-finite samples dropped", stats.non_finite)
+    if settings.noise_threshold > 0.0 {
+        bail!(
+            "--samples cannot split a render with adaptive sampling (--noise-threshold): where a pixel stops depends on the samples before A; set --noise-threshold 0"
+        );
+    }
+    if args.time_limit.is_some() {
+        bail!("--samples and --time-limit: a part must hold every sample of its range");
+    }
+    let denoise = args.denoise.unwrap_or(scene.settings.denoiser);
+    if denoise != Denoiser::None {
+        bail!(
+            "--samples cannot denoise a part (--denoise {}): denoising goes after the merge; set --denoise none",
+            denoise.key()
+        );
+    }
+    if scene.instances.iter().any(|i| i.shadow_catcher) {
+        bail!(
+            "--samples cannot split a scene with a shadow catcher: its alpha is an AOV, which does not merge exactly"
+        );
+    }
+    Ok(())
+}
+
+/// Writes the part of a split render: every pixel holds exactly the part's samples, or
+/// nothing is written (an interrupted part keeps its checkpoint for --resume).
+fn write_part_output(
+    renderer: Renderer,
+    result: Result<RenderStats, kiln::render::RenderError>,
+    output: &Path,
+    header: &PartHeader,
+    checkpoint_path: &Path,
+) -> Result<()> {
+    let stats = result?;
+    if !stats.completed {
+        let resume = if checkpoint_path.exists() {
+            format!("; --resume continues from {}", checkpoint_path.display())
         } else {
             String::new()
-        }
+        };
+        bail!(
+            "interrupted: the part {} is not written, since it must hold every sample of {}..{}{resume}",
+            output.display(),
+            header.samples.start,
+            header.samples.end
+        );
+    }
+    let film = renderer.read_exact_film()?;
+    drop(renderer);
+    kiln::farm::part::write_part(output, header, &film).map_err(anyhow::Error::msg)?;
+    let _ = std::fs::remove_file(checkpoint_path);
+    eprintln!(
+        "wrote {}: samples {}..{} of {} in {:.2} s",
+        output.display(),
+        header.samples.start,
+        header.samples.end,
+        header.total_samples,
+        stats.elapsed.as_secs_f64()
     );
     Ok(())
+}
+
+/// `kiln merge`: the parts' exact films added and written as one image.
+fn merge(
+    parts: &[PathBuf],
+    output: &Path,
+    allow_partial: bool,
+    export_options: &str,
+    plugins: &PluginHost,
+) -> Result<()> {
+    check_output(output, plugins, export_options)?;
+    let (header, film, coverage) =
+        kiln::farm::part::merge_parts(parts, allow_partial).map_err(anyhow::Error::msg)?;
+    if !coverage.missing.is_empty() {
+        eprintln!(
+            "warning: samples {} of {} per pixel are missing: the image holds the others",
+            kiln::farm::part::describe_ranges(&coverage.missing),
+            header.total_samples
+        );
+    }
+    let film = film.to_film();
+    let samples = film.sums.iter().map(|s| s[3] as f32).collect();
+    let export = ExportFilm::from_film(
+        &film,
+        header.view,
+        vec![kiln::film::output::ExportLayer {
+            name: "samples".into(),
+            channels: 1,
+            data: samples,
+        }],
+    );
+    plugins
+        .write_image(output, &export, export_options)
+        .map_err(anyhow::Error::msg)?;
+    eprintln!(
+        "wrote {}: {} parts, {} samples per pixel",
+        output.display(),
+        parts.len(),
+        film.sums.first().map_or(0, |s| s[3] as u64)
+    );
+    Ok(())
+}
+
+/// `kiln farm`: Slurm job arrays of parts and frames.
+fn farm(command: FarmCommand, plugins: &PluginHost) -> Result<()> {
+    use kiln::farm::slurm::{self, FarmJob, TaskState};
+    let absolute = |p: &Path| {
+        std::path::absolute(p).with_context(|| format!("cannot resolve {}", p.display()))
+    };
+    match command {
+        FarmCommand::Slurm {
+            scene,
+            parts,
+            spp,
+            frames,
+            turntable,
+            output,
+            dir,
+            sbatch_args,
+            submit,
+            render_args,
+        } => {
+            // The scene is read here once, so that a broken one fails now, not on the
+            // cluster, and its samples per pixel are known.
+            let (loaded, _) = load(scene.as_deref(), plugins, lookdev::Ground::Plane)?;
+            let spp = spp.unwrap_or(loaded.settings.samples_per_pixel);
+            if parts > spp {
+                bail!(
+                    "--parts {parts} is more than the {spp} samples per pixel: a part needs at least one"
+                );
+            }
+            let first_output = frames
+                .clone()
+                .map_or(output.clone(), |f| kiln::farm::frame_path(&output, f.start));
+            check_output(&first_output, plugins, "")?;
+            let output = absolute(&output)?;
+            let dir = match dir {
+                Some(d) => absolute(&d)?,
+                None => {
+                    let mut name = output.file_name().unwrap_or_default().to_os_string();
+                    name.push(".farm");
+                    output.with_file_name(name)
+                }
+            };
+            let mut job = FarmJob {
+                kiln: std::env::current_exe().context("cannot find the kiln executable")?,
+                scene: scene.as_deref().map(absolute).transpose()?,
+                output,
+                spp,
+                parts,
+                frames,
+                turntable,
+                render_args,
+                sbatch_args,
+                submissions: Vec::new(),
+            };
+            slurm::write_farm(&dir, &job).map_err(anyhow::Error::msg)?;
+            eprintln!(
+                "wrote {}: {} tasks ({} frame(s) × {parts} part(s) of {spp} spp)",
+                dir.display(),
+                job.task_count(),
+                job.frame_count()
+            );
+            if submit {
+                let s = slurm::submit(&dir, &mut job, None).map_err(anyhow::Error::msg)?;
+                eprintln!(
+                    "submitted job array {} and merge job {}",
+                    s.render_job, s.merge_job
+                );
+            } else {
+                eprintln!(
+                    "submit with: kiln farm slurm … --submit, or\n  id=$(sbatch --parsable {0}/{1}) && sbatch --dependency=afterok:$id {0}/{2}",
+                    dir.display(),
+                    slurm::RENDER_SCRIPT,
+                    slurm::MERGE_SCRIPT
+                );
+            }
+            Ok(())
+        }
+        FarmCommand::Status { dir } => {
+            let job = slurm::read_farm(&dir).map_err(anyhow::Error::msg)?;
+            let state = slurm::status(&dir, &job).map_err(anyhow::Error::msg)?;
+            let count = |f: fn(&TaskState) -> bool| state.tasks.iter().filter(|t| f(t)).count();
+            let done = count(|t| *t == TaskState::Done);
+            println!(
+                "{}: {done} of {} parts rendered",
+                dir.display(),
+                job.task_count()
+            );
+            let mut missing = Vec::new();
+            for (t, task_state) in state.tasks.iter().enumerate() {
+                let task = job.task(t as u32);
+                let what = match task.frame {
+                    Some(f) => format!(
+                        "frame {f} samples {}..{}",
+                        task.samples.start, task.samples.end
+                    ),
+                    None => format!("samples {}..{}", task.samples.start, task.samples.end),
+                };
+                match task_state {
+                    TaskState::Done => {}
+                    TaskState::Queued(q) => println!("  task {t} ({what}): {}", q.to_lowercase()),
+                    TaskState::NotSubmitted => println!("  task {t} ({what}): not submitted"),
+                    TaskState::Missing(log) => {
+                        println!(
+                            "  task {t} ({what}): missing, failed or cancelled{}",
+                            log.as_ref()
+                                .map_or(String::new(), |l| format!(" (its log ends: {l})"))
+                        );
+                        missing.push(what);
+                    }
+                }
+            }
+            match &state.merge_queued {
+                Some(q) => println!("  merge: {}", q.to_lowercase()),
+                None => println!(
+                    "  merged: {} of {} image(s)",
+                    state.merged.len(),
+                    job.frame_count()
+                ),
+            }
+            if !missing.is_empty() {
+                bail!(
+                    "{} part(s) missing ({}): kiln farm resubmit {} renders them again",
+                    missing.len(),
+                    missing.join("; "),
+                    dir.display()
+                );
+            }
+            Ok(())
+        }
+        FarmCommand::Resubmit { dir } => {
+            let mut job = slurm::read_farm(&dir).map_err(anyhow::Error::msg)?;
+            match slurm::resubmit(&dir, &mut job).map_err(anyhow::Error::msg)? {
+                Some(s) => eprintln!(
+                    "resubmitted task(s) {:?} as job array {} with merge job {}",
+                    s.tasks, s.render_job, s.merge_job
+                ),
+                None => eprintln!("nothing to resubmit: every part is rendered or queued"),
+            }
+            Ok(())
+        }
+    }
 }
 
 /// Refuses an output that could not be written: a missing or read-only folder, a format

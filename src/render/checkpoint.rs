@@ -38,10 +38,11 @@ pub fn path_for(output: &Path) -> PathBuf {
     output.with_file_name(name)
 }
 
-/// A hash of everything that decides a render's samples: the scene, and the settings but
-/// the samples per pixel (a resumed render may go on to more). The same binary gives the
-/// same key; another build may refuse an older checkpoint, never take a wrong one.
-pub fn key(scene: &Scene, settings: &RenderSettings) -> u64 {
+/// A hash of everything that decides a render's samples: the scene, the settings but the
+/// samples per pixel (a resumed render may go on to more), and the first sample index (a
+/// part of a split render starts past 0). The same binary gives the same key; another
+/// build may refuse an older checkpoint, never take a wrong one.
+pub fn key(scene: &Scene, settings: &RenderSettings, first_sample: u32) -> u64 {
     struct Hashing(std::collections::hash_map::DefaultHasher);
     impl std::fmt::Write for Hashing {
         fn write_str(&mut self, s: &str) -> std::fmt::Result {
@@ -55,7 +56,11 @@ pub fn key(scene: &Scene, settings: &RenderSettings) -> u64 {
         ..*settings
     };
     // Debug prints every field, floats exactly; streamed, never held as one string.
-    let _ = write!(h, "{scene:?}{settings:?}{}", env!("CARGO_PKG_VERSION"));
+    let _ = write!(
+        h,
+        "{scene:?}{settings:?}{first_sample}{}",
+        env!("CARGO_PKG_VERSION")
+    );
     h.0.finish()
 }
 
