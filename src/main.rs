@@ -229,8 +229,8 @@ enum FarmCommand {
         /// The merged image; with frames, `#`s in its name become the frame number.
         #[arg(short, long)]
         output: PathBuf,
-        /// The farm folder, on storage every node sees [default: OUTPUT.farm beside the
-        /// output].
+        /// The farm folder, on storage every node sees [default: beside the output, named
+        /// after it: shot_####.png → shot.farm].
         #[arg(long)]
         dir: Option<PathBuf>,
         /// An #SBATCH option of both jobs (`--partition=gpu`, `--time=2:00:00`); may be
@@ -1525,11 +1525,7 @@ fn farm(command: FarmCommand, plugins: &PluginHost) -> Result<()> {
             let output = absolute(&output)?;
             let dir = match dir {
                 Some(d) => absolute(&d)?,
-                None => {
-                    let mut name = output.file_name().unwrap_or_default().to_os_string();
-                    name.push(".farm");
-                    output.with_file_name(name)
-                }
+                None => slurm::default_dir(&output),
             };
             let mut job = FarmJob {
                 kiln: std::env::current_exe().context("cannot find the kiln executable")?,

@@ -263,7 +263,7 @@ pub fn read_part(path: &Path) -> Result<(PartHeader, ExactFilm), String> {
             .channel_data
             .list
             .iter()
-            .find(|c| c.name == Text::from(name))
+            .find(|c| c.name == *name)
             .ok_or_else(|| fail(format!("it has no {name} channel")))?;
         match &channel.sample_data {
             FlatSamples::U32(v) => Ok(v),
@@ -462,7 +462,7 @@ mod tests {
         let mut other = parts(&[0..32, 32..64]);
         other[1].1.seed = 4;
         assert!(check_parts(&other).unwrap_err().contains("seeds differ"));
-        let past = check_parts(&parts(&[0..80])).unwrap_err();
+        let past = check_parts(&parts(&[0..40, 40..80])).unwrap_err();
         assert!(past.contains("past the render's 64"), "{past}");
     }
 

@@ -109,10 +109,15 @@ impl FarmJob {
     /// The part file task `t` writes.
     pub fn part_path(&self, dir: &Path, t: u32) -> PathBuf {
         let task = self.task(t);
-        dir.join("parts").join(match task.frame {
-            Some(frame) => format!("frame{frame}.part{}.exr", task.part),
-            None => format!("part{}.exr", task.part),
-        })
+        let path = dir.join("parts").join(format!("part{}.exr", task.part));
+        match task.frame {
+            // What `kiln render --frame` makes of the script's `part$PART_####.exr`.
+            Some(frame) => frame_path(
+                &path.with_file_name(format!("part{}_####.exr", task.part)),
+                frame,
+            ),
+            None => path,
+        }
     }
 
     /// The merged image of `frame` (None for a still).
@@ -156,7 +161,7 @@ impl FarmJob {
         match &self.frames {
             Some(frames) => {
                 let _ = writeln!(s, "FRAME=$(( {} + T / PARTS ))", frames.start);
-                let _ = writeln!(s, "OUT={parts}/frame$FRAME.part$PART.exr");
+                let _ = writeln!(s, "OUT={parts}/part${{PART}}_####.exr");
                 command.extend([
                     "--frames".into(),
                     format!("{}..{}", frames.start, frames.end),
@@ -190,7 +195,9 @@ impl FarmJob {
         };
         for frame in frames {
             let pattern = match frame {
-                Some(f) => format!("frame{f}.part*.exr"),
+                Some(f) => frame_path(Path::new("part*_####.exr"), f)
+                    .to_string_lossy()
+                    .into_owned(),
                 None => "part*.exr".into(),
             };
             let output = quote(&self.output_of(frame).to_string_lossy());
@@ -219,8 +226,29 @@ fn quote(s: &str) -> String {
     }
 }
 
+/// The farm folder of `output` when none is given: beside it, named after it without the
+/// frame number's `#`s (`shot_####.png` → `shot.farm`).
+pub fn default_dir(output: &Path) -> PathBuf {
+    let stem = output
+        .file_stem()
+        .map(|s| s.to_string_lossy().replace('#', ""))
+        .unwrap_or_default();
+    let stem = stem.trim_end_matches(['_', '-', '.', ' ']);
+    output.with_file_name(format!(
+        "{}.farm",
+        if stem.is_empty() { "render" } else { stem }
+    ))
+}
+
 /// Writes the farm folder: `farm.ron`, the two scripts, and `parts/` and `logs/`.
 pub fn write_farm(dir: &Path, job: &FarmJob) -> Result<(), String> {
+    // An #SBATCH line ends at a space and at a `#`: the logs' path cannot hold either.
+    let text = dir.to_string_lossy();
+    if text.contains(|c: char| c.is_whitespace() || c == '#' || c == '%') {
+        return Err(format!(
+            "the farm folder {text} has a space, # or % in its path, which #SBATCH --output cannot hold: choose another with --dir"
+        ));
+    }
     let fail = |e: std::io::Error| format!("cannot write the farm folder {}: {e}", dir.display());
     for sub in ["parts", "logs"] {
         std::fs::create_dir_all(dir.join(sub)).map_err(fail)?;
@@ -449,7 +477,7 @@ mod tests {
         }
         assert_eq!(
             j.part_path(Path::new("/farm"), 5),
-            Path::new("/farm/parts/frame11.part2.exr")
+            Path::new("/farm/parts/part2_0011.exr")
         );
         assert_eq!(j.output_of(Some(12)), Path::new("/out/shot_0012.png"));
     }
@@ -469,7 +497,7 @@ mod tests {
         );
         let merge = j.merge_script(Path::new("/farm"));
         assert!(merge.contains(
-            "'/opt/kiln bin/kiln' merge /farm/parts/frame13.part*.exr -o /out/shot_0013.png"
+            "'/opt/kiln bin/kiln' merge /farm/parts/part*_0013.exr -o /out/shot_0013.png"
         ));
         assert_eq!(quote("it's"), "'it'\\''s'");
     }
@@ -491,17 +519,31 @@ mod tests {
             let text = String::from_utf8_lossy(&out.stdout);
             let task = j.task(t);
             let expected = format!(
-                "--samples {}..{} --frames 10..14 --frame {} --turntable 360 -o {} --quiet",
+                "--samples {}..{} --frames 10..14 --frame {} --turntable 360 -o /farm/parts/part{}_####.exr --quiet",
                 task.samples.start,
                 task.samples.end,
                 task.frame.unwrap(),
-                j.part_path(Path::new("/farm"), t).display()
+                task.part
             );
             assert!(
                 text.contains(&expected),
                 "task {t}: {text} lacks {expected}"
             );
         }
+    }
+
+    #[test]
+    fn the_default_farm_folder_has_no_frame_marks() {
+        assert_eq!(
+            default_dir(Path::new("/o/shot_####.png")),
+            Path::new("/o/shot.farm")
+        );
+        assert_eq!(
+            default_dir(Path::new("/o/final.exr")),
+            Path::new("/o/final.farm")
+        );
+        let e = write_farm(Path::new("/tmp/a b"), &job(None)).unwrap_err();
+        assert!(e.contains("choose another with --dir"), "{e}");
     }
 
     #[test]
