@@ -44,8 +44,9 @@ fn the_library_never_prints() {
 
 /// The library's layers, bottom to top: a module may use the ones before it and none
 /// after (docs/ARCHITECTURE.md explains each). `bench` drives everything, like the binary.
-const LAYERS: [&str; 10] = [
-    "limits", "shader", "material", "scene", "accel", "film", "render", "plugin", "bench", "editor",
+const LAYERS: [&str; 11] = [
+    "limits", "shader", "material", "scene", "accel", "film", "render", "farm", "plugin", "bench",
+    "editor",
 ];
 
 /// The top-level modules `text` names through `crate::`, outside comments:

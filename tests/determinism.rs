@@ -8,6 +8,7 @@ use std::sync::Arc;
 
 use common::{furnace_scene, gpu, render, settings};
 use glam::Vec3;
+use kiln::film::ExactFilm;
 use kiln::render::{RenderControl, Renderer};
 use kiln::scene::{self, Camera, Scene};
 
@@ -61,7 +62,7 @@ fn split_sample_ranges_merge_into_the_whole() {
     };
     let (a, b, c) = (part(0..5), part(5..17), part(17..24));
     for order in [[&a, &b, &c], [&c, &a, &b]] {
-        let mut merged = kiln::film::ExactFilm::new(s.width, s.height);
+        let mut merged = ExactFilm::new(s.width, s.height);
         for p in order {
             merged.merge(p).unwrap();
         }
@@ -127,4 +128,43 @@ fn every_pixel_receives_exactly_its_samples_on_long_paths() {
             assert_eq!(f.sample_count(x, y), 1000, "pixel ({x}, {y})");
         }
     }
+}
+
+#[test]
+fn the_film_adds_fixed_point_samples_exactly_and_saturates_instead_of_wrapping() {
+    let ctx = gpu();
+    let step = (ExactFilm::FRACTION_BITS as f64).exp2();
+    let exact = |environment: Vec3, spp: u32| {
+        let mut scene = Scene::empty(Camera::look_at(Vec3::Z, Vec3::ZERO, 40.0));
+        scene.environment = environment;
+        let mut r = Renderer::new(Arc::clone(&ctx), &scene, settings(2, 2, spp)).unwrap();
+        r.render(0..spp, RenderControl::default()).unwrap();
+        r.read_exact_film().unwrap()
+    };
+    // Every sample the same f32: the sum is the count times its rounded value, carries
+    // into the high word included (3.3 · 2^28 · 10^4 > 2^32).
+    let v = Vec3::new(0.7, 0.1, 3.3);
+    let film = exact(v, 10_000);
+    for s in &film.sums {
+        for c in 0..3 {
+            assert_eq!(s[c], 10_000 * (v[c] as f64 * step).round() as i64);
+        }
+    }
+    // A sample is clamped to 2^24; a sum saturates at the high word's limit.
+    let film = exact(Vec3::new(1e9, 1e7, 0.0), 4096);
+    for s in &film.sums {
+        assert_eq!(
+            s[0] >> 32,
+            ExactFilm::HIGH_LIMIT,
+            "saturated, not wrapped: {s:?}"
+        );
+        assert_eq!(
+            s[1] >> 32,
+            ExactFilm::HIGH_LIMIT,
+            "saturated, not wrapped: {s:?}"
+        );
+        assert_eq!(s[2], 0);
+    }
+    let film = exact(Vec3::new(1e9, 0.0, 0.0), 16);
+    assert_eq!(film.sums[0][0], 16 * (2f64.powi(24) * step) as i64);
 }

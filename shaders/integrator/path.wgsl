@@ -7,8 +7,8 @@
 // one-sample MIS over the channels, with next-event estimation through media and volume
 // boundaries (transmittance) weighted against phase-function sampling.
 // Each invocation owns one pixel of the current tile and renders `sample_count` samples
-// into it, adding them to the film with Kahan summation so that sums over 10^5 samples do
-// not drift.
+// into it, adding them to the film as 64-bit fixed point (`film_add`), so that sums over
+// 10^5 samples do not drift and split renders merge exactly.
 
 const RR_START_DEPTH: u32 = 3u;
 
@@ -607,8 +607,12 @@ fn trace_path(primary: Ray) -> vec3<f32> {
 // are split into dispatches, passes, or the parts of a render merged later (`kiln merge`).
 const FILM_FRACTION_BITS: f32 = 268435456.0; // 2^28
 const FILM_WORD: f32 = 4294967296.0; // 2^32
-/// Samples are clamped to this magnitude (2^34) so that one converts without overflow.
-const FILM_SAMPLE_LIMIT: f32 = 17179869184.0;
+/// Samples are clamped to this magnitude (2^24 ≈ 1.7·10^7), so that one adds at most 2^20
+/// to a sum's high word.
+const FILM_SAMPLE_LIMIT: f32 = 16777216.0;
+/// Sums saturate at this high word (2^31 − 2^21, about ±3.4·10^10): below it, adding a
+/// sample cannot wrap, and clamping the high word to it after each add saturates the sum.
+const FILM_HIGH_LIMIT: i32 = 2145386496;
 
 struct FilmSum {
     low: vec3<u32>,
@@ -621,18 +625,11 @@ fn film_add(sum: FilmSum, l: vec3<f32>) -> FilmSum {
     // v = high·2^32 + low exactly: both parts are f32 integers below 2^32.
     let vh = floor(v * (1.0 / FILM_WORD));
     let add_low = vec3<u32>(v - vh * FILM_WORD);
-    let add_high = bitcast<vec3<u32>>(vec3<i32>(vh));
     let low = sum.low + add_low;
-    let carry = select(vec3<u32>(0u), vec3<u32>(1u), low < add_low);
-    let high = sum.high + add_high + carry;
-    // Two operands of one sign whose sum has the other overflowed.
-    let a = bitcast<vec3<i32>>(sum.high);
-    let r = bitcast<vec3<i32>>(high);
-    let overflow = ((a ^ r) & (bitcast<vec3<i32>>(add_high) ^ r)) < vec3<i32>(0);
-    let positive = a >= vec3<i32>(0);
-    let saturated_high = select(vec3<u32>(0x80000000u), vec3<u32>(0x7fffffffu), positive);
-    let saturated_low = select(vec3<u32>(0u), vec3<u32>(0xffffffffu), positive);
-    return FilmSum(select(low, saturated_low, overflow), select(high, saturated_high, overflow));
+    let carry = select(vec3<i32>(0), vec3<i32>(1), low < add_low);
+    let high = bitcast<vec3<i32>>(sum.high) + vec3<i32>(vh) + carry;
+    let limit = vec3<i32>(FILM_HIGH_LIMIT);
+    return FilmSum(low, bitcast<vec3<u32>>(clamp(high, -limit, limit)));
 }
 
 /// A pixel's sums as floating point, and its count in w.

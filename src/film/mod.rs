@@ -14,8 +14,9 @@ use glam::Vec3;
 
 /// The film as the device accumulates it: per pixel each channel's radiance sum as a 64-bit
 /// two's-complement fixed-point number of [`ExactFilm::FRACTION_BITS`] fractional bits,
-/// and the sample count. Each sample is rounded to the nearest step (2⁻²⁸ ≈ 3.7·10⁻⁹) and
-/// added exactly; a sum saturates at ±2³⁵ (≈ 3.4·10¹⁰) instead of wrapping.
+/// and the sample count. Each sample (clamped to ±2²⁴) is rounded to the nearest step
+/// (2⁻²⁸ ≈ 3.7·10⁻⁹) and added exactly; a sum saturates at about ±3.4·10¹⁰ (its high word
+/// at ±[`ExactFilm::HIGH_LIMIT`]) instead of wrapping.
 #[derive(Clone, Debug, PartialEq, Eq)]
 pub struct ExactFilm {
     pub width: u32,
@@ -29,6 +30,8 @@ impl ExactFilm {
     /// Fractional bits of the fixed-point sums (`FILM_FRACTION_BITS` in
     /// `shaders/integrator/path.wgsl`).
     pub const FRACTION_BITS: i32 = 28;
+    /// The largest magnitude of a sum's high word (`FILM_HIGH_LIMIT` in the kernel).
+    pub const HIGH_LIMIT: i64 = (1 << 31) - (1 << 21);
 
     pub fn new(width: u32, height: u32) -> Self {
         let pixels = width as usize * height as usize;
@@ -46,7 +49,7 @@ impl ExactFilm {
     }
 
     /// Adds another film's samples, exactly: the result does not depend on the order in
-    /// which films are added (sums saturate as the device's do; counts must not overflow).
+    /// which films are added (unless sums saturate; counts must not overflow).
     pub fn merge(&mut self, other: &ExactFilm) -> Result<(), String> {
         if (self.width, self.height) != (other.width, other.height) {
             return Err(format!(
@@ -54,9 +57,13 @@ impl ExactFilm {
                 other.width, other.height, self.width, self.height
             ));
         }
+        let (min, max) = (
+            -Self::HIGH_LIMIT << 32,
+            (Self::HIGH_LIMIT << 32) | 0xffff_ffff,
+        );
         for (a, b) in self.sums.iter_mut().zip(&other.sums) {
             for c in 0..3 {
-                a[c] = a[c].saturating_add(b[c]);
+                a[c] = a[c].saturating_add(b[c]).clamp(min, max);
             }
         }
         for (a, b) in self.counts.iter_mut().zip(&other.counts) {
