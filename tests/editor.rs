@@ -658,8 +658,9 @@ fn the_material_list_imports_and_exports_materialx() {
         .join("../shared/corpus/materialx/StandardSurface/standard_surface_gold.mtlx");
     let out = dir.path().join("gold.mtlx");
     let mut dialogs = ScriptedDialogs::default();
-    dialogs.material_import.push_back(brass);
+    dialogs.material_import.push_back(brass.clone());
     dialogs.material_import.push_back(gold);
+    dialogs.material_import.push_back(brass);
     dialogs.material_export.push_back(out.clone());
     let mut harness = harness_with(dialogs, bundled_plugins());
     harness.step();
@@ -712,6 +713,20 @@ fn the_material_list_imports_and_exports_materialx() {
             .map(|n| n.inputs.clone())
     };
     assert_eq!(principled(&back[0].1), principled(&shown));
+
+    // A graph that does not compile (its images are missing) is not exported, as `kiln
+    // material export` refuses one: no dialog, an error naming it.
+    harness.get_by_label("Import Materials…").click();
+    harness.step();
+    harness.get_by_label("OK").click();
+    harness.step();
+    harness.get_by_label("Export Material…").click();
+    harness.step();
+    let error = harness.state().error().expect("the export is refused");
+    assert!(
+        error.contains("cannot export Tiled_Brass: its graph does not compile"),
+        "{error}"
+    );
 }
 
 /// File ▸ Import… (the dialog answers with the file queued), which must succeed.

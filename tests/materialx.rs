@@ -636,6 +636,30 @@ fn every_file_the_exporter_writes_passes_materialx_validation() {
     for file in corpus().into_iter().filter(|f| !is_hair(f)) {
         graphs.extend(host.import_materials(&file).unwrap().materials);
     }
+    // The implementations no bundled material uses: distorted and plain waves, the
+    // Geometry node's outputs MaterialX has no node for, Vector Math's refract, modulo
+    // and wrap.
+    graphs.push(
+        kiln::material::parse_material(
+            r#"(
+    version: 1,
+    name: "Implementations",
+    nodes: {
+        "geometry": (type: "geometry"),
+        "wave": (type: "wave_texture", params: { "wave_type": "rings", "profile": "saw" }, inputs: { "distortion": 2.0, "detail": 3.0 }),
+        "plain": (type: "wave_texture", inputs: { "vector": "geometry.incoming" }),
+        "refract": (type: "vector_math", params: { "operation": "refract" }, inputs: { "a": "geometry.incoming", "b": "geometry.true_normal", "scale": 0.7 }),
+        "modulo": (type: "vector_math", params: { "operation": "modulo" }, inputs: { "a": "refract.vector", "b": (0.3, 0.5, 0.0) }),
+        "wrap": (type: "vector_math", params: { "operation": "wrap" }, inputs: { "a": "modulo.vector", "b": (1.0, 1.0, 1.0), "c": (-1.0, 0.0, 0.5) }),
+        "mix": (type: "mix_color", inputs: { "factor": "geometry.backfacing", "a": "wave.color", "b": "plain.color" }),
+        "surface": (type: "principled_bsdf", inputs: { "base_color": "mix.result", "normal": "wrap.vector" }),
+        "out": (type: "material_output", inputs: { "surface": "surface.bsdf" }),
+    },
+)"#,
+            "implementations.kmat",
+        )
+        .unwrap(),
+    );
     for (i, (name, graph)) in graphs.iter().enumerate() {
         let file = dir.path().join(format!("{i}.mtlx"));
         host.export_material(&file, name, graph)
@@ -644,4 +668,82 @@ fn every_file_the_exporter_writes_passes_materialx_validation() {
     }
     eprintln!("{} exported files", files.len());
     materialx_validate(&files);
+}
+
+/// A float of an imported graph: the few nodes the 2D ramps and splits import as, evaluated
+/// at constant inputs (Kiln's semantics: mix_float clamps its factor).
+fn evaluate(graph: &Graph, input: &Input, socket_type: &str) -> f32 {
+    match input {
+        Input::Value(Value::Float(x)) => *x,
+        Input::Value(v) => panic!("a {socket_type} constant {v:?}"),
+        Input::Link(link) => {
+            let node = &graph.nodes[&link.node];
+            let get = |name: &str| evaluate(graph, &node.inputs[name], name);
+            match (node.kind.as_str(), link.socket.as_str()) {
+                ("separate_xyz", axis) => {
+                    let i = ["x", "y", "z"].iter().position(|a| *a == axis).unwrap();
+                    match &node.inputs["vector"] {
+                        Input::Value(Value::Vec3(v)) => v[i],
+                        Input::Value(Value::Vec2(v)) => v[i],
+                        other => panic!("separate_xyz of {other:?}"),
+                    }
+                }
+                ("mix_float", "result") => {
+                    let t = get("factor").clamp(0.0, 1.0);
+                    get("a") + (get("b") - get("a")) * t
+                }
+                ("math", "value") => {
+                    assert_eq!(node.params["operation"], Param::Text("greater_than".into()));
+                    if get("a") > get("b") { 1.0 } else { 0.0 }
+                }
+                (kind, socket) => panic!("unexpected {kind}.{socket}"),
+            }
+        }
+    }
+}
+
+#[test]
+fn ramps_and_splits_of_texture_coordinates_import_as_materialx_defines_them() {
+    let dir = tempfile::tempdir().unwrap();
+    let host = bundled_plugins();
+    let ramp4 = "<input name=\"valuetl\" type=\"float\" value=\"0.1\" /><input name=\"valuetr\" type=\"float\" value=\"0.9\" /><input name=\"valuebl\" type=\"float\" value=\"0.3\" /><input name=\"valuebr\" type=\"float\" value=\"0.6\" />";
+    let lr = "<input name=\"valuel\" type=\"float\" value=\"0.2\" /><input name=\"valuer\" type=\"float\" value=\"0.7\" /><input name=\"center\" type=\"float\" value=\"0.4\" />";
+    let tb = "<input name=\"valuet\" type=\"float\" value=\"0.2\" /><input name=\"valueb\" type=\"float\" value=\"0.7\" />";
+    for (s, t) in [(0.25f32, 0.8f32), (0.6, 0.1), (-0.5, 1.5)] {
+        let (sc, tc) = (s.clamp(0.0, 1.0), t.clamp(0.0, 1.0));
+        let lerp = |a: f32, b: f32, x: f32| a + (b - a) * x;
+        let step = |center: f32, x: f32| if x > center { 1.0 } else { 0.0 };
+        for (category, inputs, expected) in [
+            (
+                "ramp4",
+                ramp4,
+                lerp(lerp(0.1, 0.9, sc), lerp(0.3, 0.6, sc), tc),
+            ),
+            ("splitlr", lr, lerp(0.2, 0.7, step(0.4, s))),
+            ("splittb", tb, lerp(0.2, 0.7, step(0.5, t))),
+        ] {
+            let text = format!(
+                "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n  <{category} name=\"pattern\" type=\"float\">{inputs}<input name=\"texcoord\" type=\"vector2\" value=\"{s}, {t}\" /></{category}>\n  <open_pbr_surface name=\"surface\" type=\"surfaceshader\"><input name=\"specular_roughness\" type=\"float\" nodename=\"pattern\" /></open_pbr_surface>\n  <surfacematerial name=\"M\" type=\"material\"><input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"surface\" /></surfacematerial>\n</materialx>\n"
+            );
+            let path = dir.path().join(format!("{category}.mtlx"));
+            std::fs::write(&path, text).unwrap();
+            let imported = host.import_materials(&path).unwrap();
+            assert!(
+                imported.warnings.is_empty(),
+                "{category}: {:?}",
+                imported.warnings
+            );
+            let graph = &imported.materials[0].1;
+            let bsdf = graph
+                .nodes
+                .values()
+                .find(|n| n.kind == "principled_bsdf")
+                .expect("the surface");
+            let value = evaluate(graph, &bsdf.inputs["roughness"], "roughness");
+            assert!(
+                (value - expected).abs() < 1e-6,
+                "{category} at ({s}, {t}): {value}, MaterialX gives {expected}"
+            );
+        }
+    }
 }

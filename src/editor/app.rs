@@ -713,6 +713,14 @@ impl EditorApp {
             return;
         };
         let name = self.document.scene().materials[material].name.clone();
+        // As `kiln material export`: a graph that does not compile is not written (another
+        // program would read a material Kiln cannot render).
+        if let Some(e) = self.document.graph_error(material) {
+            self.error = Some(format!(
+                "cannot export {name}: its graph does not compile ({e}); fix it first"
+            ));
+            return;
+        }
         let Some(path) = self.dialogs.material_export_path(&name, &extensions) else {
             return;
         };

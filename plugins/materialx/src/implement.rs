@@ -429,6 +429,145 @@ pub fn implement(
             g.output(&out_name("color")?, "color3", color);
             g.output(&out_name("fac")?, f, fac);
         }
+        "wave_texture" => {
+            // shaders/nodes/textures.wgsl node_wave. Exact without distortion; the
+            // distortion's noise is MaterialX's fractal noise standing for Kiln's (as the
+            // Noise Texture's implementation).
+            let (f, t) = ("float", "vector3");
+            let detail = match inputs.get("detail") {
+                Some(Input::Float(d)) => *d,
+                None => 2.0,
+                _ => return None,
+            };
+            let octaves = detail.clamp(0.0, 15.0).floor() as i32 + 1;
+            // A wave whose distortion is a constant 0 (Kiln's default) needs no noise.
+            let undistorted = matches!(inputs.get("distortion"), None | Some(Input::Float(0.0)));
+            g.variant = if undistorted {
+                "undistorted".into()
+            } else {
+                format!("octaves{octaves}")
+            };
+            // q = (p · scale + 10⁻⁶) · 0.999999 keeps unit coordinates off the band edges.
+            let q = g.node(
+                "multiply",
+                t,
+                &[("in1", t, Src::I("vector")), ("in2", f, Src::I("scale"))],
+            );
+            let q = g.node("add", t, &[("in1", t, q), ("in2", f, v(0.000001))]);
+            let q = g.node("multiply", t, &[("in1", t, q), ("in2", f, v(0.999999))]);
+            let axis = match text(params, "direction") {
+                "x" => [1.0, 0.0, 0.0],
+                "y" => [0.0, 1.0, 0.0],
+                "z" => [0.0, 0.0, 1.0],
+                "diagonal" => [0.5, 0.5, 0.5],
+                _ => return None,
+            };
+            let n = match text(params, "wave_type") {
+                "bands" => {
+                    let along = Src::V(format!("{}, {}, {}", axis[0], axis[1], axis[2]));
+                    let d = g.node("dotproduct", f, &[("in1", t, q.clone()), ("in2", t, along)]);
+                    g.binary("multiply", f, d, v(20.0))
+                }
+                "rings" => {
+                    // The distance from the axis (all three coordinates for diagonal).
+                    let mask = match text(params, "direction") {
+                        "x" => "0, 1, 1",
+                        "y" => "1, 0, 1",
+                        "z" => "1, 1, 0",
+                        _ => "1, 1, 1",
+                    };
+                    let m = g.binary("multiply", t, q.clone(), Src::V(mask.into()));
+                    let l = g.unary_typed("magnitude", f, t, m);
+                    g.binary("multiply", f, l, v(20.0))
+                }
+                _ => return None,
+            };
+            let mut n = g.binary("add", f, n, Src::I("phase_offset"));
+            if !undistorted {
+                let noise_at = g.node(
+                    "multiply",
+                    t,
+                    &[("in1", t, q), ("in2", f, Src::I("detail_scale"))],
+                );
+                let roughness = g.binary("max", f, Src::I("detail_roughness"), v(0.0));
+                let noise = g.node(
+                    "fractal3d",
+                    f,
+                    &[
+                        ("amplitude", f, v(1.0)),
+                        ("octaves", "integer", Src::V(octaves.to_string())),
+                        ("lacunarity", f, v(2.0)),
+                        ("diminish", f, roughness),
+                        ("position", t, noise_at),
+                    ],
+                );
+                let distorted = g.binary("multiply", f, noise, Src::I("distortion"));
+                n = g.binary("add", f, n, distorted);
+            }
+            let tau = std::f32::consts::TAU;
+            let fraction = |g: &mut Graph, x: Src| {
+                let fl = g.unary("floor", f, x.clone());
+                g.binary("subtract", f, x, fl)
+            };
+            let w = match text(params, "profile") {
+                "saw" => {
+                    let turns = g.binary("divide", f, n, v(tau));
+                    fraction(&mut g, turns)
+                }
+                "triangle" => {
+                    let turns = g.binary("divide", f, n, v(tau));
+                    let shifted = g.binary("add", f, turns.clone(), v(0.5));
+                    let fl = g.unary("floor", f, shifted);
+                    let d = g.binary("subtract", f, turns, fl);
+                    let d = g.unary("absval", f, d);
+                    g.binary("multiply", f, d, v(2.0))
+                }
+                "sine" => {
+                    // 0.5 + 0.5 sin(n − π/2), the argument reduced to [0, 2π) as Kiln's.
+                    let shifted = g.binary("subtract", f, n, v(std::f32::consts::FRAC_PI_2));
+                    let turns = g.binary("divide", f, shifted, v(tau));
+                    let turns = fraction(&mut g, turns);
+                    let angle = g.binary("multiply", f, turns, v(tau));
+                    let s = g.unary("sin", f, angle);
+                    let s = g.binary("multiply", f, s, v(0.5));
+                    g.binary("add", f, s, v(0.5))
+                }
+                _ => return None,
+            };
+            let w = g.clamp(f, w, v(0.0), v(1.0));
+            let color = g.unary_typed("convert", "color3", f, w.clone());
+            g.output(&out_name("color")?, "color3", color);
+            g.output(&out_name("fac")?, f, w);
+        }
+        "geometry" => {
+            // The outputs MaterialX has nodes for are written as those nodes (the
+            // exporter's `coordinate`); this definition serves the others. MaterialX has
+            // no geometric normal: the true normal is the shading normal here. The view
+            // direction points at the surface, Kiln's incoming away from it.
+            let (f, t) = ("float", "vector3");
+            let world = || ("space", "string", Src::V("world".into()));
+            let view = g.node("viewdirection", t, &[world()]);
+            let normal = g.node("normal", t, &[world()]);
+            let facing = g.node(
+                "dotproduct",
+                f,
+                &[("in1", t, view.clone()), ("in2", t, normal.clone())],
+            );
+            let backfacing = g.ifgreater(f, facing, v(0.0), v(1.0), v(0.0));
+            let incoming = g.binary("multiply", t, view, v3(-1.0));
+            let position = g.node("position", t, &[world()]);
+            let tangent = g.node("tangent", t, &[world()]);
+            for (kiln, ty, src) in [
+                ("position", t, position),
+                ("normal", t, normal.clone()),
+                ("true_normal", t, normal),
+                ("tangent", t, tangent),
+                ("incoming", t, incoming),
+                ("backfacing", f, backfacing),
+            ] {
+                g.output(&out_name(kiln)?, ty, src);
+            }
+        }
         "layer_weight" => {
             // shaders/nodes/inputs.wgsl nd_layer_weight; the view direction points at
             // the surface, Kiln's `wo` away from it.
@@ -790,12 +929,7 @@ fn math(g: &mut Graph, op: &str) -> Option<Src> {
             let fl = g.unary("floor", f, a.clone());
             g.binary("subtract", f, a, fl)
         }
-        "truncated_modulo" => {
-            let q = g.binary("divide", f, a.clone(), b.clone());
-            let t = trunc(g, q);
-            let p = g.binary("multiply", f, b, t);
-            g.binary("subtract", f, a, p)
-        }
+        "truncated_modulo" => truncated_modulo(g, a, b),
         "floored_modulo" => g.binary("modulo", f, a, b),
         "snap" => {
             let q = g.binary("divide", f, a, b.clone());
@@ -810,25 +944,7 @@ fn math(g: &mut Graph, op: &str) -> Option<Src> {
         "arctangent" => g.node("atan2", f, &[("iny", f, a), ("inx", f, v(1.0))]),
         "arctan2" => g.node("atan2", f, &[("iny", f, a), ("inx", f, b)]),
         "radians" => g.binary("multiply", f, a, v(std::f32::consts::PI / 180.0)),
-        // value − range · floor((value − min) / range); min where the range is empty.
-        "wrap" => {
-            let range = g.binary("subtract", f, b, c.clone());
-            let from = g.binary("subtract", f, a.clone(), c.clone());
-            let q = g.binary("divide", f, from, range.clone());
-            let fl = g.unary("floor", f, q);
-            let p = g.binary("multiply", f, range.clone(), fl);
-            let wrapped = g.binary("subtract", f, a, p);
-            g.node(
-                "ifequal",
-                f,
-                &[
-                    ("value1", f, range),
-                    ("value2", f, v(0.0)),
-                    ("in1", f, c),
-                    ("in2", f, wrapped),
-                ],
-            )
-        }
+        "wrap" => wrap(g, a, b, c),
         // |fract((a − b) / 2b) · 2b − b|; 0 where b is 0.
         "pingpong" => {
             let twice = g.binary("multiply", f, b.clone(), v(2.0));
@@ -946,6 +1062,76 @@ fn fresnel_dielectric(g: &mut Graph, cos: Src, eta: Src) -> Src {
     g.ifgreater(f, g2, v(0.0), r, v(1.0))
 }
 
+/// Cycles' `wrapf(value, max, min)`: value − range · floor((value − min) / range), range =
+/// max − min; min where the range is empty.
+fn wrap(g: &mut Graph, value: Src, max: Src, min: Src) -> Src {
+    let f = "float";
+    let range = g.binary("subtract", f, max, min.clone());
+    let from = g.binary("subtract", f, value.clone(), min.clone());
+    let q = g.binary("divide", f, from, range.clone());
+    let fl = g.unary("floor", f, q);
+    let p = g.binary("multiply", f, range.clone(), fl);
+    let wrapped = g.binary("subtract", f, value, p);
+    g.node(
+        "ifequal",
+        f,
+        &[
+            ("value1", f, range),
+            ("value2", f, v(0.0)),
+            ("in1", f, min),
+            ("in2", f, wrapped),
+        ],
+    )
+}
+
+/// C's `fmodf` (the remainder truncated toward zero): a − b · trunc(a / b); 0 where b is 0.
+fn truncated_modulo(g: &mut Graph, a: Src, b: Src) -> Src {
+    let f = "float";
+    let q = g.binary("divide", f, a.clone(), b.clone());
+    let t = trunc(g, q);
+    let p = g.binary("multiply", f, b.clone(), t);
+    let r = g.binary("subtract", f, a, p);
+    g.node(
+        "ifequal",
+        f,
+        &[
+            ("value1", f, b),
+            ("value2", f, v(0.0)),
+            ("in1", f, v(0.0)),
+            ("in2", f, r),
+        ],
+    )
+}
+
+/// A float operation applied to each component of vectors: their components separated,
+/// `op` on each, combined.
+fn per_component(g: &mut Graph, inputs: &[Src], op: impl Fn(&mut Graph, &[Src]) -> Src) -> Src {
+    let (f, t) = ("float", "vector3");
+    let separated: Vec<String> = inputs
+        .iter()
+        .map(
+            |x| match g.node("separate3", "multioutput", &[("in", t, x.clone())]) {
+                Src::N(name) => name,
+                _ => unreachable!("a node is named"),
+            },
+        )
+        .collect();
+    let mut parts = Vec::new();
+    for axis in ["outx", "outy", "outz"] {
+        let components: Vec<Src> = separated.iter().map(|s| Src::O(s.clone(), axis)).collect();
+        parts.push(op(g, &components));
+    }
+    g.node(
+        "combine3",
+        t,
+        &[
+            ("in1", f, parts[0].clone()),
+            ("in2", f, parts[1].clone()),
+            ("in3", f, parts[2].clone()),
+        ],
+    )
+}
+
 /// `sign(x) floor(|x|)`.
 fn trunc(g: &mut Graph, x: Src) -> Src {
     let s = g.unary("sign", "float", x.clone());
@@ -1036,6 +1222,44 @@ fn vector_math(g: &mut Graph, op: &str) -> Option<(Src, Src)> {
             let q = g.binary("divide", t, a, b.clone());
             let fl = g.unary("floor", t, q);
             (g.binary("multiply", t, fl, b), zero())
+        }
+        "modulo" => (
+            per_component(g, &[a, b], |g, x| {
+                truncated_modulo(g, x[0].clone(), x[1].clone())
+            }),
+            zero(),
+        ),
+        // Per component: Cycles' wrapf(a, b, c), b the max and c the min.
+        "wrap" => (
+            per_component(g, &[a, b, c], |g, x| {
+                wrap(g, x[0].clone(), x[1].clone(), x[2].clone())
+            }),
+            zero(),
+        ),
+        // Cycles' refract of a by the unit normal n = normalize(b) at IOR ratio eta:
+        // k = 1 − eta² (1 − dot(n, a)²); eta a − (eta dot(n, a) + sqrt(k)) n, 0 where k < 0.
+        "refract" => {
+            let f = "float";
+            let eta = Src::I("scale");
+            let n = g.unary("normalize", t, b);
+            let d = g.node(
+                "dotproduct",
+                f,
+                &[("in1", t, n.clone()), ("in2", t, a.clone())],
+            );
+            let d2 = g.binary("multiply", f, d.clone(), d.clone());
+            let sin2 = g.binary("subtract", f, v(1.0), d2);
+            let e2 = g.binary("multiply", f, eta.clone(), eta.clone());
+            let k = g.binary("multiply", f, e2, sin2);
+            let k = g.binary("subtract", f, v(1.0), k);
+            let root = g.binary("max", f, k.clone(), v(0.0));
+            let root = g.unary("sqrt", f, root);
+            let ed = g.binary("multiply", f, eta.clone(), d);
+            let along = g.binary("add", f, ed, root);
+            let ea = g.node("multiply", t, &[("in1", t, a), ("in2", f, eta)]);
+            let an = g.node("multiply", t, &[("in1", t, n), ("in2", f, along)]);
+            let r = g.binary("subtract", t, ea, an);
+            (g.ifgreater(t, v(0.0), k, zero3(), r), zero())
         }
         _ => return None,
     })

@@ -1027,7 +1027,10 @@ impl<'a> Build<'_, 'a> {
                 let id = scope.graph.add(&name, position(e, node));
                 out(Value::link(&id, "vector"))
             }
-            "ramplr" | "ramptb" => {
+            "ramplr" | "ramptb" | "splitlr" | "splittb" | "ramp4" => {
+                // MaterialX's NG definitions: mix(a, b, clamp(s)) for the ramps,
+                // mix(a, b, aastep(center, s)) for the splits (a step here, unfiltered),
+                // and ramp4's mix(mix(tl, tr, x), mix(bl, br, x), y).
                 let coords = get!("texcoord").unwrap_or_else(|| {
                     let id = coordinates(scope, &format!("{name}_coords"), e, "texture_coordinate");
                     Value::link(&id, "uv")
@@ -1036,28 +1039,58 @@ impl<'a> Build<'_, 'a> {
                     &format!("{name}_split"),
                     Node::new("separate_xyz").input("vector", coords),
                 );
-                let t = Value::link(&split, if category == "ramplr" { "x" } else { "y" });
-                let (a, b) = if category == "ramplr" {
+                let horizontal = matches!(category, "ramplr" | "splitlr");
+                let (x, y) = (Value::link(&split, "x"), Value::link(&split, "y"));
+                let constant = |v: f32| {
+                    if ty == "float" {
+                        Value::Float(v)
+                    } else {
+                        Value::Color([v; 3])
+                    }
+                };
+                let mix = |scope: &mut Scope<'a>, id: &str, t: Value, a: Value, b: Value| {
+                    let mix = if ty == "float" {
+                        Node::new("mix_float")
+                    } else {
+                        Node::new("mix_color").text("blend", "mix")
+                    };
+                    let id = scope.graph.add(
+                        id,
+                        position(e, mix.input("factor", t).input("a", a).input("b", b)),
+                    );
+                    Value::link(&id, "result")
+                };
+                if category == "ramp4" {
+                    // MaterialX's defaults are 0 for every value.
+                    let tl = get!("valuetl").unwrap_or(constant(0.0));
+                    let tr = get!("valuetr").unwrap_or(constant(0.0));
+                    let bl = get!("valuebl").unwrap_or(constant(0.0));
+                    let br = get!("valuebr").unwrap_or(constant(0.0));
+                    let top = mix(scope, &format!("{name}_top"), x.clone(), tl, tr);
+                    let bottom = mix(scope, &format!("{name}_bottom"), x, bl, br);
+                    return out(mix(scope, &name, y, top, bottom));
+                }
+                let t = if horizontal { x } else { y };
+                let (a, b) = if horizontal {
                     ("valuel", "valuer")
                 } else {
                     ("valuet", "valueb")
                 };
-                let zero = if ty == "float" {
-                    Value::Float(0.0)
+                let t = if category.starts_with("split") {
+                    let center = get!("center").unwrap_or(Value::Float(0.5));
+                    let step = Node::new("math")
+                        .text("operation", "greater_than")
+                        .input("a", t)
+                        .input("b", center);
+                    Value::link(&scope.graph.add(&format!("{name}_step"), step), "value")
                 } else {
-                    Value::Color([0.0; 3])
+                    t
                 };
-                let (a, b) = (get!(a).unwrap_or(zero.clone()), get!(b).unwrap_or(zero));
-                let mix = if ty == "float" {
-                    Node::new("mix_float")
-                } else {
-                    Node::new("mix_color").text("blend", "mix")
-                };
-                let id = scope.graph.add(
-                    &name,
-                    position(e, mix.input("factor", t).input("a", a).input("b", b)),
+                let (a, b) = (
+                    get!(a).unwrap_or(constant(0.0)),
+                    get!(b).unwrap_or(constant(0.0)),
                 );
-                out(Value::link(&id, "result"))
+                out(mix(scope, &name, t, a, b))
             }
             "clamp" if ty != "float" => {
                 // Colour clamps to [0, 1] are the clamped result of a no-op mix.

@@ -483,12 +483,7 @@ fn vector_and_mix_implementations_compute_what_kiln_does() {
     // Every operation with a vector result but those without an implementation.
     let vector_results = kiln::material::nodes::VECTOR_MATH_OPERATIONS
         .iter()
-        .filter(|o| {
-            !matches!(
-                **o,
-                "dot" | "distance" | "length" | "refract" | "modulo" | "wrap"
-            )
-        });
+        .filter(|o| !matches!(**o, "dot" | "distance" | "length"));
     for &operation in vector_results {
         let node = op("vector_math", operation)
             .input("a", a)
@@ -496,6 +491,28 @@ fn vector_and_mix_implementations_compute_what_kiln_does() {
             .input("c", c)
             .input("scale", 1.5);
         cases.push((node, "vector"));
+    }
+    // The edges: a zero divisor, an empty wrap range, total internal reflection.
+    for (operation, a, b, c, scale) in [
+        ("modulo", [-1.7, 2.5, 0.9], [0.5, 0.0, -0.4], c, 1.0),
+        (
+            "wrap",
+            [2.3, -0.7, 0.1],
+            [1.0, 1.0, 0.1],
+            [0.0, -1.0, 0.1],
+            1.0,
+        ),
+        ("refract", [0.9, 0.1, -0.2], [0.0, 0.0, 1.0], c, 1.5),
+        ("refract", [0.2, 0.1, -0.97], [0.0, 0.0, 1.0], c, 0.67),
+    ] {
+        cases.push((
+            op("vector_math", operation)
+                .input("a", a)
+                .input("b", b)
+                .input("c", c)
+                .input("scale", scale),
+            "vector",
+        ));
     }
     for operation in ["dot", "distance", "length"] {
         cases.push((
@@ -663,6 +680,22 @@ fn texture_and_mapping_implementations_compute_what_kiln_does() {
                     .input("vector", vector),
                 "fac",
             ));
+        }
+        for &wave_type in choices("wave_texture", "wave_type") {
+            for &direction in choices("wave_texture", "direction") {
+                for &profile in choices("wave_texture", "profile") {
+                    cases.push((
+                        Node::new("wave_texture")
+                            .param("wave_type", Param::Text(wave_type.into()))
+                            .param("direction", Param::Text(direction.into()))
+                            .param("profile", Param::Text(profile.into()))
+                            .input("vector", vector)
+                            .input("scale", 1.3)
+                            .input("phase_offset", 0.7),
+                        "fac",
+                    ));
+                }
+            }
         }
         for vector_type in ["point", "texture", "vector", "normal"] {
             cases.push((
