@@ -215,17 +215,9 @@ enum FarmCommand {
         /// Samples per pixel (default: the scene's).
         #[arg(long, value_parser = clap::value_parser!(u32).range(1..))]
         spp: Option<u32>,
-        /// Frames of a turntable, A..B (B excluded): one task per frame and part.
-        #[arg(long, value_parser = kiln::farm::part::parse_range, requires = "turntable")]
-        frames: Option<std::ops::Range<u32>>,
-        /// Degrees the camera orbits its target over the frames.
-        #[arg(
-            long,
-            value_name = "DEGREES",
-            allow_hyphen_values = true,
-            requires = "frames"
-        )]
-        turntable: Option<f32>,
+        // A turntable: one task per frame and part.
+        #[command(flatten)]
+        animation: AnimationArgs,
         /// The merged image; with frames, `#`s in its name become the frame number.
         #[arg(short, long)]
         output: PathBuf,
@@ -289,6 +281,22 @@ enum MaterialCommand {
     },
 }
 
+/// A turntable's frames, as `kiln render` and `kiln farm slurm` take them.
+#[derive(clap::Args)]
+struct AnimationArgs {
+    /// The frames A..B (B excluded) of a turntable.
+    #[arg(long, value_name = "A..B", value_parser = kiln::farm::part::parse_range, requires = "turntable")]
+    frames: Option<std::ops::Range<u32>>,
+    /// Degrees the camera orbits its target (about its up axis) over --frames.
+    #[arg(
+        long,
+        value_name = "DEGREES",
+        allow_hyphen_values = true,
+        requires = "frames"
+    )]
+    turntable: Option<f32>,
+}
+
 #[derive(clap::Args)]
 struct RenderArgs {
     /// A .kiln scene file.
@@ -346,21 +354,13 @@ struct RenderArgs {
     /// `kiln merge`. --spp is the whole render's samples per pixel.
     #[arg(long, value_name = "A..B", value_parser = kiln::farm::part::parse_range)]
     samples: Option<std::ops::Range<u32>>,
-    /// Render the frames A..B (B excluded) of a turntable, each to OUTPUT with its frame
-    /// number (`#`s in the name, else `_NNNN` before the extension).
-    #[arg(long, value_name = "A..B", value_parser = kiln::farm::part::parse_range, requires = "turntable")]
-    frames: Option<std::ops::Range<u32>>,
+    // A turntable, its frames each written to OUTPUT with its frame number (`#`s in the
+    // name, else `_NNNN` before the extension).
+    #[command(flatten)]
+    animation: AnimationArgs,
     /// Render only this frame of --frames.
     #[arg(long, requires = "frames")]
     frame: Option<u32>,
-    /// Degrees the camera orbits its target (about its up axis) over --frames.
-    #[arg(
-        long,
-        value_name = "DEGREES",
-        allow_hyphen_values = true,
-        requires = "frames"
-    )]
-    turntable: Option<f32>,
     /// Seed of the random sequence; the same seed gives the same image (default: the
     /// scene's, or 0).
     #[arg(long)]
@@ -920,10 +920,14 @@ fn list_plugins(plugins: &PluginHost) -> Result<()> {
 
 fn render(args: RenderArgs, backend: Option<Backend>, plugins: &PluginHost) -> Result<()> {
     // Which frames, and where each goes.
-    let turntable = args.frames.clone().map(|frames| kiln::farm::Turntable {
-        degrees: args.turntable.unwrap_or(0.0),
-        frames,
-    });
+    let turntable = args
+        .animation
+        .frames
+        .clone()
+        .map(|frames| kiln::farm::Turntable {
+            degrees: args.animation.turntable.unwrap_or(0.0),
+            frames,
+        });
     let frames: Vec<Option<u32>> = match (&turntable, args.frame) {
         (Some(t), Some(f)) if !t.frames.contains(&f) => bail!(
             "--frame {f} is not one of --frames {}..{}",
@@ -1501,8 +1505,7 @@ fn farm(command: FarmCommand, plugins: &PluginHost) -> Result<()> {
             scene,
             parts,
             spp,
-            frames,
-            turntable,
+            animation: AnimationArgs { frames, turntable },
             output,
             dir,
             sbatch_args,

@@ -142,25 +142,14 @@ fn a_job_array_renders_the_bits_of_one_process_and_a_cancelled_task_is_resubmitt
         ],
     ));
 
-    // Four parts through Slurm, merged by the dependent job.
-    let said = ok(cluster.kiln(
-        w,
-        &[
-            &[
-                "farm",
-                "slurm",
-                "--parts",
-                "4",
-                "--spp",
-                "16",
-                "-o",
-                "farmed.exr",
-                "--submit",
-            ][..],
-            &size,
-        ]
-        .concat(),
-    ));
+    // Four parts of 16 spp through Slurm, merged by the dependent job.
+    let submit = |output: &str| {
+        let args = [
+            "farm", "slurm", "--parts", "4", "--spp", "16", "-o", output, "--submit",
+        ];
+        ok(cluster.kiln(w, &[&args[..], &size].concat()))
+    };
+    let said = submit("farmed.exr");
     assert!(said.contains("submitted job array"), "{said}");
     cluster.wait_idle();
     let farm = w.join("farmed.farm");
@@ -170,24 +159,7 @@ fn a_job_array_renders_the_bits_of_one_process_and_a_cancelled_task_is_resubmitt
 
     // One task cancelled before it runs: its merge job is cancelled with it (Slurm's
     // kill_invalid_depend), status names the missing range, and resubmit completes it.
-    ok(cluster.kiln(
-        w,
-        &[
-            &[
-                "farm",
-                "slurm",
-                "--parts",
-                "4",
-                "--spp",
-                "16",
-                "-o",
-                "again.exr",
-                "--submit",
-            ][..],
-            &size,
-        ]
-        .concat(),
-    ));
+    submit("again.exr");
     let farm = w.join("again.farm");
     let job = kiln::farm::slurm::read_farm(&farm).unwrap();
     let array = &job.submissions[0].render_job;

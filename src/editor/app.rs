@@ -796,7 +796,8 @@ impl EditorApp {
         };
         self.device_lost = Some(reason);
         (self.on_device_lost)(lost);
-        true
+        // The notice shows from this frame on.
+        self.handle_device_loss(ui)
     }
 
     /// Writes a changed document to the recovery autosave every [`AUTOSAVE_EVERY`], on a

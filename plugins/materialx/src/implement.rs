@@ -94,6 +94,21 @@ impl Graph {
         )
     }
 
+    /// `x == 0 ? zero : otherwise`, of floats.
+    fn if_zero(&mut self, x: Src, zero: Src, otherwise: Src) -> Src {
+        let f = "float";
+        self.node(
+            "ifequal",
+            f,
+            &[
+                ("value1", f, x),
+                ("value2", f, v(0.0)),
+                ("in1", f, zero),
+                ("in2", f, otherwise),
+            ],
+        )
+    }
+
     /// `bg + (fg - bg) mix`.
     fn mix(&mut self, ty: &str, bg: Src, fg: Src, mix: Src) -> Src {
         self.node(
@@ -424,22 +439,14 @@ pub fn implement(
                 }
                 _ => return None,
             };
-            let fac = g.clamp(f, fac, v(0.0), v(1.0));
-            let color = g.unary_typed("convert", "color3", f, fac.clone());
-            g.output(&out_name("color")?, "color3", color);
-            g.output(&out_name("fac")?, f, fac);
+            grey_outputs(&mut g, fac, out_name("color")?, out_name("fac")?);
         }
         "wave_texture" => {
             // shaders/nodes/textures.wgsl node_wave. Exact without distortion; the
             // distortion's noise is MaterialX's fractal noise standing for Kiln's (as the
             // Noise Texture's implementation).
             let (f, t) = ("float", "vector3");
-            let detail = match inputs.get("detail") {
-                Some(Input::Float(d)) => *d,
-                None => 2.0,
-                _ => return None,
-            };
-            let octaves = detail.clamp(0.0, 15.0).floor() as i32 + 1;
+            let octaves = octaves(inputs)?;
             // A wave whose distortion is a constant 0 (Kiln's default) needs no noise.
             let undistorted = matches!(inputs.get("distortion"), None | Some(Input::Float(0.0)));
             g.variant = if undistorted {
@@ -534,10 +541,7 @@ pub fn implement(
                 }
                 _ => return None,
             };
-            let w = g.clamp(f, w, v(0.0), v(1.0));
-            let color = g.unary_typed("convert", "color3", f, w.clone());
-            g.output(&out_name("color")?, "color3", color);
-            g.output(&out_name("fac")?, f, w);
+            grey_outputs(&mut g, w, out_name("color")?, out_name("fac")?);
         }
         "geometry" => {
             // The outputs MaterialX has nodes for are written as those nodes (the
@@ -593,12 +597,7 @@ pub fn implement(
             // An approximation: MaterialX's fractal noise with Kiln's frequency, octave
             // count, roughness and lacunarity, mapped from [-1, 1] onto [0, 1] as Kiln's
             // noise lies; not Kiln's values, and without distortion.
-            let detail = match inputs.get("detail") {
-                Some(Input::Float(d)) => *d,
-                None => 2.0,
-                _ => return None,
-            };
-            let octaves = detail.clamp(0.0, 15.0).floor() as i32 + 1;
+            let octaves = octaves(inputs)?;
             g.variant = format!("octaves{octaves}");
             let t = "vector3";
             let p = g.node(
@@ -880,16 +879,7 @@ fn math(g: &mut Graph, op: &str) -> Option<Src> {
         // Division by zero gives 0.
         "divide" => {
             let q = g.binary("divide", f, a, b.clone());
-            g.node(
-                "ifequal",
-                f,
-                &[
-                    ("value1", f, b),
-                    ("value2", f, v(0.0)),
-                    ("in1", f, v(0.0)),
-                    ("in2", f, q),
-                ],
-            )
+            g.if_zero(b, v(0.0), q)
         }
         "multiply_add" => {
             let p = g.binary("multiply", f, a, b);
@@ -955,16 +945,7 @@ fn math(g: &mut Graph, op: &str) -> Option<Src> {
             let s = g.binary("multiply", f, fr, twice);
             let s = g.binary("subtract", f, s, b.clone());
             let r = g.unary("absval", f, s);
-            g.node(
-                "ifequal",
-                f,
-                &[
-                    ("value1", f, b),
-                    ("value2", f, v(0.0)),
-                    ("in1", f, v(0.0)),
-                    ("in2", f, r),
-                ],
-            )
+            g.if_zero(b, v(0.0), r)
         }
         "smooth_min" => smooth_min(g, a, b, c),
         "smooth_max" => {
@@ -1011,16 +992,7 @@ fn smooth_min(g: &mut Graph, a: Src, b: Src, k: Src) -> Src {
     let t = g.binary("multiply", f, t, v(1.0 / 6.0));
     let m = g.binary("min", f, a, b);
     let smooth = g.binary("subtract", f, m.clone(), t);
-    g.node(
-        "ifequal",
-        f,
-        &[
-            ("value1", f, k),
-            ("value2", f, v(0.0)),
-            ("in1", f, m),
-            ("in2", f, smooth),
-        ],
-    )
+    g.if_zero(k, m, smooth)
 }
 
 /// The cosine between `normal` and the direction toward the viewer (Kiln's `wo`; the
@@ -1062,6 +1034,25 @@ fn fresnel_dielectric(g: &mut Graph, cos: Src, eta: Src) -> Src {
     g.ifgreater(f, g2, v(0.0), r, v(1.0))
 }
 
+/// A texture's value clamped to [0, 1], as its `fac` and its grey `color`.
+fn grey_outputs(g: &mut Graph, value: Src, color: String, fac: String) {
+    let value = g.clamp("float", value, v(0.0), v(1.0));
+    let grey = g.unary_typed("convert", "color3", "float", value.clone());
+    g.output(&color, "color3", grey);
+    g.output(&fac, "float", value);
+}
+
+/// The octaves of Kiln's fractal noise from a constant `detail` input (Kiln's default 2):
+/// `floor(clamp(detail, 0, 15)) + 1`; None for a connected detail.
+fn octaves(inputs: &BTreeMap<String, Input>) -> Option<i32> {
+    let detail = match inputs.get("detail") {
+        Some(Input::Float(d)) => *d,
+        None => 2.0,
+        _ => return None,
+    };
+    Some(detail.clamp(0.0, 15.0).floor() as i32 + 1)
+}
+
 /// Cycles' `wrapf(value, max, min)`: value − range · floor((value − min) / range), range =
 /// max − min; min where the range is empty.
 fn wrap(g: &mut Graph, value: Src, max: Src, min: Src) -> Src {
@@ -1072,16 +1063,7 @@ fn wrap(g: &mut Graph, value: Src, max: Src, min: Src) -> Src {
     let fl = g.unary("floor", f, q);
     let p = g.binary("multiply", f, range.clone(), fl);
     let wrapped = g.binary("subtract", f, value, p);
-    g.node(
-        "ifequal",
-        f,
-        &[
-            ("value1", f, range),
-            ("value2", f, v(0.0)),
-            ("in1", f, min),
-            ("in2", f, wrapped),
-        ],
-    )
+    g.if_zero(range, min, wrapped)
 }
 
 /// C's `fmodf` (the remainder truncated toward zero): a − b · trunc(a / b); 0 where b is 0.
@@ -1091,16 +1073,7 @@ fn truncated_modulo(g: &mut Graph, a: Src, b: Src) -> Src {
     let t = trunc(g, q);
     let p = g.binary("multiply", f, b.clone(), t);
     let r = g.binary("subtract", f, a, p);
-    g.node(
-        "ifequal",
-        f,
-        &[
-            ("value1", f, b),
-            ("value2", f, v(0.0)),
-            ("in1", f, v(0.0)),
-            ("in2", f, r),
-        ],
-    )
+    g.if_zero(b, v(0.0), r)
 }
 
 /// A float operation applied to each component of vectors: their components separated,
