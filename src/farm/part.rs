@@ -11,8 +11,6 @@
 //! image made from it the same bits.
 
 use std::collections::HashMap;
-use std::fmt::Write as _;
-use std::hash::Hasher;
 use std::ops::Range;
 use std::path::{Path, PathBuf};
 
@@ -24,7 +22,7 @@ use exr::prelude::{
 use crate::film::ExactFilm;
 use crate::film::output::ViewSettings;
 use crate::film::tonemap::Tonemap;
-use crate::render::RenderSettings;
+use crate::render::{RenderSettings, checkpoint};
 use crate::scene::Scene;
 
 /// The header attributes' prefix.
@@ -52,34 +50,14 @@ pub struct PartHeader {
     pub view: ViewSettings,
 }
 
-/// A stable 64-bit hash (FNV-1a) of a value's `Debug` text, which prints every field and
-/// floats exactly: the same on every machine running this version of Kiln.
-fn debug_hash(value: &dyn std::fmt::Debug) -> u64 {
-    struct Hashing(fnv::FnvHasher);
-    impl std::fmt::Write for Hashing {
-        fn write_str(&mut self, s: &str) -> std::fmt::Result {
-            self.0.write(s.as_bytes());
-            Ok(())
-        }
-    }
-    let mut h = Hashing(fnv::FnvHasher::default());
-    // Streamed, never held as one string (a scene's meshes print long).
-    let _ = write!(h, "{value:?}{}", env!("CARGO_PKG_VERSION"));
-    h.0.finish()
-}
-
 /// The hash of everything in the scene (geometry, materials, lights, camera).
 pub fn scene_hash(scene: &Scene) -> u64 {
-    debug_hash(scene)
+    checkpoint::debug_hash(scene)
 }
 
-/// The hash of the settings that decide a sample's value: all of them but the samples per
-/// pixel, which differ between the parts of a render.
+/// The hash of the settings that decide a sample's value ([`checkpoint::settings_hash`]).
 pub fn settings_hash(settings: &RenderSettings) -> u64 {
-    debug_hash(&RenderSettings {
-        samples_per_pixel: 0,
-        ..*settings
-    })
+    checkpoint::settings_hash(settings)
 }
 
 impl PartHeader {

@@ -38,30 +38,36 @@ pub fn path_for(output: &Path) -> PathBuf {
     output.with_file_name(name)
 }
 
-/// A hash of everything that decides a render's samples: the scene, the settings but the
-/// samples per pixel (a resumed render may go on to more), and the first sample index (a
-/// part of a split render starts past 0). The same binary gives the same key; another
-/// build may refuse an older checkpoint, never take a wrong one.
-pub fn key(scene: &Scene, settings: &RenderSettings, first_sample: u32) -> u64 {
-    struct Hashing(std::collections::hash_map::DefaultHasher);
+/// A stable 64-bit hash (FNV-1a) of a value's `Debug` text, which prints every field and
+/// floats exactly, and of Kiln's version: the same on every machine running this version.
+/// Streamed, never held as one string (a scene's meshes print long).
+pub fn debug_hash(value: &dyn std::fmt::Debug) -> u64 {
+    struct Hashing(fnv::FnvHasher);
     impl std::fmt::Write for Hashing {
         fn write_str(&mut self, s: &str) -> std::fmt::Result {
             self.0.write(s.as_bytes());
             Ok(())
         }
     }
-    let mut h = Hashing(Default::default());
-    let settings = RenderSettings {
+    let mut h = Hashing(fnv::FnvHasher::default());
+    let _ = write!(h, "{value:?}{}", env!("CARGO_PKG_VERSION"));
+    h.0.finish()
+}
+
+/// The hash of the settings that decide a sample's value: all of them but the samples per
+/// pixel (a resumed render may go on to more; the parts of a split render differ in it).
+pub fn settings_hash(settings: &RenderSettings) -> u64 {
+    debug_hash(&RenderSettings {
         samples_per_pixel: 0,
         ..*settings
-    };
-    // Debug prints every field, floats exactly; streamed, never held as one string.
-    let _ = write!(
-        h,
-        "{scene:?}{settings:?}{first_sample}{}",
-        env!("CARGO_PKG_VERSION")
-    );
-    h.0.finish()
+    })
+}
+
+/// A hash of everything that decides a render's samples: the scene, the settings
+/// ([`settings_hash`]), and the first sample index (a part of a split render starts past
+/// 0). Another build may refuse an older checkpoint, never take a wrong one.
+pub fn key(scene: &Scene, settings: &RenderSettings, first_sample: u32) -> u64 {
+    debug_hash(&(scene, settings_hash(settings), first_sample))
 }
 
 impl Checkpoint {
