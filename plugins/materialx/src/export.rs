@@ -1134,14 +1134,20 @@ fn group_outputs(group: &read::Group) -> (Vec<(String, String, String)>, String)
     output_names(&outputs, &inputs)
 }
 
-/// A Kiln node type's outputs as MaterialX names them, and its node type.
+/// A Kiln node type's outputs as MaterialX names them (apart from its inputs and its
+/// parameters, which are inputs too: Voronoi's `distance` is both), and its node type.
 fn type_outputs(node_type: &NodeType) -> (Vec<(String, String, String)>, String) {
     let outputs: Vec<(String, String)> = node_type
         .outputs
         .iter()
         .map(|o| (o.name.clone(), table::mx_type(o.ty.name()).to_owned()))
         .collect();
-    let inputs: Vec<&str> = node_type.inputs.iter().map(|s| s.name.as_str()).collect();
+    let inputs: Vec<&str> = node_type
+        .inputs
+        .iter()
+        .map(|s| s.name.as_str())
+        .chain(node_type.params.iter().map(|p| p.name.as_str()))
+        .collect();
     output_names(&outputs, &inputs)
 }
 

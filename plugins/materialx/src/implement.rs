@@ -1,9 +1,11 @@
 //! Node-graph implementations of Kiln nodes in MaterialX's standard nodes, so that other
 //! tools render the `kiln_TYPE` nodes the exporter writes ([`crate::export`]): for each
 //! Kiln node (with its parameters; a colour ramp with its stops), a graph computing what
-//! Kiln's WGSL does, reading the node definition's inputs by `interfacename`. Kiln nodes
-//! without one (its noises, Brick, Wave, volumes, …) are declared without an
-//! implementation (docs/MATERIALX.md lists them).
+//! Kiln's WGSL does, reading the node definition's inputs by `interfacename`; where Kiln
+//! hashes integers (its noises, Brick's tint, White Noise, Object Info's random number),
+//! MaterialX's own noises stand in. Kiln nodes without one (Voronoi in other metrics, the
+//! image nodes MaterialX reads directly, …) are declared without an implementation
+//! (docs/MATERIALX.md lists them).
 
 use std::fmt::Write as _;
 
@@ -199,39 +201,19 @@ pub fn implement(
             g.output(&out_name("result")?, ty, r);
         }
         "mix_color" => {
-            let (a, b, c) = (Src::I("a"), Src::I("b"), "color3");
-            let blended = match text(params, "blend") {
-                "mix" => Src::I("b"),
-                "multiply" => g.binary("multiply", c, a.clone(), b),
-                "add" => g.binary("add", c, a.clone(), b),
-                "subtract" => g.binary("subtract", c, a.clone(), b),
-                "divide" => g.binary("divide", c, a.clone(), b),
-                "darken" => g.binary("min", c, a.clone(), b),
-                "lighten" => g.binary("max", c, a.clone(), b),
-                "difference" => {
-                    let d = g.binary("subtract", c, a.clone(), b);
-                    g.unary("absval", c, d)
-                }
-                "screen" => {
-                    let ia = g.binary("subtract", c, v3(1.0), a.clone());
-                    let ib = g.binary("subtract", c, v3(1.0), b);
-                    let p = g.binary("multiply", c, ia, ib);
-                    g.binary("subtract", c, v3(1.0), p)
-                }
-                "exclusion" => {
-                    let s = g.binary("add", c, a.clone(), b.clone());
-                    let p = g.binary("multiply", c, a.clone(), b);
-                    let p2 = g.binary("multiply", c, p, v3(2.0));
-                    g.binary("subtract", c, s, p2)
-                }
-                "linear_light" => {
-                    let b2 = g.binary("multiply", c, b, v3(2.0));
-                    let s = g.binary("add", c, a.clone(), b2);
-                    g.binary("subtract", c, s, v3(1.0))
-                }
-                _ => return None,
+            // shaders/nodes/color.wgsl node_mix_color, whose factor is clamped.
+            let (a, c) = (Src::I("a"), "color3");
+            let blend = text(params, "blend");
+            let t = g.clamp("float", Src::I("factor"), v(0.0), v(1.0));
+            let r = match blend_target(&mut g, blend) {
+                Some(blended) => g.mix(c, a, blended, t),
+                None => blend_mode(&mut g, blend, t)?,
             };
-            let r = g.mix(c, a, blended, Src::I("factor"));
+            let r = if blend == "exclusion" {
+                g.binary("max", c, r, v3(0.0))
+            } else {
+                r
+            };
             let r = if flag(params, "clamp_result") {
                 g.clamp(c, r, v3(0.0), v3(1.0))
             } else {
@@ -669,42 +651,148 @@ pub fn implement(
             let reflection = g.node("reflect", t, &[("in", t, view)]);
             g.output(&out_name("reflection")?, t, reflection);
         }
-        "voronoi_texture"
-            if text(params, "feature") == "f1" && text(params, "distance") == "euclidean" =>
-        {
-            // An approximation: MaterialX's Worley noise (the distance to the nearest
-            // jittered point) at Kiln's frequency and randomness; a cell noise of the
-            // coordinates stands for the nearest point's colour, the cell's centre for
-            // its position.
-            let t = "vector3";
-            let p = g.node(
-                "multiply",
-                t,
-                &[
-                    ("in1", t, Src::I("vector")),
-                    ("in2", "float", Src::I("scale")),
-                ],
-            );
-            let distance = g.node(
-                "worleynoise3d",
-                "float",
-                &[
-                    ("position", t, p.clone()),
-                    ("jitter", "float", Src::I("randomness")),
-                ],
-            );
-            let cell = g.unary("floor", t, p);
-            let random = g.node("cellnoise3d", "float", &[("position", t, cell.clone())]);
-            let color = g.unary_typed("convert", "color3", "float", random);
-            let centre = g.binary("add", t, cell, v3(0.5));
-            let position = g.node(
-                "divide",
-                t,
-                &[("in1", t, centre), ("in2", "float", Src::I("scale"))],
-            );
+        "voronoi_texture" => {
+            let (distance, color, position) =
+                voronoi(&mut g, text(params, "distance"), text(params, "feature"))?;
             g.output(&out_name("distance")?, "float", distance);
             g.output(&out_name("color")?, "color3", color);
-            g.output(&out_name("position")?, t, position);
+            g.output(&out_name("position")?, "vector3", position);
+        }
+        "brick_texture" => {
+            // shaders/nodes/textures.wgsl node_brick, exact but for the brick's tint:
+            // Kiln's integer hash of the brick and row has no standard node, so
+            // MaterialX's cell noise of (brick, row) stands for it (the same in [0, 1),
+            // not the same values). A bias of ±1 saturates the tint: then exact too.
+            let (f, t) = ("float", "vector3");
+            let q = g.node(
+                "multiply",
+                t,
+                &[("in1", t, Src::I("vector")), ("in2", f, Src::I("scale"))],
+            );
+            let q = match g.node("separate3", "multioutput", &[("in", t, q)]) {
+                Src::N(name) => name,
+                _ => unreachable!("a node is named"),
+            };
+            let (qx, qy) = (Src::O(q.clone(), "outx"), Src::O(q, "outy"));
+            let rh = g.binary("max", f, Src::I("row_height"), v(1e-6));
+            let row = g.binary("divide", f, qy.clone(), rh.clone());
+            let row = g.unary("floor", f, row);
+            let rounded = |g: &mut Graph, x: &'static str| {
+                let h = g.binary("add", f, Src::I(x), v(0.5));
+                g.unary("floor", f, h)
+            };
+            let offset_frequency = rounded(&mut g, "offset_frequency");
+            let squash_frequency = rounded(&mut g, "squash_frequency");
+            // `when` where the row is a multiple of `frequency` and neither frequency is
+            // 0, `otherwise` elsewhere.
+            let every = |g: &mut Graph, frequency: Src, when: Src, otherwise: Src| {
+                let m = g.binary("modulo", f, row.clone(), frequency);
+                let r = g.if_zero(m, when, otherwise.clone());
+                let r = g.if_zero(squash_frequency.clone(), otherwise.clone(), r);
+                g.if_zero(offset_frequency.clone(), otherwise, r)
+            };
+            let squashed = g.binary("multiply", f, Src::I("brick_width"), Src::I("squash"));
+            let bw = every(
+                &mut g,
+                squash_frequency.clone(),
+                squashed,
+                Src::I("brick_width"),
+            );
+            let shift = g.binary("multiply", f, bw.clone(), Src::I("offset"));
+            let shift = every(&mut g, offset_frequency.clone(), shift, v(0.0));
+            let bw = g.binary("max", f, bw, v(1e-6));
+            let shifted = g.binary("add", f, qx, shift);
+            let brick = g.binary("divide", f, shifted.clone(), bw.clone());
+            let brick = g.unary("floor", f, brick);
+            let start = g.binary("multiply", f, bw.clone(), brick.clone());
+            let x = g.binary("subtract", f, shifted, start);
+            let bottom = g.binary("multiply", f, rh.clone(), row.clone());
+            let y = g.binary("subtract", f, qy, bottom);
+            let to_right = g.binary("subtract", f, bw, x.clone());
+            let to_top = g.binary("subtract", f, rh, y.clone());
+            let near = g.binary("min", f, x, y);
+            let far = g.binary("min", f, to_right, to_top);
+            let min_dist = g.binary("min", f, near, far);
+            // Mortar where min_dist < mortar_size: 1 without smoothing, else a smoothstep.
+            let ratio = g.binary("divide", f, min_dist.clone(), Src::I("mortar_size"));
+            let ratio = g.if_zero(Src::I("mortar_size"), v(0.0), ratio);
+            let inside = g.binary("subtract", f, v(1.0), ratio);
+            let stepped = g.binary("divide", f, inside, Src::I("mortar_smooth"));
+            let stepped = g.node(
+                "smoothstep",
+                f,
+                &[("in", f, stepped), ("low", f, v(0.0)), ("high", f, v(1.0))],
+            );
+            let mortar = g.if_zero(Src::I("mortar_smooth"), v(1.0), stepped);
+            let fac = g.ifgreater(f, Src::I("mortar_size"), min_dist, mortar, v(0.0));
+            let cell = g.node("combine2", "vector2", &[("in1", f, brick), ("in2", f, row)]);
+            let noise = g.node("cellnoise2d", f, &[("texcoord", "vector2", cell)]);
+            let tint = g.binary("add", f, noise, Src::I("bias"));
+            let tint = g.clamp(f, tint, v(0.0), v(1.0));
+            let c = "color3";
+            let brick_color = g.mix(c, Src::I("color1"), Src::I("color2"), tint);
+            let color = g.mix(c, brick_color, Src::I("mortar"), fac.clone());
+            g.output(&out_name("color")?, c, color);
+            g.output(&out_name("fac")?, f, fac);
+        }
+        "white_noise_texture" => {
+            // An approximation, as MaterialX's randomfloat: Kiln hashes the bits of the
+            // position, MaterialX's cell noise its floor, so the position is scaled by
+            // 4096 first. Equal in distribution (uniform in [0, 1), one value per point
+            // of a floored input), not in value.
+            let t = "vector3";
+            let p = g.binary("multiply", t, Src::I("vector"), v3(4096.0));
+            let noise = |g: &mut Graph, offset: [f32; 3]| {
+                let at = g.binary(
+                    "add",
+                    t,
+                    p.clone(),
+                    Src::V(format!("{}, {}, {}", offset[0], offset[1], offset[2])),
+                );
+                g.node("cellnoise3d", "float", &[("position", t, at)])
+            };
+            let value = noise(&mut g, [0.0; 3]);
+            let channels = [
+                noise(&mut g, [65536.0, 0.0, 0.0]),
+                noise(&mut g, [0.0, 65536.0, 0.0]),
+                noise(&mut g, [0.0, 0.0, 65536.0]),
+            ];
+            let color = g.node(
+                "combine3",
+                "color3",
+                &[
+                    ("in1", "float", channels[0].clone()),
+                    ("in2", "float", channels[1].clone()),
+                    ("in3", "float", channels[2].clone()),
+                ],
+            );
+            g.output(&out_name("value")?, "float", value);
+            g.output(&out_name("color")?, "color3", color);
+        }
+        "object_info" => {
+            // The instance's origin exactly; its random number, which MaterialX has no
+            // notion of, as a cell noise of that origin (one value per instance, uniform
+            // in [0, 1), not Kiln's).
+            let t = "vector3";
+            let location = g.node(
+                "transformpoint",
+                t,
+                &[
+                    ("in", t, v3(0.0)),
+                    ("fromspace", "string", Src::V("object".into())),
+                    ("tospace", "string", Src::V("world".into())),
+                ],
+            );
+            let at = g.binary("multiply", t, location.clone(), v3(4096.0));
+            let random = g.node("cellnoise3d", "float", &[("position", t, at)]);
+            g.output(&out_name("random")?, "float", random);
+            g.output(&out_name("location")?, t, location);
+        }
+        "volume_absorption" | "volume_scatter" | "principled_volume" => {
+            // shaders/nodes/volume.wgsl's coefficients as MaterialX's VDF (absorption and
+            // scattering per unit length, Henyey–Greenstein anisotropy) and EDF
+            // (emission per unit length): exact.
+            volume(&mut g, kind, &out_name("volume")?);
         }
         "fresnel" => {
             // shaders/nodes/inputs.wgsl nd_fresnel: seen from behind, the interface is
@@ -1074,6 +1162,369 @@ fn truncated_modulo(g: &mut Graph, a: Src, b: Src) -> Src {
     let p = g.binary("multiply", f, b.clone(), t);
     let r = g.binary("subtract", f, a, p);
     g.if_zero(b, v(0.0), r)
+}
+
+/// A volume shader node (shaders/nodes/volume.wgsl) as MaterialX's `volume` of a VDF and,
+/// for the Principled Volume, a uniform EDF: output `output`.
+fn volume(g: &mut Graph, kind: &str, output: &str) {
+    let (f, t, c) = ("float", "vector3", "color3");
+    let density = g.binary("max", f, Src::I("density"), v(0.0));
+    let times_density = |g: &mut Graph, x: Src| {
+        let x = g.node("multiply", c, &[("in1", c, x), ("in2", f, density.clone())]);
+        g.unary_typed("convert", t, c, x)
+    };
+    let anisotropy = |g: &mut Graph| g.clamp(f, Src::I("anisotropy"), v(-0.999), v(0.999));
+    let mut closures = Vec::new();
+    match kind {
+        "volume_absorption" => {
+            let colour = g.clamp(c, Src::I("color"), v3(0.0), v3(1.0));
+            let lost = g.binary("subtract", c, v3(1.0), colour);
+            let absorption = times_density(g, lost);
+            let vdf = g.node("absorption_vdf", "VDF", &[("absorption", t, absorption)]);
+            closures.push(("vdf", "VDF", vdf));
+        }
+        "volume_scatter" => {
+            let colour = g.binary("max", c, Src::I("color"), v3(0.0));
+            let scattering = times_density(g, colour);
+            let anisotropy = anisotropy(g);
+            let vdf = g.node(
+                "anisotropic_vdf",
+                "VDF",
+                &[("scattering", t, scattering), ("anisotropy", f, anisotropy)],
+            );
+            closures.push(("vdf", "VDF", vdf));
+        }
+        _ => {
+            let colour = g.binary("max", c, Src::I("color"), v3(0.0));
+            let tint = g.binary("max", c, Src::I("absorption_color"), v3(0.0));
+            // MaterialX has no square root of a colour.
+            let tint = g.node("power", c, &[("in1", c, tint), ("in2", f, v(0.5))]);
+            let tint = g.binary("subtract", c, v3(1.0), tint);
+            let tint = g.binary("max", c, tint, v3(0.0));
+            let lost = g.binary("subtract", c, v3(1.0), colour.clone());
+            let lost = g.binary("max", c, lost, v3(0.0));
+            let lost = g.binary("multiply", c, lost, tint);
+            let absorption = times_density(g, lost);
+            let scattering = times_density(g, colour);
+            let anisotropy = anisotropy(g);
+            let vdf = g.node(
+                "anisotropic_vdf",
+                "VDF",
+                &[
+                    ("absorption", t, absorption),
+                    ("scattering", t, scattering),
+                    ("anisotropy", f, anisotropy),
+                ],
+            );
+            let strength = g.binary("max", f, Src::I("emission_strength"), v(0.0));
+            let emission = g.binary("max", c, Src::I("emission_color"), v3(0.0));
+            let emission = g.node("multiply", c, &[("in1", c, emission), ("in2", f, strength)]);
+            let edf = g.node("uniform_edf", "EDF", &[("color", c, emission)]);
+            closures.push(("vdf", "VDF", vdf));
+            closures.push(("edf", "EDF", edf));
+        }
+    }
+    let shader = g.node("volume", "volumeshader", &closures);
+    g.output(output, "volumeshader", shader);
+}
+
+/// The colour a Mix node's blend mode mixes toward by the factor, for the modes that are
+/// such a mix (`a + t (blended − a)`); `None` for the others.
+fn blend_target(g: &mut Graph, mode: &str) -> Option<Src> {
+    let (a, b, c) = (Src::I("a"), Src::I("b"), "color3");
+    Some(match mode {
+        "mix" => b,
+        "multiply" => g.binary("multiply", c, a, b),
+        "add" => g.binary("add", c, a, b),
+        "subtract" => g.binary("subtract", c, a, b),
+        "darken" => g.binary("min", c, a, b),
+        "lighten" => g.binary("max", c, a, b),
+        "difference" => {
+            let d = g.binary("subtract", c, a, b);
+            g.unary("absval", c, d)
+        }
+        "screen" => {
+            let ia = g.binary("subtract", c, v3(1.0), a);
+            let ib = g.binary("subtract", c, v3(1.0), b);
+            let p = g.binary("multiply", c, ia, ib);
+            g.binary("subtract", c, v3(1.0), p)
+        }
+        "exclusion" => {
+            let s = g.binary("add", c, a.clone(), b.clone());
+            let p = g.binary("multiply", c, a, b);
+            let p2 = g.binary("multiply", c, p, v3(2.0));
+            g.binary("subtract", c, s, p2)
+        }
+        "linear_light" => {
+            let b2 = g.binary("multiply", c, b, v3(2.0));
+            let s = g.binary("add", c, a, b2);
+            g.binary("subtract", c, s, v3(1.0))
+        }
+        _ => return None,
+    })
+}
+
+/// The Mix node's other blend modes by factor `t` (already clamped), as
+/// shaders/nodes/color.wgsl computes them: per channel (overlay, dodge, burn), soft
+/// light, and the HSV modes (hue, saturation, value, color); divide, which leaves a
+/// channel alone where b's is 0.
+fn blend_mode(g: &mut Graph, mode: &str, t: Src) -> Option<Src> {
+    let (a, b, c, f) = (Src::I("a"), Src::I("b"), "color3", "float");
+    let tm = g.binary("subtract", f, v(1.0), t.clone());
+    let per_channel = |g: &mut Graph, op: &dyn Fn(&mut Graph, Src, Src) -> Src| {
+        let vectors = [a.clone(), b.clone()].map(|x| g.unary_typed("convert", "vector3", c, x));
+        let r = per_component(g, &vectors, |g, ab| op(g, ab[0].clone(), ab[1].clone()));
+        g.unary_typed("convert", c, "vector3", r)
+    };
+    // The hue, saturation and value of a colour.
+    let hsv = |g: &mut Graph, x: Src| {
+        let hsv = g.unary("rgbtohsv", c, x);
+        match g.node("separate3", "multioutput", &[("in", c, hsv)]) {
+            Src::N(s) => ["outr", "outg", "outb"].map(|o| Src::O(s.clone(), o)),
+            _ => unreachable!("a node is named"),
+        }
+    };
+    let rgb = |g: &mut Graph, [h, s, v]: [Src; 3]| {
+        let joined = g.node(
+            "combine3",
+            c,
+            &[("in1", f, h), ("in2", f, s), ("in3", f, v)],
+        );
+        g.unary("hsvtorgb", c, joined)
+    };
+    let lerp = |g: &mut Graph, x: Src, y: Src| {
+        let a = g.binary("multiply", f, tm.clone(), x);
+        let b = g.binary("multiply", f, t.clone(), y);
+        g.binary("add", f, a, b)
+    };
+    Some(match mode {
+        "overlay" => per_channel(g, &|g, a, b| {
+            // a < 0.5: a (tm + 2 t b); else 1 − (tm + 2 t (1 − b)) (1 − a).
+            let t2 = g.binary("multiply", f, t.clone(), v(2.0));
+            let low = g.binary("multiply", f, t2.clone(), b.clone());
+            let low = g.binary("add", f, tm.clone(), low);
+            let low = g.binary("multiply", f, a.clone(), low);
+            let ib = g.binary("subtract", f, v(1.0), b);
+            let high = g.binary("multiply", f, t2, ib);
+            let high = g.binary("add", f, tm.clone(), high);
+            let ia = g.binary("subtract", f, v(1.0), a.clone());
+            let high = g.binary("multiply", f, high, ia);
+            let high = g.binary("subtract", f, v(1.0), high);
+            g.ifgreater(f, v(0.5), a, low, high)
+        }),
+        "dodge" => per_channel(g, &|g, a, b| {
+            // a where a = 0; 1 where 1 − t b ≤ 0; else min(a / (1 − t b), 1).
+            let tb = g.binary("multiply", f, t.clone(), b);
+            let d = g.binary("subtract", f, v(1.0), tb);
+            let q = g.binary("divide", f, a.clone(), d.clone());
+            let q = g.binary("min", f, q, v(1.0));
+            let r = g.ifgreater(f, d, v(0.0), q, v(1.0));
+            g.if_zero(a.clone(), a, r)
+        }),
+        "divide" => per_channel(g, &|g, a, b| {
+            // a where b = 0; else tm a + t a / b.
+            let q = g.binary("divide", f, a.clone(), b.clone());
+            let r = lerp(g, a.clone(), q);
+            g.if_zero(b, a, r)
+        }),
+        "burn" => per_channel(g, &|g, a, b| {
+            // 0 where 1 − t + t b ≤ 0; else clamp(1 − (1 − a) / (1 − t + t b), 0, 1).
+            let tb = g.binary("multiply", f, t.clone(), b);
+            let d = g.binary("add", f, tm.clone(), tb);
+            let ia = g.binary("subtract", f, v(1.0), a);
+            let q = g.binary("divide", f, ia, d.clone());
+            let q = g.binary("subtract", f, v(1.0), q);
+            let q = g.clamp(f, q, v(0.0), v(1.0));
+            g.ifgreater(f, d, v(0.0), q, v(0.0))
+        }),
+        "soft_light" => {
+            // tm a + t ((1 − a) b a + a (1 − (1 − b)(1 − a))).
+            let ia = g.binary("subtract", c, v3(1.0), a.clone());
+            let ib = g.binary("subtract", c, v3(1.0), b.clone());
+            let screen = g.binary("multiply", c, ib, ia.clone());
+            let screen = g.binary("subtract", c, v3(1.0), screen);
+            let x = g.binary("multiply", c, ia, b);
+            let x = g.binary("multiply", c, x, a.clone());
+            let y = g.binary("multiply", c, a.clone(), screen);
+            let soft = g.binary("add", c, x, y);
+            g.mix(c, a, soft, t)
+        }
+        "hue" | "color" => {
+            // Nothing where b is grey (no hue to give).
+            let [hb, sb, _] = hsv(g, b.clone());
+            let [_, sa, va] = hsv(g, a.clone());
+            let s = if mode == "hue" { sa } else { sb.clone() };
+            let shifted = rgb(g, [hb, s, va]);
+            let r = g.mix(c, a.clone(), shifted, t.clone());
+            g.node(
+                "ifequal",
+                c,
+                &[
+                    ("value1", f, sb),
+                    ("value2", f, v(0.0)),
+                    ("in1", c, a),
+                    ("in2", c, r),
+                ],
+            )
+        }
+        "saturation" => {
+            // Nothing where a is grey (no hue to saturate).
+            let [ha, sa, va] = hsv(g, a.clone());
+            let [_, sb, _] = hsv(g, b);
+            let s = lerp(g, sa.clone(), sb);
+            let r = rgb(g, [ha, s, va]);
+            g.node(
+                "ifequal",
+                c,
+                &[
+                    ("value1", f, sa),
+                    ("value2", f, v(0.0)),
+                    ("in1", c, a),
+                    ("in2", c, r),
+                ],
+            )
+        }
+        "value" => {
+            let [ha, sa, va] = hsv(g, a);
+            let [_, _, vb] = hsv(g, b);
+            let value = lerp(g, va, vb);
+            rgb(g, [ha, sa, value])
+        }
+        _ => return None,
+    })
+}
+
+/// Voronoi F1 or F2 in `metric` (shaders/nodes/textures.wgsl node_voronoi): the 27 cells
+/// around the point searched node by node as Kiln's kernel searches them, each cell's
+/// feature point at its corner plus a random offset times the randomness. Kiln's offsets
+/// hash the cell's bits, which no standard node does, so MaterialX's cell noise gives
+/// them: exact at randomness 0, the same distribution otherwise; the colour is the chosen
+/// cell's offset. Smooth F1 (a blend over 125 cells in Kiln) is F1 here. Returns the
+/// distance, colour and position.
+fn voronoi(g: &mut Graph, metric: &str, feature: &str) -> Option<(Src, Src, Src)> {
+    let (f, t) = ("float", "vector3");
+    let second = match feature {
+        "f1" | "smooth_f1" => false,
+        "f2" => true,
+        _ => return None,
+    };
+    let exponent = g.binary("max", f, Src::I("exponent"), v(0.05));
+    let inverse = g.binary("divide", f, v(1.0), exponent.clone());
+    let distance = |g: &mut Graph, d: Src| -> Option<Src> {
+        Some(match metric {
+            "euclidean" => g.unary_typed("magnitude", f, t, d),
+            "manhattan" => {
+                let a = g.unary("absval", t, d);
+                g.node("dotproduct", f, &[("in1", t, a), ("in2", t, v3(1.0))])
+            }
+            "chebyshev" => {
+                let a = g.unary("absval", t, d);
+                let Src::N(a) = g.node("separate3", "multioutput", &[("in", t, a)]) else {
+                    unreachable!("a node is named")
+                };
+                let xy = g.binary(
+                    "max",
+                    f,
+                    Src::O(a.clone(), "outx"),
+                    Src::O(a.clone(), "outy"),
+                );
+                g.binary("max", f, xy, Src::O(a, "outz"))
+            }
+            "minkowski" => {
+                let a = g.unary("absval", t, d);
+                let powered = g.node("power", t, &[("in1", t, a), ("in2", f, exponent.clone())]);
+                let sum = g.node("dotproduct", f, &[("in1", t, powered), ("in2", t, v3(1.0))]);
+                let r = g.binary("power", f, sum.clone(), inverse.clone());
+                g.ifgreater(f, sum, v(0.0), r, v(0.0))
+            }
+            _ => return None,
+        })
+    };
+    let p = g.node(
+        "multiply",
+        t,
+        &[("in1", t, Src::I("vector")), ("in2", f, Src::I("scale"))],
+    );
+    let base = g.unary("floor", t, p.clone());
+    let randomness = g.clamp(f, Src::I("randomness"), v(0.0), v(1.0));
+    let far = || v(3.4e38);
+    let (mut d1, mut point1, mut offset1) = (far(), v3(0.0), v3(0.0));
+    let (mut d2, mut point2, mut offset2) = (far(), v3(0.0), v3(0.0));
+    for k in -1..=1 {
+        for j in -1..=1 {
+            for i in -1..=1 {
+                let cell = g.binary("add", t, base.clone(), Src::V(format!("{i}, {j}, {k}")));
+                let random = [[0.0; 3], [0.0, 0.0, 65536.0], [0.0, 65536.0, 0.0]].map(|o| {
+                    let at = if o == [0.0; 3] {
+                        cell.clone()
+                    } else {
+                        g.binary(
+                            "add",
+                            t,
+                            cell.clone(),
+                            Src::V(format!("{}, {}, {}", o[0], o[1], o[2])),
+                        )
+                    };
+                    g.node("cellnoise3d", f, &[("position", t, at)])
+                });
+                let offset = g.node(
+                    "combine3",
+                    t,
+                    &[
+                        ("in1", f, random[0].clone()),
+                        ("in2", f, random[1].clone()),
+                        ("in3", f, random[2].clone()),
+                    ],
+                );
+                let jitter = g.node(
+                    "multiply",
+                    t,
+                    &[("in1", t, offset.clone()), ("in2", f, randomness.clone())],
+                );
+                let point = g.binary("add", t, cell, jitter);
+                let d = g.binary("subtract", t, point.clone(), p.clone());
+                let dist = distance(g, d)?;
+                // Strictly nearer than the nearest, or else than the second: the first of
+                // equal candidates stays, as in Kiln.
+                let nearer = |g: &mut Graph, ty: &str, than: &Src, new: Src, old: Src| {
+                    g.ifgreater(ty, than.clone(), dist.clone(), new, old)
+                };
+                if second {
+                    let d2_new = nearer(g, f, &d2, dist.clone(), d2.clone());
+                    let point2_new = nearer(g, t, &d2, point.clone(), point2.clone());
+                    let offset2_new = nearer(g, t, &d2, offset.clone(), offset2.clone());
+                    d2 = nearer(g, f, &d1, d1.clone(), d2_new);
+                    point2 = nearer(g, t, &d1, point1.clone(), point2_new);
+                    offset2 = nearer(g, t, &d1, offset1.clone(), offset2_new);
+                }
+                point1 = nearer(g, t, &d1, point, point1.clone());
+                offset1 = nearer(g, t, &d1, offset, offset1.clone());
+                d1 = g.binary("min", f, d1, dist.clone());
+            }
+        }
+    }
+    let (d, point, offset) = if second {
+        (d2, point2, offset2)
+    } else {
+        (d1, point1, offset1)
+    };
+    let color = g.unary_typed("convert", "color3", t, offset);
+    let position = g.node(
+        "divide",
+        t,
+        &[("in1", t, point), ("in2", f, Src::I("scale"))],
+    );
+    let position = g.node(
+        "ifequal",
+        t,
+        &[
+            ("value1", f, Src::I("scale")),
+            ("value2", f, v(0.0)),
+            ("in1", t, v3(0.0)),
+            ("in2", t, position),
+        ],
+    );
+    Some((d, color, position))
 }
 
 /// A float operation applied to each component of vectors: their components separated,

@@ -231,11 +231,72 @@ fn evaluate(g: &implement::Graph, interface: &HashMap<String, V>) -> HashMap<(St
                 }
                 continue;
             }
+            "smoothstep" => {
+                let (low, high) = (get("low")[0], get("high")[0]);
+                map(&get("in"), |x| {
+                    if x >= high {
+                        1.0
+                    } else if x <= low {
+                        0.0
+                    } else {
+                        let t = (x - low) / (high - low);
+                        t * t * (3.0 - 2.0 * t)
+                    }
+                })
+            }
+            "combine2" => vec![get("in1")[0], get("in2")[0]],
+            "cellnoise2d" => vec![cell_noise(&get("texcoord"))],
+            "cellnoise3d" => vec![cell_noise(&get("position"))],
+            // A volume as [absorption, scattering, emission, anisotropy].
+            "absorption_vdf" => [get("absorption"), vec![0.0; 3], vec![0.0]].concat(),
+            "anisotropic_vdf" => {
+                let or_zero = |n: &str| inputs.get(n).cloned().unwrap_or(vec![0.0; 3]);
+                [
+                    or_zero("absorption"),
+                    or_zero("scattering"),
+                    or_zero("anisotropy"),
+                ]
+                .concat()
+            }
+            "uniform_edf" => get("color"),
+            "volume" => {
+                let vdf = get("vdf");
+                let edf = inputs.get("edf").cloned().unwrap_or(vec![0.0; 3]);
+                [&vdf[..6], &edf[..], &vdf[6..7]].concat()
+            }
             other => panic!("the test's interpreter lacks {other}"),
         };
         values.insert((name, "out".into()), out);
     }
     values
+}
+
+/// MaterialX's cell noise (mx_cell_noise_float): Bob Jenkins' lookup3 of the floored
+/// coordinates as integers, scaled to [0, 1].
+fn cell_noise(p: &[f32]) -> f32 {
+    let seed = 0xdeadbeef_u32
+        .wrapping_add((p.len() as u32) << 2)
+        .wrapping_add(13);
+    let mut abc = [seed; 3];
+    for (k, x) in abc.iter_mut().zip(p) {
+        *k = k.wrapping_add(x.floor() as i32 as u32);
+    }
+    let [mut a, mut b, mut c] = abc;
+    c ^= b;
+    c = c.wrapping_sub(b.rotate_left(14));
+    a ^= c;
+    a = a.wrapping_sub(c.rotate_left(11));
+    b ^= a;
+    b = b.wrapping_sub(a.rotate_left(25));
+    c ^= b;
+    c = c.wrapping_sub(b.rotate_left(16));
+    a ^= c;
+    a = a.wrapping_sub(c.rotate_left(4));
+    b ^= a;
+    b = b.wrapping_sub(a.rotate_left(14));
+    c ^= b;
+    c = c.wrapping_sub(b.rotate_left(24));
+    c as f32 / u32::MAX as f32
 }
 
 /// The offset added to a node's output before it becomes emission (which Kiln keeps
@@ -530,29 +591,31 @@ fn vector_and_mix_implementations_compute_what_kiln_does() {
             "result",
         ));
     }
-    for blend in [
-        "mix",
-        "multiply",
-        "add",
-        "subtract",
-        "divide",
-        "darken",
-        "lighten",
-        "difference",
-        "screen",
-        "exclusion",
-        "linear_light",
-    ] {
-        for clamp in [false, true] {
-            cases.push((
-                Node::new("mix_color")
-                    .param("blend", Param::Text(blend.into()))
-                    .param("clamp_result", Param::Bool(clamp))
-                    .input("factor", 0.6)
-                    .input("a", [0.2, 0.5, 0.9])
-                    .input("b", [0.7, 0.3, 0.4]),
-                "result",
-            ));
+    // Channels of 0 (dodge and divide leave them), greys (no hue to give or saturate),
+    // 1 − t b = 0 (dodge) and 1 − t + t b = 0 (burn), the factor's ends.
+    let colours = [
+        (0.6, [0.2, 0.5, 0.9], [0.7, 0.3, 0.4]),
+        (0.9, [0.0, 0.6, 0.3], [0.5, 0.5, 0.5]),
+        (0.0, [0.4, 0.4, 0.4], [0.9, 0.95, 0.2]),
+        (1.0, [0.7, 0.2, 0.05], [1.0, 0.0, 0.6]),
+        (0.35, [0.8, 0.1, 0.6], [0.2, 0.9, 0.0]),
+    ];
+    for &blend in choices("mix_color", "blend") {
+        for (i, &(factor, a, b)) in colours.iter().enumerate() {
+            for clamp in [false, true] {
+                if clamp && i > 0 {
+                    continue;
+                }
+                cases.push((
+                    Node::new("mix_color")
+                        .param("blend", Param::Text(blend.into()))
+                        .param("clamp_result", Param::Bool(clamp))
+                        .input("factor", factor)
+                        .input("a", a)
+                        .input("b", b),
+                    "result",
+                ));
+            }
         }
     }
     for interpolation in ["linear", "stepped", "smoothstep", "smootherstep"] {
@@ -710,4 +773,144 @@ fn texture_and_mapping_implementations_compute_what_kiln_does() {
         }
     }
     compare(&cases);
+}
+
+#[test]
+fn brick_implementation_computes_what_kiln_does() {
+    // The layout (Fac) everywhere; the colour where a bias of ±1 saturates the tint (a
+    // hash of the brick in Kiln, MaterialX's cell noise in the implementation).
+    let mut cases = Vec::new();
+    let positions = [
+        [0.3, 0.4, 0.2],
+        [-0.7, 1.6, 0.2],
+        [0.45, -0.2, -0.6],
+        [0.123, 0.0505, 0.0],
+        [0.2017, 0.3038, 0.0],
+        [-0.333, -0.4471, 0.9],
+    ];
+    // squash, squash frequency, offset, offset frequency, mortar smoothness and size.
+    let layouts = [
+        [1.0, 2.0, 0.5, 2.0, 0.1, 0.02],
+        [1.7, 3.0, 0.3, 3.0, 0.0, 0.05],
+        [0.6, 1.0, 0.8, 2.0, 0.4, 0.1],
+        [1.0, 2.0, 0.5, 2.0, 0.1, 0.0],
+    ];
+    for vector in positions {
+        for [
+            squash,
+            squash_frequency,
+            offset,
+            offset_frequency,
+            smooth,
+            size,
+        ] in layouts
+        {
+            for (bias, socket) in [(0.0, "fac"), (-1.0, "color"), (1.0, "color")] {
+                cases.push((
+                    Node::new("brick_texture")
+                        .input("vector", vector)
+                        .input("color1", [0.9, 0.3, 0.1])
+                        .input("color2", [0.2, 0.6, 0.8])
+                        .input("mortar", [0.05, 0.1, 0.15])
+                        .input("squash", squash)
+                        .input("squash_frequency", squash_frequency)
+                        .input("offset", offset)
+                        .input("offset_frequency", offset_frequency)
+                        .input("mortar_smooth", smooth)
+                        .input("mortar_size", size)
+                        .input("bias", bias),
+                    socket,
+                ));
+            }
+        }
+    }
+    // Some of them are on mortar, some on its smooth edge, some on brick.
+    let facs: Vec<f32> = cases
+        .iter()
+        .filter(|(_, socket)| *socket == "fac")
+        .map(|(node, socket)| materialx_value(node, socket)[0])
+        .collect();
+    assert!(facs.contains(&0.0) && facs.contains(&1.0));
+    assert!(facs.iter().any(|&f| f > 0.05 && f < 0.95), "{facs:?}");
+    compare(&cases);
+}
+
+#[test]
+fn voronoi_implementation_searches_as_kiln_does() {
+    // At randomness 0 the feature points are the lattice's corners whatever the hash, so
+    // distances and positions are exact there, in every metric; Smooth F1 at smoothness 0
+    // is F1.
+    let mut cases = Vec::new();
+    for vector in [[0.3, 0.4, 0.2], [-0.7, 1.6, 0.2], [0.45, -0.2, -0.6]] {
+        for &metric in choices("voronoi_texture", "distance") {
+            for &feature in choices("voronoi_texture", "feature") {
+                for socket in ["distance", "position"] {
+                    cases.push((
+                        Node::new("voronoi_texture")
+                            .param("distance", Param::Text(metric.into()))
+                            .param("feature", Param::Text(feature.into()))
+                            .input("vector", vector)
+                            .input("scale", 1.37)
+                            .input("randomness", 0.0)
+                            .input("smoothness", 0.0)
+                            .input("exponent", 1.5),
+                        socket,
+                    ));
+                }
+            }
+        }
+    }
+    compare(&cases);
+}
+
+#[test]
+fn volume_implementations_give_kiln_coefficients() {
+    let cases = [
+        Node::new("volume_absorption")
+            .input("color", [0.2, 0.7, 1.3])
+            .input("density", 2.5),
+        Node::new("volume_scatter")
+            .input("color", [0.9, -0.1, 0.4])
+            .input("density", 0.7)
+            .input("anisotropy", 1.0),
+        Node::new("principled_volume")
+            .input("color", [0.3, 0.8, 1.2])
+            .input("density", 1.5)
+            .input("anisotropy", -0.4)
+            .input("absorption_color", [0.25, 0.0, 0.9])
+            .input("emission_strength", 3.0)
+            .input("emission_color", [1.0, 0.5, -0.2]),
+        Node::new("principled_volume").input("density", 0.0),
+    ];
+    for node in cases {
+        let mut g = Graph::default();
+        g.add("v", node.clone());
+        g.add(
+            "out",
+            Node::new("material_output").input("volume", Link::new("v", "volume")),
+        );
+        let material = kiln::scene::Material::from_graph("volume", g).unwrap();
+        let k = material
+            .graph
+            .unwrap()
+            .traits
+            .volume
+            .expect("constant inputs");
+        let kiln = [
+            &k.absorption[..],
+            &k.scattering[..],
+            &k.emission[..],
+            &[k.g][..],
+        ]
+        .concat();
+        let mx = materialx_value(&node, "volume");
+        assert_eq!(mx.len(), kiln.len());
+        for (m, k) in mx.iter().zip(&kiln) {
+            assert!(
+                (m - k).abs() <= 1e-5 * k.abs().max(1.0),
+                "{}: Kiln {kiln:?}, MaterialX {mx:?}",
+                node.kind
+            );
+        }
+    }
 }
