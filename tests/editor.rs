@@ -1249,3 +1249,47 @@ fn a_lost_device_autosaves_the_document_and_hands_over_once() {
             .is_some()
     );
 }
+
+/// A device lost while egui draws a frame, after the editor's check at the frame's start:
+/// egui's renderer panics (it cannot make its buffers), and the editor, dropped as the
+/// panic unwinds, still writes the edit to the recovery autosave and hands over.
+#[test]
+fn a_device_lost_while_egui_draws_still_autosaves_and_hands_over() {
+    let state = tempfile::tempdir().unwrap();
+    let calls = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+    let record = std::sync::Arc::clone(&calls);
+    let mut harness = start(Setup {
+        state_dir: Some(state.path().to_owned()),
+        on_device_lost: Box::new(move |lost| record.lock().unwrap().push(lost)),
+        ..Setup::default()
+    });
+    step_until(&mut harness, "the first samples", samples_done);
+    harness.get_by_label("block").click();
+    harness.step();
+    set_field(&mut harness, "Location", 0, -125.0);
+    let moved = harness.state().document().scene().instances[6].transform;
+    let gpu = harness.state().gpu().expect("a wgpu device").clone();
+    // The frame's shapes are made; the device goes before they are drawn.
+    harness.step();
+    gpu.device.destroy();
+    let drawn = std::panic::catch_unwind(std::panic::AssertUnwindSafe(|| harness.render()));
+    assert!(
+        !matches!(drawn, Ok(Ok(_))),
+        "egui drew on a destroyed device"
+    );
+    assert!(calls.lock().unwrap().is_empty(), "no frame checked yet");
+    drop(harness);
+    let calls = calls.lock().unwrap().clone();
+    assert_eq!(calls.len(), 1, "{calls:?}");
+    assert!(
+        calls[0].reason.contains("destroyed") && calls[0].autosaved,
+        "{calls:?}"
+    );
+    let autosave = state
+        .path()
+        .join("recovery")
+        .join(std::process::id().to_string())
+        .join("autosave.kiln");
+    let saved = kiln::scene::load_scene(&autosave).unwrap();
+    assert_eq!(saved.instances[6].transform, moved);
+}

@@ -214,6 +214,8 @@ pub struct EditorApp {
     on_device_lost: Box<dyn FnMut(DeviceLost)>,
     /// Why the device was lost, once it was: the editor then draws only that.
     device_lost: Option<String>,
+    /// eframe closed the window normally ([`eframe::App::on_exit`]).
+    exited: bool,
     quit_when_done: bool,
     report: Option<Arc<std::sync::Mutex<RunReport>>>,
     tool: Option<TransformTool>,
@@ -360,6 +362,7 @@ impl EditorApp {
             recovery: session.as_ref().and_then(SessionStore::recovery),
             on_device_lost: options.on_device_lost,
             device_lost: None,
+            exited: false,
             saved_viewport: viewport_preferences,
             session,
             autosave_every: options.autosave_every,
@@ -773,6 +776,14 @@ impl EditorApp {
         let Some(reason) = gpu.lost() else {
             return false;
         };
+        self.report_device_loss(reason);
+        // The notice shows from this frame on.
+        self.handle_device_loss(ui)
+    }
+
+    /// Writes unsaved changes to the recovery autosave at once and hands over to
+    /// [`EditorOptions::on_device_lost`] (once).
+    fn report_device_loss(&mut self, reason: String) {
         tracing::error!("the editor's GPU device was lost: {reason}");
         let autosaved = match &self.session {
             Some(store) if self.document.is_dirty() => {
@@ -796,8 +807,6 @@ impl EditorApp {
         };
         self.device_lost = Some(reason);
         (self.on_device_lost)(lost);
-        // The notice shows from this frame on.
-        self.handle_device_loss(ui)
     }
 
     /// Writes a changed document to the recovery autosave every [`AUTOSAVE_EVERY`], on a
@@ -2225,6 +2234,7 @@ impl eframe::App for EditorApp {
     }
 
     fn on_exit(&mut self) {
+        self.exited = true;
         if let Some(report) = &self.report {
             let status = self.viewport_status().unwrap_or_default();
             *report.lock().unwrap_or_else(|e| e.into_inner()) = RunReport {
@@ -2245,6 +2255,41 @@ impl eframe::App for EditorApp {
         }
         if let Some(store) = &self.session {
             store.clear_autosave();
+        }
+    }
+}
+
+/// A device lost while egui draws a frame (after [`EditorApp::handle_device_loss`]'s check
+/// at the frame's start) makes egui's renderer panic: the editor is dropped as that panic
+/// unwinds, and writes the document to the recovery autosave and hands over then, as it
+/// would have at the next frame. Any other panic also leaves the unsaved document in the
+/// recovery autosave, offered at the next start.
+impl Drop for EditorApp {
+    fn drop(&mut self) {
+        if self.device_lost.is_some() || self.exited {
+            return;
+        }
+        if let Some(gpu) = &self.gpu {
+            let _ = gpu.device.poll(wgpu::PollType::Poll);
+            if let Some(reason) = gpu.lost() {
+                self.report_device_loss(reason);
+                return;
+            }
+        }
+        if !std::thread::panicking() || !self.document.is_dirty() {
+            return;
+        }
+        if let Some(job) = self.autosave_job.take() {
+            let _ = job.join();
+        }
+        if let Some(store) = &self.session
+            && let Err(e) = store.autosave(
+                self.document.scene(),
+                self.document.images(),
+                self.document.path(),
+            )
+        {
+            tracing::error!("the autosave after a panic failed: {e}");
         }
     }
 }
