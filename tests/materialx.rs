@@ -835,3 +835,392 @@ fn ramps_and_splits_of_texture_coordinates_import_as_materialx_defines_them() {
         }
     }
 }
+
+/// A document whose material's surface is pbrlib's `surface` node `S` with `inputs`,
+/// beside closure nodes `nodes`.
+fn closure_document(nodes: &str, inputs: &str) -> String {
+    format!(
+        "<?xml version=\"1.0\"?>\n<materialx version=\"1.39\">\n{nodes}\n  <surface name=\"S\" type=\"surfaceshader\">\n{inputs}\n  </surface>\n  <surfacematerial name=\"M\" type=\"material\">\n    <input name=\"surfaceshader\" type=\"surfaceshader\" nodename=\"S\" />\n  </surfacematerial>\n</materialx>\n"
+    )
+}
+
+const DIFFUSE: &str = r#"  <oren_nayar_diffuse_bsdf name="diffuse" type="BSDF">
+    <input name="color" type="color3" value="0.7, 0.3, 0.2" />
+    <input name="roughness" type="float" value="0.5" />
+  </oren_nayar_diffuse_bsdf>"#;
+
+const SPECULAR_OVER_DIFFUSE: &str = r#"  <roughness_anisotropy name="alpha" type="vector2">
+    <input name="roughness" type="float" value="0.35" />
+  </roughness_anisotropy>
+  <dielectric_bsdf name="specular" type="BSDF">
+    <input name="ior" type="float" value="1.4" />
+    <input name="roughness" type="vector2" nodename="alpha" />
+  </dielectric_bsdf>
+  <layer name="plastic" type="BSDF">
+    <input name="top" type="BSDF" nodename="specular" />
+    <input name="base" type="BSDF" nodename="diffuse" />
+  </layer>"#;
+
+const GOLD: &str = r#"  <conductor_bsdf name="metal" type="BSDF">
+    <input name="ior" type="color3" value="0.143, 0.374, 1.442" />
+    <input name="extinction" type="color3" value="3.983, 2.385, 1.603" />
+    <input name="roughness" type="vector2" value="0.09, 0.09" />
+  </conductor_bsdf>"#;
+
+/// Closure graphs as other tools write them (the structures Standard Surface and OpenPBR
+/// are built of), with the Principled BSDF inputs docs/MATERIALX.md says they fold to.
+/// What a closure graph is called, its document, and the Principled BSDF inputs (Kiln
+/// names) it folds to.
+type ClosureCase = (&'static str, String, Vec<(&'static str, [f32; 3])>);
+
+fn closure_cases() -> Vec<ClosureCase> {
+    // Normal-incidence reflectance of gold's complex index.
+    let gold_f0 = {
+        let f0 = |n: f32, k: f32| ((n - 1.0).powi(2) + k * k) / ((n + 1.0).powi(2) + k * k);
+        [f0(0.143, 3.983), f0(0.374, 2.385), f0(1.442, 1.603)]
+    };
+    let doc = |nodes: &[&str], top: &str, extra: &str| {
+        let bsdf = format!(r#"    <input name="bsdf" type="BSDF" nodename="{top}" />"#);
+        closure_document(&nodes.join("\n"), &format!("{bsdf}\n{extra}"))
+    };
+    vec![
+        (
+            "diffuse",
+            doc(&[DIFFUSE], "diffuse", ""),
+            vec![
+                ("base_weight", [1.0; 3]),
+                ("base_color", [0.7, 0.3, 0.2]),
+                ("diffuse_roughness", [0.5; 3]),
+                ("specular_weight", [0.0; 3]),
+                ("metallic", [0.0; 3]),
+            ],
+        ),
+        (
+            "plastic",
+            doc(&[DIFFUSE, SPECULAR_OVER_DIFFUSE], "plastic", ""),
+            vec![
+                ("base_weight", [1.0; 3]),
+                ("base_color", [0.7, 0.3, 0.2]),
+                ("specular_weight", [1.0; 3]),
+                ("ior", [1.4; 3]),
+                ("roughness", [0.35; 3]),
+                ("anisotropy", [0.0; 3]),
+                ("coat_weight", [0.0; 3]),
+            ],
+        ),
+        (
+            "gold",
+            doc(&[GOLD], "metal", ""),
+            vec![
+                ("metallic", [1.0; 3]),
+                ("base_color", gold_f0),
+                ("roughness", [0.3; 3]),
+                ("specular_weight", [0.0; 3]),
+            ],
+        ),
+        (
+            "metal mixed with plastic",
+            doc(
+                &[
+                    DIFFUSE,
+                    SPECULAR_OVER_DIFFUSE,
+                    GOLD,
+                    r#"  <mix name="mixed" type="BSDF">
+    <input name="fg" type="BSDF" nodename="metal" />
+    <input name="bg" type="BSDF" nodename="plastic" />
+    <input name="mix" type="float" value="0.3" />
+  </mix>"#,
+                ],
+                "mixed",
+                "",
+            ),
+            vec![
+                ("metallic", [0.3; 3]),
+                ("base_weight", [1.0; 3]),
+                ("specular_weight", [1.0; 3]),
+                (
+                    "base_color",
+                    std::array::from_fn(|i| [0.7, 0.3, 0.2][i] * 0.7 + gold_f0[i] * 0.3),
+                ),
+                ("roughness", [0.35 * 0.7 + 0.3 * 0.3; 3]),
+            ],
+        ),
+        (
+            "glass",
+            doc(
+                &[r#"  <dielectric_bsdf name="glass" type="BSDF">
+    <input name="tint" type="color3" value="0.8, 0.9, 1" />
+    <input name="ior" type="float" value="1.45" />
+    <input name="roughness" type="vector2" value="0.0025, 0.0025" />
+    <input name="scatter_mode" type="string" value="RT" />
+  </dielectric_bsdf>"#],
+                "glass",
+                "",
+            ),
+            vec![
+                ("transmission_weight", [1.0; 3]),
+                ("transmission_color", [0.8, 0.9, 1.0]),
+                ("specular_weight", [1.0; 3]),
+                ("ior", [1.45; 3]),
+                ("roughness", [0.05; 3]),
+                ("base_weight", [0.0; 3]),
+            ],
+        ),
+        (
+            "coat",
+            doc(
+                &[
+                    DIFFUSE,
+                    SPECULAR_OVER_DIFFUSE,
+                    r#"  <dielectric_bsdf name="coat" type="BSDF">
+    <input name="weight" type="float" value="0.6" />
+    <input name="ior" type="float" value="1.6" />
+    <input name="roughness" type="vector2" value="0.01, 0.01" />
+  </dielectric_bsdf>
+  <layer name="coated" type="BSDF">
+    <input name="top" type="BSDF" nodename="coat" />
+    <input name="base" type="BSDF" nodename="plastic" />
+  </layer>"#,
+                ],
+                "coated",
+                "",
+            ),
+            vec![
+                ("coat_weight", [0.6; 3]),
+                ("coat_ior", [1.6; 3]),
+                ("coat_roughness", [0.1; 3]),
+                ("specular_weight", [1.0; 3]),
+                ("ior", [1.4; 3]),
+                ("base_color", [0.7, 0.3, 0.2]),
+            ],
+        ),
+        (
+            "sheen",
+            doc(
+                &[
+                    DIFFUSE,
+                    r#"  <sheen_bsdf name="sheen" type="BSDF">
+    <input name="weight" type="float" value="0.7" />
+    <input name="color" type="color3" value="0.5, 0.2, 0.8" />
+    <input name="roughness" type="float" value="0.5" />
+    <input name="mode" type="string" value="zeltner" />
+  </sheen_bsdf>
+  <layer name="cloth" type="BSDF">
+    <input name="top" type="BSDF" nodename="sheen" />
+    <input name="base" type="BSDF" nodename="diffuse" />
+  </layer>"#,
+                ],
+                "cloth",
+                "",
+            ),
+            vec![
+                ("sheen_weight", [0.7; 3]),
+                ("sheen_color", [0.5, 0.2, 0.8]),
+                ("sheen_roughness", [0.5; 3]),
+                ("base_weight", [1.0; 3]),
+            ],
+        ),
+        (
+            "subsurface",
+            doc(
+                &[r#"  <oren_nayar_diffuse_bsdf name="diffuse" type="BSDF">
+    <input name="color" type="color3" value="0.9, 0.5, 0.4" />
+  </oren_nayar_diffuse_bsdf>
+  <subsurface_bsdf name="skin" type="BSDF">
+    <input name="color" type="color3" value="0.9, 0.5, 0.4" />
+    <input name="radius" type="color3" value="0.1, 0.04, 0.02" />
+    <input name="anisotropy" type="float" value="0.3" />
+  </subsurface_bsdf>
+  <mix name="mixed" type="BSDF">
+    <input name="fg" type="BSDF" nodename="skin" />
+    <input name="bg" type="BSDF" nodename="diffuse" />
+    <input name="mix" type="float" value="0.8" />
+  </mix>"#],
+                "mixed",
+                "",
+            ),
+            vec![
+                ("subsurface_weight", [0.8; 3]),
+                ("base_weight", [1.0; 3]),
+                ("base_color", [0.9, 0.5, 0.4]),
+                ("subsurface_scale", [0.1; 3]),
+                ("subsurface_radius", [1.0, 0.4, 0.2]),
+                ("subsurface_anisotropy", [0.3; 3]),
+            ],
+        ),
+        (
+            "emission and opacity",
+            doc(
+                &[
+                    DIFFUSE,
+                    r#"  <uniform_edf name="glow" type="EDF">
+    <input name="color" type="color3" value="2, 1, 0.5" />
+  </uniform_edf>"#,
+                ],
+                "diffuse",
+                r#"    <input name="edf" type="EDF" nodename="glow" />
+    <input name="opacity" type="float" value="0.4" />"#,
+            ),
+            vec![
+                ("emission_color", [1.0, 0.5, 0.25]),
+                ("emission_strength", [2.0; 3]),
+                ("alpha", [0.4; 3]),
+                ("base_color", [0.7, 0.3, 0.2]),
+            ],
+        ),
+    ]
+}
+
+#[test]
+fn closure_graphs_fold_onto_the_documented_principled_bsdf() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    let mut imported = Vec::new();
+    for (what, document, want) in closure_cases() {
+        let file = dir.path().join(format!("{}.mtlx", what.replace(' ', "_")));
+        std::fs::write(&file, document).unwrap();
+        let (_, graph) = host
+            .import_materials(&file)
+            .unwrap_or_else(|e| panic!("{what}: {e}"))
+            .materials
+            .remove(0);
+        let surface = graph
+            .nodes
+            .values()
+            .find(|n| n.kind == "principled_bsdf")
+            .expect("a principled node");
+        for (name, value) in want {
+            let Some(Input::Value(v)) = surface.inputs.get(name) else {
+                panic!(
+                    "{what}: {name} is not a constant: {:?}",
+                    surface.inputs.get(name)
+                );
+            };
+            let got = match v {
+                Value::Float(x) => [*x; 3],
+                v => v.as_vec3(),
+            };
+            assert!(
+                (0..3).all(|i| (got[i] - value[i]).abs() < 1e-4),
+                "{what}: {name} is {got:?}, the fold gives {value:?}"
+            );
+        }
+        imported.push(Material::from_graph(what, graph).unwrap());
+    }
+    // And they render, finite.
+    let image = render(&gpu(), &spheres(imported, 5), settings(100, 48, 8)).radiance();
+    assert!(image.iter().all(|p| p.is_finite()));
+
+    // A varying factor stays a connection; a hair closure is refused by name.
+    let varying = doc_with_varying_metal();
+    let file = dir.path().join("varying.mtlx");
+    std::fs::write(&file, varying).unwrap();
+    let (_, graph) = host.import_materials(&file).unwrap().materials.remove(0);
+    let surface = graph
+        .nodes
+        .values()
+        .find(|n| n.kind == "principled_bsdf")
+        .unwrap();
+    assert!(
+        matches!(surface.inputs.get("metallic"), Some(Input::Link(_))),
+        "{:?}",
+        surface.inputs.get("metallic")
+    );
+    let hair = closure_document(
+        r#"  <chiang_hair_bsdf name="strands" type="BSDF" />"#,
+        r#"    <input name="bsdf" type="BSDF" nodename="strands" />"#,
+    );
+    let file = dir.path().join("hair.mtlx");
+    std::fs::write(&file, hair).unwrap();
+    let message = host.import_materials(&file).unwrap_err().to_string();
+    assert!(
+        message.contains("strands (chiang_hair_bsdf)") && message.contains("cannot render"),
+        "{message}"
+    );
+}
+
+fn doc_with_varying_metal() -> String {
+    closure_document(
+        &[
+            DIFFUSE,
+            GOLD,
+            r#"  <noise3d name="noise" type="float" />
+  <mix name="mixed" type="BSDF">
+    <input name="fg" type="BSDF" nodename="metal" />
+    <input name="bg" type="BSDF" nodename="diffuse" />
+    <input name="mix" type="float" nodename="noise" />
+  </mix>"#,
+        ]
+        .join("\n"),
+        r#"    <input name="bsdf" type="BSDF" nodename="mixed" />"#,
+    )
+}
+
+/// A `volumematerial` of pbrlib's closures becomes a Principled Volume with the same
+/// coefficients (per unit length) in Kiln's kernel.
+#[test]
+fn a_volume_of_closures_becomes_a_principled_volume_of_the_same_coefficients() {
+    let host = bundled_plugins();
+    let dir = tempfile::tempdir().unwrap();
+    let cases = [
+        (
+            r#"<anisotropic_vdf name="medium" type="VDF">
+    <input name="absorption" type="vector3" value="0.2, 0.5, 1.0" />
+    <input name="scattering" type="vector3" value="1.5, 0.8, 0.1" />
+    <input name="anisotropy" type="float" value="0.3" />
+  </anisotropic_vdf>
+  <uniform_edf name="glow" type="EDF">
+    <input name="color" type="color3" value="0.4, 0.2, 0.0" />
+  </uniform_edf>"#,
+            ([0.2, 0.5, 1.0], [1.5, 0.8, 0.1], [0.4, 0.2, 0.0], 0.3),
+        ),
+        (
+            r#"<absorption_vdf name="medium" type="VDF">
+    <input name="absorption" type="vector3" value="3, 0.5, 0" />
+  </absorption_vdf>"#,
+            ([3.0, 0.5, 0.0], [0.0; 3], [0.0; 3], 0.0),
+        ),
+    ];
+    for (i, (nodes, (absorption, scattering, emission, g))) in cases.into_iter().enumerate() {
+        let edf = if nodes.contains("glow") {
+            r#"<input name="edf" type="EDF" nodename="glow" />"#
+        } else {
+            ""
+        };
+        let document = format!(
+            r#"<?xml version="1.0"?>
+<materialx version="1.39">
+  {nodes}
+  <volume name="V" type="volumeshader">
+    <input name="vdf" type="VDF" nodename="medium" />
+    {edf}
+  </volume>
+  <volumematerial name="M" type="material">
+    <input name="volumeshader" type="volumeshader" nodename="V" />
+  </volumematerial>
+</materialx>
+"#
+        );
+        let file = dir.path().join(format!("{i}.mtlx"));
+        std::fs::write(&file, document).unwrap();
+        let (_, graph) = host.import_materials(&file).unwrap().materials.remove(0);
+        let material = Material::from_graph("volume", graph).unwrap();
+        let k = material
+            .graph
+            .unwrap()
+            .traits
+            .volume
+            .expect("a homogeneous volume");
+        for (what, got, want) in [
+            ("absorption", k.absorption, absorption),
+            ("scattering", k.scattering, scattering),
+            ("emission", k.emission, emission),
+            ("anisotropy", [k.g; 3], [g; 3]),
+        ] {
+            assert!(
+                (0..3).all(|c| (got[c] - want[c]).abs() < 1e-4),
+                "case {i}: {what} is {got:?}, MaterialX says {want:?}"
+            );
+        }
+    }
+}

@@ -13,6 +13,8 @@ use kiln_plugin_api::kmat::{Graph, Group, Node, Param, Socket, Value};
 use kiln_plugin_api::read::{MAX_FILE_BYTES, read_text_bounded};
 
 use crate::surface::{self, ShaderInputs};
+
+mod closures;
 use crate::table::{self, Fixed};
 
 /// The graphs a document's materials become, by material name, and what was reported.
@@ -338,19 +340,26 @@ impl<'a> Build<'_, 'a> {
                 .doc
                 .top(name)
                 .ok_or(format!("its volume shader {name} is not in the file"))?;
-            match self.custom_node(&mut scope, shader)? {
-                Some(outputs) => {
-                    let socket = i.attribute("output").unwrap_or("out");
-                    let v = outputs
-                        .get(socket)
-                        .cloned()
-                        .ok_or(format!("its volume shader {name} has no output {socket}"))?;
-                    output = output.input("volume", v);
+            if shader.tag_name().name() == "volume" {
+                let v = self.closure_volume(&mut scope, shader).map_err(|part| {
+                    format!("its volume is made of {part}, which Kiln cannot render")
+                })?;
+                output = output.input("volume", v);
+            } else {
+                match self.custom_node(&mut scope, shader)? {
+                    Some(outputs) => {
+                        let socket = i.attribute("output").unwrap_or("out");
+                        let v = outputs
+                            .get(socket)
+                            .cloned()
+                            .ok_or(format!("its volume shader {name} has no output {socket}"))?;
+                        output = output.input("volume", v);
+                    }
+                    None => self.warn(format!(
+                        "volume shader {name} ({}) is not read: Kiln's volumes are its own nodes",
+                        shader.tag_name().name()
+                    )),
                 }
-                None => self.warn(format!(
-                    "volume shader {name} ({}) is not read: Kiln's volumes are its own nodes",
-                    shader.tag_name().name()
-                )),
             }
         }
         let spare: Vec<Element> = self
@@ -428,6 +437,11 @@ impl<'a> Build<'_, 'a> {
             let node = surface::principled(shader_name, &open_pbr, thin_walled, &mut self.warnings);
             let node = position(shader, node);
             return Ok(Value::link(&scope.graph.add(shader_name, node), "bsdf"));
+        }
+        if category == "surface" {
+            return self.closure_surface(scope, shader).map_err(|part| {
+                format!("its shading is made of {part}, which Kiln cannot render")
+            });
         }
         match self.custom_node(scope, shader)? {
             Some(outputs) => {
@@ -757,6 +771,14 @@ impl<'a> Build<'_, 'a> {
         }
         match category {
             "dot" | "convert" => out(get!("in")?),
+            // A shader made of closures, inside a node graph (a custom shader's).
+            "surface" if ty == "surfaceshader" => match self.closure_surface(scope, e) {
+                Ok(v) => out(v),
+                Err(part) => {
+                    self.unrenderable.push(part);
+                    Some(HashMap::new())
+                }
+            },
             // What the exporter split off one Kiln node says which node and output.
             "texcoord" | "position" | "normal" | "tangent"
                 if e.attribute("kiln_node").is_some() && e.attribute("kiln_output").is_some() =>

@@ -120,9 +120,9 @@ pub struct ShaderInputs {
 }
 
 /// Builds the expressions of a translation in `graph`, naming new nodes after `prefix`.
-struct Ops<'a> {
-    graph: &'a mut Graph,
-    prefix: String,
+pub(crate) struct Ops<'a> {
+    pub(crate) graph: &'a mut Graph,
+    pub(crate) prefix: String,
 }
 
 impl Ops<'_> {
@@ -131,7 +131,7 @@ impl Ops<'_> {
     }
 
     /// `a + (b - a) t` of colours (`color`) or floats, folded for constants.
-    fn mix(&mut self, what: &str, color: bool, a: Value, b: Value, t: Value) -> Value {
+    pub(crate) fn mix(&mut self, what: &str, color: bool, a: Value, b: Value, t: Value) -> Value {
         match (&a, &b, &t) {
             (_, _, Value::Float(t)) if *t == 0.0 => a,
             (_, _, Value::Float(t)) if *t == 1.0 => b,
@@ -163,7 +163,7 @@ impl Ops<'_> {
         }
     }
 
-    fn multiply(&mut self, what: &str, color: bool, a: Value, b: Value) -> Value {
+    pub(crate) fn multiply(&mut self, what: &str, color: bool, a: Value, b: Value) -> Value {
         if color {
             self.graph.multiply_color(&self.id(what), a, b)
         } else {
@@ -172,7 +172,7 @@ impl Ops<'_> {
     }
 
     /// A float operation of Kiln's math node, folded by `fold` for constants.
-    fn math(
+    pub(crate) fn math(
         &mut self,
         what: &str,
         op: &str,
@@ -212,7 +212,7 @@ impl Ops<'_> {
 }
 
 /// A constant's three channels (a float in each).
-fn constant3(v: &Value) -> Option<[f32; 3]> {
+pub(crate) fn constant3(v: &Value) -> Option<[f32; 3]> {
     match v {
         Value::Float(x) => Some([*x; 3]),
         Value::Color(c) | Value::Vector(c) => Some(*c),
