@@ -1126,6 +1126,27 @@ fn closure_graphs_fold_onto_the_documented_principled_bsdf() {
         "{:?}",
         surface.inputs.get("metallic")
     );
+    // A custom shader whose node graph is made of closures reads its interface.
+    let file = dir.path().join("custom.mtlx");
+    std::fs::write(&file, CUSTOM_PLASTIC).unwrap();
+    let read = host.import_materials(&file).unwrap();
+    assert!(read.warnings.is_empty(), "{:?}", read.warnings);
+    let graph = &read.materials[0].1;
+    let inside = graph
+        .groups
+        .get("my_plastic")
+        .and_then(|g| g.nodes.values().find(|n| n.kind == "principled_bsdf"))
+        .expect("the shader's graph as a group with a principled node");
+    for (input, link) in [
+        ("base_color", "group_input.base"),
+        ("roughness", "group_input.rough"),
+    ] {
+        assert!(
+            matches!(inside.inputs.get(input), Some(Input::Link(l)) if l.to_string() == link),
+            "{input}: {:?}",
+            inside.inputs.get(input)
+        );
+    }
     let hair = closure_document(
         r#"  <chiang_hair_bsdf name="strands" type="BSDF" />"#,
         r#"    <input name="bsdf" type="BSDF" nodename="strands" />"#,
@@ -1224,3 +1245,40 @@ fn a_volume_of_closures_becomes_a_principled_volume_of_the_same_coefficients() {
         }
     }
 }
+
+/// A custom shader implemented by a node graph of closures, its roughness through
+/// `roughness_anisotropy`.
+const CUSTOM_PLASTIC: &str = r#"<?xml version="1.0"?>
+<materialx version="1.39">
+  <nodedef name="ND_my_plastic" node="my_plastic">
+    <input name="base" type="color3" value="0.2, 0.5, 0.8" />
+    <input name="rough" type="float" value="0.25" />
+    <output name="out" type="surfaceshader" />
+  </nodedef>
+  <nodegraph name="NG_my_plastic" nodedef="ND_my_plastic">
+    <oren_nayar_diffuse_bsdf name="diffuse" type="BSDF">
+      <input name="color" type="color3" interfacename="base" />
+    </oren_nayar_diffuse_bsdf>
+    <roughness_anisotropy name="alpha" type="vector2">
+      <input name="roughness" type="float" interfacename="rough" />
+    </roughness_anisotropy>
+    <dielectric_bsdf name="spec" type="BSDF">
+      <input name="roughness" type="vector2" nodename="alpha" />
+    </dielectric_bsdf>
+    <layer name="plastic" type="BSDF">
+      <input name="top" type="BSDF" nodename="spec" />
+      <input name="base" type="BSDF" nodename="diffuse" />
+    </layer>
+    <surface name="surf" type="surfaceshader">
+      <input name="bsdf" type="BSDF" nodename="plastic" />
+    </surface>
+    <output name="out" type="surfaceshader" nodename="surf" />
+  </nodegraph>
+  <my_plastic name="S" type="surfaceshader">
+    <input name="base" type="color3" value="0.9, 0.1, 0.1" />
+  </my_plastic>
+  <surfacematerial name="M" type="material">
+    <input name="surfaceshader" type="surfaceshader" nodename="S" />
+  </surfacematerial>
+</materialx>
+"#;

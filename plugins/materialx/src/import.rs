@@ -779,6 +779,17 @@ impl<'a> Build<'_, 'a> {
                     Some(HashMap::new())
                 }
             },
+            "volume" if ty == "volumeshader" => match self.closure_volume(scope, e) {
+                Ok(v) => out(v),
+                Err(part) => {
+                    self.unrenderable.push(part);
+                    Some(HashMap::new())
+                }
+            },
+            // Closures (and their roughness) are read by the surface or volume made of
+            // them.
+            _ if matches!(ty, "BSDF" | "EDF" | "VDF") => Some(HashMap::new()),
+            "roughness_anisotropy" | "roughness_dual" => Some(HashMap::new()),
             // What the exporter split off one Kiln node says which node and output.
             "texcoord" | "position" | "normal" | "tangent"
                 if e.attribute("kiln_node").is_some() && e.attribute("kiln_output").is_some() =>
