@@ -8,7 +8,7 @@
 
 // ---- Jenkins lookup3 (Cycles' util/hash.h) ----
 
-fn final_mix(mut a: u32, mut b: u32, mut c: u32) -> u32 {
+pub fn final_mix(mut a: u32, mut b: u32, mut c: u32) -> u32 {
     c ^= b;
     c = c.wrapping_sub(b.rotate_left(14));
     a ^= c;

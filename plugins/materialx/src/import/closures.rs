@@ -211,6 +211,26 @@ impl<'a> Build<'_, 'a> {
         fold.open_pbr.insert(key.to_owned(), value);
     }
 
+    /// The specular lobe's roughness and anisotropy ([`Build::closure_roughness`]).
+    fn set_roughness(
+        &mut self,
+        scope: &mut Scope<'a>,
+        fold: &mut Fold,
+        node: Element,
+        (roughness, anisotropy): (Value, Value),
+        share: &Value,
+    ) {
+        self.set(scope, fold, node, "specular_roughness", roughness, share);
+        self.set(
+            scope,
+            fold,
+            node,
+            "specular_roughness_anisotropy",
+            anisotropy,
+            share,
+        );
+    }
+
     /// A BSDF closure (and what it is made of) folded into `fold` with weight `weight`.
     fn fold_bsdf(
         &mut self,
@@ -269,15 +289,7 @@ impl<'a> Build<'_, 'a> {
                             fold.transmission = true;
                         }
                         self.set(scope, fold, e, "specular_ior", ior, &w);
-                        self.set(scope, fold, e, "specular_roughness", roughness, &w);
-                        self.set(
-                            scope,
-                            fold,
-                            e,
-                            "specular_roughness_anisotropy",
-                            anisotropy,
-                            &w,
-                        );
+                        self.set_roughness(scope, fold, e, (roughness, anisotropy), &w);
                     }
                     other => {
                         return Err(format!("{name} (dielectric_bsdf, scatter mode {other})"));
@@ -319,15 +331,7 @@ impl<'a> Build<'_, 'a> {
                 self.set(scope, fold, e, "base_metalness", w.clone(), &one);
                 self.set(scope, fold, e, "base_color", color, &w);
                 self.set(scope, fold, e, "specular_color", tint, &w);
-                self.set(scope, fold, e, "specular_roughness", roughness, &w);
-                self.set(
-                    scope,
-                    fold,
-                    e,
-                    "specular_roughness_anisotropy",
-                    anisotropy,
-                    &w,
-                );
+                self.set_roughness(scope, fold, e, (roughness, anisotropy), &w);
                 fold.metal = true;
             }
             "sheen_bsdf" => {
