@@ -2270,7 +2270,12 @@ impl Drop for EditorApp {
             return;
         }
         if let Some(gpu) = &self.gpu {
-            let _ = gpu.device.poll(wgpu::PollType::Poll);
+            // A destroyed device says so once the work submitted before finishes: wait
+            // for it (briefly; a lost device's queue does not run forever).
+            let _ = gpu.device.poll(wgpu::PollType::Wait {
+                submission_index: None,
+                timeout: Some(Duration::from_secs(2)),
+            });
             if let Some(reason) = gpu.lost() {
                 self.report_device_loss(reason);
                 return;
