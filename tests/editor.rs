@@ -1196,24 +1196,43 @@ fn the_world_tab_makes_and_edits_a_sky_and_saves_it() {
     assert!(saved.world.is_some());
 }
 
-/// A GPU device lost under the editor (destroyed here): the unsaved change is written to
-/// the recovery autosave at once, the editor hands over once (`kiln edit` starts a new
-/// editor on a new device) and draws nothing more; the new editor says why it started.
-#[test]
-fn a_lost_device_autosaves_the_document_and_hands_over_once() {
-    let state = tempfile::tempdir().unwrap();
-    let calls = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
+/// Device losses the editor handed over, as `kiln edit`'s answer would receive them.
+type Handovers = std::sync::Arc<std::sync::Mutex<Vec<kiln::editor::DeviceLost>>>;
+
+/// An editor on the bundled scene, its session state in `state`, whose block has been
+/// moved to x = `x` and not saved; and the device losses it hands over.
+fn editor_with_an_unsaved_move(state: &Path, x: f64) -> (Harness<'static, EditorApp>, Handovers) {
+    let calls = Handovers::default();
     let record = std::sync::Arc::clone(&calls);
     let mut harness = start(Setup {
-        state_dir: Some(state.path().to_owned()),
+        state_dir: Some(state.to_owned()),
         on_device_lost: Box::new(move |lost| record.lock().unwrap().push(lost)),
         ..Setup::default()
     });
     step_until(&mut harness, "the first samples", samples_done);
     harness.get_by_label("block").click();
     harness.step();
-    set_field(&mut harness, "Location", 0, 250.0);
+    set_field(&mut harness, "Location", 0, x);
     assert!(harness.state().document().is_dirty());
+    (harness, calls)
+}
+
+/// The scene this process's editor left in the recovery autosave under `state`.
+fn recovered(state: &Path) -> kiln::scene::Scene {
+    let autosave = state
+        .join("recovery")
+        .join(std::process::id().to_string())
+        .join("autosave.kiln");
+    kiln::scene::load_scene(&autosave).unwrap()
+}
+
+/// A GPU device lost under the editor (destroyed here): the unsaved change is written to
+/// the recovery autosave at once, the editor hands over once (`kiln edit` starts a new
+/// editor on a new device) and draws nothing more; the new editor says why it started.
+#[test]
+fn a_lost_device_autosaves_the_document_and_hands_over_once() {
+    let state = tempfile::tempdir().unwrap();
+    let (mut harness, calls) = editor_with_an_unsaved_move(state.path(), 250.0);
     let moved = harness.state().document().scene().instances[6].transform;
     let gpu = harness.state().gpu().expect("a wgpu device").clone();
     gpu.device.destroy();
@@ -1226,13 +1245,7 @@ fn a_lost_device_autosaves_the_document_and_hands_over_once() {
         calls[0].reason.contains("destroyed") && calls[0].autosaved && calls[0].file.is_none(),
         "{calls:?}"
     );
-    let autosave = state
-        .path()
-        .join("recovery")
-        .join(std::process::id().to_string())
-        .join("autosave.kiln");
-    let saved = kiln::scene::load_scene(&autosave).unwrap();
-    assert_eq!(saved.instances[6].transform, moved);
+    assert_eq!(recovered(state.path()).instances[6].transform, moved);
     assert!(
         harness
             .query_by_label_contains("The GPU device was lost")
@@ -1256,17 +1269,7 @@ fn a_lost_device_autosaves_the_document_and_hands_over_once() {
 #[test]
 fn a_device_lost_while_egui_draws_still_autosaves_and_hands_over() {
     let state = tempfile::tempdir().unwrap();
-    let calls = std::sync::Arc::new(std::sync::Mutex::new(Vec::new()));
-    let record = std::sync::Arc::clone(&calls);
-    let mut harness = start(Setup {
-        state_dir: Some(state.path().to_owned()),
-        on_device_lost: Box::new(move |lost| record.lock().unwrap().push(lost)),
-        ..Setup::default()
-    });
-    step_until(&mut harness, "the first samples", samples_done);
-    harness.get_by_label("block").click();
-    harness.step();
-    set_field(&mut harness, "Location", 0, -125.0);
+    let (mut harness, calls) = editor_with_an_unsaved_move(state.path(), -125.0);
     let moved = harness.state().document().scene().instances[6].transform;
     let gpu = harness.state().gpu().expect("a wgpu device").clone();
     // The frame's shapes are made; the device goes before they are drawn.
@@ -1285,11 +1288,5 @@ fn a_device_lost_while_egui_draws_still_autosaves_and_hands_over() {
         calls[0].reason.contains("destroyed") && calls[0].autosaved,
         "{calls:?}"
     );
-    let autosave = state
-        .path()
-        .join("recovery")
-        .join(std::process::id().to_string())
-        .join("autosave.kiln");
-    let saved = kiln::scene::load_scene(&autosave).unwrap();
-    assert_eq!(saved.instances[6].transform, moved);
+    assert_eq!(recovered(state.path()).instances[6].transform, moved);
 }
