@@ -25,15 +25,14 @@ use kiln_plugin_api::kmat::Value;
 use super::{Build, Element, Scope, elements, input, name_of, position};
 use crate::surface::{self, Ops, constant3};
 
-/// What a closure graph folds into: OpenPBR's inputs, and the lobes seen.
+/// What a closure graph folds into: OpenPBR's inputs, and the lobes seen that decide
+/// what a later closure is (a coat over a reflecting surface) and which lobes stay off.
 #[derive(Default)]
 struct Fold {
     open_pbr: BTreeMap<String, Value>,
     diffuse: bool,
     specular: bool,
     metal: bool,
-    transmission: bool,
-    subsurface: bool,
 }
 
 /// OpenPBR inputs that weigh a lobe: summed where two sides of a mix both set them.
@@ -286,7 +285,6 @@ impl<'a> Build<'_, 'a> {
                         if transmits {
                             self.set(scope, fold, e, "transmission_weight", w.clone(), &one);
                             self.set(scope, fold, e, "transmission_color", tint, &w);
-                            fold.transmission = true;
                         }
                         self.set(scope, fold, e, "specular_ior", ior, &w);
                         self.set_roughness(scope, fold, e, (roughness, anisotropy), &w);
@@ -379,7 +377,6 @@ impl<'a> Build<'_, 'a> {
                     anisotropy,
                     &one,
                 );
-                fold.subsurface = true;
             }
             "layer" => {
                 if let Some(base) = self.closure_source(scope, e, "base") {
