@@ -1236,6 +1236,11 @@ fn a_lost_device_autosaves_the_document_and_hands_over_once() {
     let moved = harness.state().document().scene().instances[6].transform;
     let gpu = harness.state().gpu().expect("a wgpu device").clone();
     gpu.device.destroy();
+    // wgpu says so once the work submitted before finishes (seconds under load).
+    let handed_over = std::sync::Arc::clone(&calls);
+    step_until(&mut harness, "the handover", |_| {
+        !handed_over.lock().unwrap().is_empty()
+    });
     for _ in 0..5 {
         harness.step();
     }

@@ -2271,11 +2271,18 @@ impl Drop for EditorApp {
         }
         if let Some(gpu) = &self.gpu {
             // A destroyed device says so once the work submitted before finishes: wait
-            // for it (briefly; a lost device's queue does not run forever).
-            let _ = gpu.device.poll(wgpu::PollType::Wait {
-                submission_index: None,
-                timeout: Some(Duration::from_secs(2)),
-            });
+            // for it (a lost device's queue does not run forever; under load a viewport
+            // dispatch on a software driver can take seconds, so wait up to thirty).
+            let deadline = Instant::now() + Duration::from_secs(30);
+            while gpu.lost().is_none() && Instant::now() < deadline {
+                let idle = gpu.device.poll(wgpu::PollType::Wait {
+                    submission_index: None,
+                    timeout: Some(Duration::from_millis(500)),
+                });
+                if !matches!(idle, Err(wgpu::PollError::Timeout)) {
+                    break;
+                }
+            }
             if let Some(reason) = gpu.lost() {
                 self.report_device_loss(reason);
                 return;
