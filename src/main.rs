@@ -537,6 +537,7 @@ fn edit(
     quit_when_done: bool,
     plugins: PluginHost,
 ) -> Result<()> {
+    report_editor_panics();
     let import_extensions = plugins
         .plugins()
         .filter(|p| p.kind == PluginKind::Importer)
@@ -571,6 +572,44 @@ fn edit(
         );
     }
     Ok(())
+}
+
+/// `kiln edit`'s panic report: one `error:` line naming where the editor failed, since the
+/// editor, dropped as the panic unwinds, then says what it kept (the recovery autosave)
+/// and, when the GPU device was lost under egui's renderer (whose panic eframe cannot
+/// catch), starts again. `RUST_BACKTRACE` set keeps Rust's own report, backtrace and all.
+fn report_editor_panics() {
+    if std::env::var_os("RUST_BACKTRACE").is_some() {
+        return;
+    }
+    std::panic::set_hook(Box::new(|info| {
+        let message = info
+            .payload()
+            .downcast_ref::<&str>()
+            .copied()
+            .or_else(|| info.payload().downcast_ref::<String>().map(String::as_str))
+            .unwrap_or("no message");
+        eprintln!("{}", panic_line(message, info.location()));
+    }));
+}
+
+/// The line [`report_editor_panics`] prints.
+fn panic_line(message: &str, location: Option<&std::panic::Location<'_>>) -> String {
+    let at = location.map_or(String::new(), |l| {
+        format!(" at {}:{}", source_file(l.file()), l.line())
+    });
+    format!("error: the editor failed{at}: {message}")
+}
+
+/// A dependency's source file by its crate and path, without the registry's folders.
+fn source_file(file: &str) -> String {
+    match file.rsplit_once("/src/") {
+        Some((krate, path)) => {
+            let krate = krate.rsplit('/').next().unwrap_or(krate);
+            format!("{krate}/src/{path}")
+        }
+        None => file.to_owned(),
+    }
 }
 
 /// Set in the environment of an editor started again after a lost device: the reason,
@@ -1732,5 +1771,33 @@ fn write_output(
             output.display()
         ))),
         None => Ok(()),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn an_editor_panic_is_one_line_naming_the_crate_and_file() {
+        assert_eq!(
+            source_file(
+                "/root/.cargo/registry/src/index.crates.io-1949cf8c6b5b557f/egui-wgpu-0.36.2/src/renderer.rs"
+            ),
+            "egui-wgpu-0.36.2/src/renderer.rs"
+        );
+        assert_eq!(source_file("src/main.rs"), "src/main.rs");
+        let line = panic_line("Failed to create staging buffer", None);
+        assert_eq!(
+            line,
+            "error: the editor failed: Failed to create staging buffer"
+        );
+        let here = std::panic::Location::caller();
+        let line = panic_line("boom", Some(here));
+        assert!(
+            line.starts_with("error: the editor failed at src/main.rs:")
+                && line.ends_with(": boom"),
+            "{line}"
+        );
     }
 }

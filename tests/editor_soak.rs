@@ -35,6 +35,22 @@ const ROW_EVERY: Duration = Duration::from_secs(60);
 /// to `PIPELINE_CACHE_CAPACITY`), before the soak calls it a leak.
 const GROWTH_LIMIT_MIB: f64 = 64.0;
 
+/// The C heap's bytes in use and its bytes free but kept from the system, in MiB (glibc's
+/// `mallinfo2`): resident memory that grows while the first stays flat is the allocator
+/// keeping freed pages, not a leak.
+#[cfg(all(target_os = "linux", target_env = "gnu"))]
+fn heap() -> (f64, f64) {
+    // SAFETY: mallinfo2 only reads the allocator's counters.
+    let info = unsafe { libc::mallinfo2() };
+    let mib = |bytes: usize| bytes as f64 / 1048576.0;
+    (mib(info.uordblks + info.hblkhd), mib(info.fordblks))
+}
+
+#[cfg(not(all(target_os = "linux", target_env = "gnu")))]
+fn heap() -> (f64, f64) {
+    (f64::NAN, f64::NAN)
+}
+
 /// Steps frames for about `time`, as a user's edits leave the editor between them.
 fn idle(harness: &mut Harness<'_, EditorApp>, time: Duration) {
     let start = Instant::now();
@@ -145,9 +161,9 @@ fn a_long_editing_session_keeps_memory_and_pipelines_bounded() {
             .map_or("none".into(), |g| g.describe())
     );
     println!(
-        "| minutes | edits | resident MiB | pipelines held | pipelines compiled | viewport passes | renderers built | kernels built | undo steps (at most {UNDO_STEPS}) |"
+        "| minutes | edits | resident MiB | heap in use MiB | heap kept free MiB | pipelines held | pipelines compiled | viewport passes | renderers built | kernels built | undo steps (at most {UNDO_STEPS}) |"
     );
-    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---|");
+    println!("|---:|---:|---:|---:|---:|---:|---:|---:|---:|---:|---|");
     let begin = Instant::now();
     let mut next_row = ROW_EVERY;
     // Resident MiB and pipelines compiled, per row.
@@ -171,9 +187,10 @@ fn a_long_editing_session_keeps_memory_and_pipelines_bounded() {
             let resident = kiln::bench::memory().map_or(0.0, |(now, _)| now as f64) / 1048576.0;
             let gpu = app.gpu().unwrap();
             rows.push((resident, gpu.pipelines_compiled()));
+            let (in_use, kept) = heap();
             let status = app.viewport_status().unwrap();
             println!(
-                "| {:.0} | {edits} | {resident:.0} | {} | {} | {} | {} | {} | {} |",
+                "| {:.0} | {edits} | {resident:.0} | {in_use:.0} | {kept:.0} | {} | {} | {} | {} | {} | {} |",
                 begin.elapsed().as_secs_f64() / 60.0,
                 gpu.pipelines_cached(),
                 gpu.pipelines_compiled(),
