@@ -108,6 +108,11 @@ pub struct RunReport {
 /// Blender autosaves every two minutes; the issue asks for one.
 pub const AUTOSAVE_EVERY: Duration = Duration::from_secs(60);
 
+/// How often the editor gives the C heap's free pages back to the system
+/// ([`crate::render::release_free_host_memory`]): on a CPU adapter each rebuilt renderer
+/// and compiled kernel frees hundreds of MiB that glibc otherwise keeps.
+const HEAP_RELEASE_EVERY: Duration = Duration::from_secs(10);
+
 /// Something the user asked for that waits on the unsaved-changes prompt.
 #[derive(Clone, Debug, PartialEq, Eq)]
 enum Pending {
@@ -206,6 +211,8 @@ pub struct EditorApp {
     recent: Vec<PathBuf>,
     autosave_every: Duration,
     last_autosave: Instant,
+    /// When the C heap's free pages were last given back ([`HEAP_RELEASE_EVERY`]).
+    last_heap_release: Instant,
     /// The document revision the last autosave holds, and the autosave under way.
     autosaved_revision: Option<(u64, u64)>,
     autosave_job: Option<JoinHandle<Result<(), String>>>,
@@ -367,6 +374,7 @@ impl EditorApp {
             session,
             autosave_every: options.autosave_every,
             last_autosave: Instant::now(),
+            last_heap_release: Instant::now(),
             autosaved_revision: None,
             autosave_job: None,
             quit_when_done: options.quit_when_done,
@@ -2353,6 +2361,10 @@ impl EditorApp {
         self.dialogs_ui(&ctx);
         self.update_title(&ctx);
         self.autosave();
+        if self.last_heap_release.elapsed() >= HEAP_RELEASE_EVERY {
+            self.last_heap_release = Instant::now();
+            crate::render::release_free_host_memory();
+        }
         if self.quit_when_done {
             let status = self.viewport_status();
             let done = status.is_none_or(|s| {

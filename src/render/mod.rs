@@ -25,7 +25,7 @@ mod update;
 pub mod volume_grid;
 pub mod world_bake;
 
-pub use context::{Backend, GpuContext, GpuError};
+pub use context::{Backend, GpuContext, GpuError, release_free_host_memory};
 pub use export::export_film;
 pub use film_pieces::{DeviceFilm, memory_check};
 pub use readback::map_and_read;
