@@ -60,10 +60,42 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
         return false;
     }
     var node_index = root;
+    // "While-while" traversal (Aila & Laine 2009): descend through interior nodes until a
+    // leaf or a miss, then test the leaf's triangles, then pop. A software rasteriser runs
+    // every branch of a loop body for the whole SIMD batch, so keeping the triangle loop
+    // and the pop out of the descent's body runs them once per leaf, not once per node.
     loop {
-        let node = fetch_blas_node(node_index);
-        var descend = false;
-        if (node.count > 0u) {
+        var node = fetch_blas_node(node_index);
+        var leaf = true;
+        loop {
+            if (node.count > 0u) {
+                break;
+            }
+            let left = fetch_blas_node(node.first);
+            let right = fetch_blas_node(node.first + 1u);
+            let tl = intersect_aabb(ray.origin, inv_dir, (*best).t, left.min, left.max);
+            let tr = intersect_aabb(ray.origin, inv_dir, (*best).t, right.min, right.max);
+            if (tl >= 0.0 && tr >= 0.0) {
+                let left_first = tl <= tr;
+                blas_stack_node[sp] = select(node.first, node.first + 1u, left_first);
+                blas_stack_t[sp] = max(tl, tr);
+                sp++;
+                node_index = select(node.first + 1u, node.first, left_first);
+            } else if (tl >= 0.0) {
+                node_index = node.first;
+            } else if (tr >= 0.0) {
+                node_index = node.first + 1u;
+            } else {
+                leaf = false;
+                break;
+            }
+            if (node_index == node.first) {
+                node = left;
+            } else {
+                node = right;
+            }
+        }
+        if (leaf) {
             for (var i = node.first; i < node.first + node.count; i++) {
                 let tri = fetch_triangle(i);
                 let h = intersect_triangle(ray, rs, (*best).t, tri.p0.xyz, tri.p1.xyz, tri.p2.xyz);
@@ -75,40 +107,19 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
                     }
                 }
             }
-        } else {
-            let left = fetch_blas_node(node.first);
-            let right = fetch_blas_node(node.first + 1u);
-            let tl = intersect_aabb(ray.origin, inv_dir, (*best).t, left.min, left.max);
-            let tr = intersect_aabb(ray.origin, inv_dir, (*best).t, right.min, right.max);
-            if (tl >= 0.0 && tr >= 0.0) {
-                let left_first = tl <= tr;
-                blas_stack_node[sp] = select(node.first, node.first + 1u, left_first);
-                blas_stack_t[sp] = max(tl, tr);
-                sp++;
-                node_index = select(node.first + 1u, node.first, left_first);
-                descend = true;
-            } else if (tl >= 0.0) {
-                node_index = node.first;
-                descend = true;
-            } else if (tr >= 0.0) {
-                node_index = node.first + 1u;
-                descend = true;
-            }
         }
-        if (!descend) {
-            // Pop the next subtree that can still hold a closer hit.
-            var popped = false;
-            while (sp > 0u) {
-                sp--;
-                if (blas_stack_t[sp] <= (*best).t * BOX_T_SLACK) {
-                    node_index = blas_stack_node[sp];
-                    popped = true;
-                    break;
-                }
-            }
-            if (!popped) {
+        // Pop the next subtree that can still hold a closer hit.
+        var popped = false;
+        while (sp > 0u) {
+            sp--;
+            if (blas_stack_t[sp] <= (*best).t * BOX_T_SLACK) {
+                node_index = blas_stack_node[sp];
+                popped = true;
                 break;
             }
+        }
+        if (!popped) {
+            break;
         }
     }
     return found;
@@ -126,19 +137,15 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
         return best;
     }
     var node_index = 0u;
+    // While-while, as in traverse_blas: the instance's whole BLAS traversal runs once per
+    // TLAS leaf reached, not once per TLAS node.
     loop {
-        let node = fetch_tlas_node(node_index);
-        var descend = false;
-        if (node.count > 0u) {
-            for (var i = node.first; i < node.first + node.count; i++) {
-                let placement = fetch_placement(i);
-                // The direction is not renormalised, so t means the same in both spaces.
-                let local = Ray(transform_point(placement.to_object, ray.origin), transform_vector(placement.to_object, ray.dir));
-                if (traverse_blas(i, placement.blas_root, local, any_hit, &best) && any_hit) {
-                    return best;
-                }
+        var node = fetch_tlas_node(node_index);
+        var leaf = true;
+        loop {
+            if (node.count > 0u) {
+                break;
             }
-        } else {
             let left = fetch_tlas_node(node.first);
             let right = fetch_tlas_node(node.first + 1u);
             let tl = intersect_aabb(ray.origin, inv_dir, best.t, left.min, left.max);
@@ -149,28 +156,41 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
                 tlas_stack_t[sp] = max(tl, tr);
                 sp++;
                 node_index = select(node.first + 1u, node.first, left_first);
-                descend = true;
             } else if (tl >= 0.0) {
                 node_index = node.first;
-                descend = true;
             } else if (tr >= 0.0) {
                 node_index = node.first + 1u;
-                descend = true;
-            }
-        }
-        if (!descend) {
-            var popped = false;
-            while (sp > 0u) {
-                sp--;
-                if (tlas_stack_t[sp] <= best.t * BOX_T_SLACK) {
-                    node_index = tlas_stack_node[sp];
-                    popped = true;
-                    break;
-                }
-            }
-            if (!popped) {
+            } else {
+                leaf = false;
                 break;
             }
+            if (node_index == node.first) {
+                node = left;
+            } else {
+                node = right;
+            }
+        }
+        if (leaf) {
+            for (var i = node.first; i < node.first + node.count; i++) {
+                let placement = fetch_placement(i);
+                // The direction is not renormalised, so t means the same in both spaces.
+                let local = Ray(transform_point(placement.to_object, ray.origin), transform_vector(placement.to_object, ray.dir));
+                if (traverse_blas(i, placement.blas_root, local, any_hit, &best) && any_hit) {
+                    return best;
+                }
+            }
+        }
+        var popped = false;
+        while (sp > 0u) {
+            sp--;
+            if (tlas_stack_t[sp] <= best.t * BOX_T_SLACK) {
+                node_index = tlas_stack_node[sp];
+                popped = true;
+                break;
+            }
+        }
+        if (!popped) {
+            break;
         }
     }
     return best;
