@@ -356,16 +356,12 @@ impl<V: Clone> PipelineCache<V> {
 /// does nothing. On a CPU adapter a device's buffers and its pipelines' compile are host
 /// allocations made by many threads, and glibc keeps what they free in per-thread arenas:
 /// an editor session on lavapipe held 1.5 GiB of freed heap beside 0.5 GiB in use. A
-/// long-running caller (the editor) calls it now and then. True when pages were released.
-pub fn release_free_host_memory() -> bool {
+/// long-running caller (the editor) calls it now and then.
+pub fn release_free_host_memory() {
+    // SAFETY: malloc_trim only returns free pages of the allocator's own arenas.
     #[cfg(all(target_os = "linux", target_env = "gnu"))]
-    {
-        // SAFETY: malloc_trim only returns free pages of the allocator's own arenas.
-        unsafe { libc::malloc_trim(0) == 1 }
-    }
-    #[cfg(not(all(target_os = "linux", target_env = "gnu")))]
-    {
-        false
+    unsafe {
+        libc::malloc_trim(0);
     }
 }
 
