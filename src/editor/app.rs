@@ -2278,6 +2278,12 @@ impl Drop for EditorApp {
             return;
         }
         if let Some(gpu) = &self.gpu {
+            // The workers poll the device too, and the one whose poll finds the lost device
+            // reports it: stop them first, so that no report is still on its way.
+            drop(self.viewport.take());
+            drop(self.thumbnails.take());
+            drop(self.node_previews.take());
+            drop(self.final_render.take());
             // A destroyed device says so once the work submitted before finishes: wait
             // for it (a lost device's queue does not run forever; under load a viewport
             // dispatch on a software driver can take seconds, so wait up to thirty).

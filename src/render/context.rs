@@ -74,10 +74,10 @@ fn watch_for_loss(device: &wgpu::Device) -> Arc<std::sync::Mutex<Option<String>>
             wgpu::DeviceLostReason::Unknown if message.is_empty() => "no reason given".to_owned(),
             wgpu::DeviceLostReason::Unknown => message,
         };
-        tracing::error!("GPU device lost: {why}");
         if let Ok(mut slot) = slot.lock() {
-            slot.get_or_insert(why);
+            slot.get_or_insert(why.clone());
         }
+        tracing::error!("GPU device lost: {why}");
     });
     lost
 }
