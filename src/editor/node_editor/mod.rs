@@ -660,7 +660,9 @@ impl NodeEditor {
                 .and_then(|t| t.texture(i))
                 .map(|texture| egui::Image::new((texture.id(), egui::vec2(side, side))))
         };
-        ui.horizontal(|ui| {
+        // Wrapped: in a narrow window the bar takes a second row rather than running under
+        // the side panel.
+        ui.horizontal_wrapped(|ui| {
             ui.selectable_value(&mut self.world, false, "Object")
                 .on_hover_text("The node graph of the selected object's material");
             ui.selectable_value(&mut self.world, true, "World")
@@ -773,10 +775,14 @@ impl NodeEditor {
                     ));
                 }
             }
-            let label = ui.label("Name");
+            // The label and its field wrap together.
             let edit = ui
-                .add(egui::TextEdit::singleline(&mut self.rename).desired_width(140.0))
-                .labelled_by(label.id);
+                .horizontal(|ui| {
+                    let label = ui.label("Name");
+                    ui.add(egui::TextEdit::singleline(&mut self.rename).desired_width(140.0))
+                        .labelled_by(label.id)
+                })
+                .inner;
             if !edit.has_focus() && !edit.lost_focus() {
                 self.rename = materials[m].name.clone();
             }
