@@ -31,6 +31,24 @@ fn same_seed_renders_are_bit_identical() {
     );
 }
 
+/// The editor renders its thumbnails, node previews and final renders on a second device
+/// of the adapter (`GpuContext::sibling`), so that their submissions never wait behind the
+/// window's or hold them up: a device of its own, which renders the same bits.
+#[test]
+fn a_sibling_device_is_a_device_of_its_own_and_renders_the_same_bits() {
+    let ctx = gpu();
+    let sibling = ctx.sibling().expect("a second device on the adapter");
+    assert!(
+        sibling.device != ctx.device,
+        "the sibling shares the device"
+    );
+    assert_eq!(sibling.describe(), ctx.describe());
+    let s = settings(32, 32, 4);
+    let here = render(&ctx, &cornell(), s);
+    let there = render(&sibling, &cornell(), s);
+    assert!(here == there, "the sibling device's film differs");
+}
+
 #[test]
 fn split_sample_ranges_merge_into_the_whole() {
     let ctx = gpu();

@@ -178,6 +178,10 @@ pub struct EditorApp {
     document_serial: u64,
     view: Camera,
     gpu: Option<Arc<GpuContext>>,
+    /// A second device on the same adapter for the renders whose images come back to the
+    /// host (thumbnails, node previews, the final render), so that their submissions never
+    /// hold up the window's (see [`GpuContext::sibling`]); `gpu` when none could be opened.
+    background_gpu: Option<Arc<GpuContext>>,
     render_state: Option<egui_wgpu::RenderState>,
     viewport: Option<ViewportRenderer>,
     /// The material list's thumbnails, and the document state they were last asked for
@@ -294,15 +298,26 @@ impl EditorApp {
                 None
             }
         };
+        let background_gpu = gpu.as_ref().map(|ctx| {
+            ctx.sibling().unwrap_or_else(|e| {
+                tracing::warn!(
+                    "no second device for background renders, sharing the window's: {e}"
+                );
+                Arc::clone(ctx)
+            })
+        });
         let viewport = gpu.as_ref().map(|ctx| {
             let egui_ctx = cc.egui_ctx.clone();
             ViewportRenderer::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
         });
-        let thumbnails = gpu.as_ref().filter(|_| options.thumbnails).map(|ctx| {
-            let egui_ctx = cc.egui_ctx.clone();
-            Thumbnails::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
-        });
-        let node_previews = gpu.as_ref().map(|ctx| {
+        let thumbnails = background_gpu
+            .as_ref()
+            .filter(|_| options.thumbnails)
+            .map(|ctx| {
+                let egui_ctx = cc.egui_ctx.clone();
+                Thumbnails::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
+            });
+        let node_previews = background_gpu.as_ref().map(|ctx| {
             let egui_ctx = cc.egui_ctx.clone();
             NodePreviews::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
         });
@@ -339,6 +354,7 @@ impl EditorApp {
             document_serial: 0,
             view,
             gpu,
+            background_gpu,
             render_state: cc.wgpu_render_state.clone(),
             viewport,
             thumbnails,
@@ -779,9 +795,12 @@ impl EditorApp {
         let Some(gpu) = &self.gpu else {
             return false;
         };
-        // Runs the device's callbacks, the one that says it is lost among them.
+        // Runs the device's callbacks, the one that says it is lost among them. The
+        // background device is not polled here (a poll waits while a kernel compiles in
+        // a submission): its workers' polls report its loss (a driver reset loses both).
         let _ = gpu.device.poll(wgpu::PollType::Poll);
-        let Some(reason) = gpu.lost() else {
+        let background = self.background_gpu.as_ref().and_then(|b| b.lost());
+        let Some(reason) = gpu.lost().or(background) else {
             return false;
         };
         self.report_device_loss(reason);
@@ -852,7 +871,7 @@ impl EditorApp {
     /// Starts the final render of the document (hidden items left out) with the kernel
     /// specialised to it.
     fn start_render(&mut self, ctx: &egui::Context) {
-        let Some(gpu) = &self.gpu else {
+        let Some(gpu) = &self.background_gpu else {
             self.error = Some("rendering needs a GPU device, and none was found".into());
             return;
         };

@@ -157,6 +157,12 @@ impl GpuContext {
                 reason: format!("{} cannot run compute shaders", describe_adapter(&info)),
             });
         }
+        Self::open_device(adapter, limits)
+    }
+
+    /// A device of its own on `adapter`, asking for `limits`.
+    fn open_device(adapter: wgpu::Adapter, limits: wgpu::Limits) -> Result<Arc<Self>, GpuError> {
+        let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("kiln"),
             required_features: wgpu::Features::empty(),
@@ -182,6 +188,15 @@ impl GpuContext {
             pipelines_compiled: Default::default(),
             lost,
         }))
+    }
+
+    /// A second device on this context's adapter, with its own queue and pipeline cache:
+    /// for work whose submissions must not hold up this device's. A software driver
+    /// (lavapipe) compiles a kernel at its first dispatch, inside the submission, and every
+    /// other submission to that device waits for it: the editor's window, whose frames
+    /// are submissions, froze for a thumbnail's compile.
+    pub fn sibling(&self) -> Result<Arc<Self>, GpuError> {
+        Self::open_device(self.adapter.clone(), self.adapter.limits())
     }
 
     /// Wraps a device another part of the program opened (the editor's window, whose
