@@ -556,6 +556,7 @@ fn edit(
         pixel_size,
         on_device_lost: Box::new(restart_after_device_loss),
         restarted_after_device_loss: restarted_after_device_loss(),
+        rehearse_compiles: true,
     })
     .map_err(|e| anyhow::anyhow!("the editor's window failed: {e}"))?;
     if let Some(error) = report.error {

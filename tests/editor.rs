@@ -1102,6 +1102,36 @@ fn a_quality_preset_sets_its_settings_in_one_undo_step() {
     assert_eq!(harness.state().document().scene().settings, before);
 }
 
+/// On a software driver a kernel compiles inside its first submission, and the window,
+/// whose frames are submissions to the same device, waited for it (a minute with a cold
+/// shader cache). `kiln edit` compiles each of the viewport's kernels on the background
+/// device first, so that the window's device finds it in the driver's cache.
+#[test]
+fn the_viewports_kernels_compile_on_the_background_device_first() {
+    let mut harness = start(Setup {
+        rehearse_compiles: true,
+        ..Setup::default()
+    });
+    step_until(&mut harness, "the first samples", samples_done);
+    let app = harness.state();
+    let (window, background) = (app.gpu().unwrap(), app.background_gpu().unwrap());
+    assert!(window.device != background.device, "one device for both");
+    if window.info.device_type == wgpu::DeviceType::Cpu {
+        // Thumbnails are off: what the background device compiled, it compiled for the
+        // viewport.
+        assert!(
+            background.pipelines_compiled() >= window.pipelines_compiled(),
+            "the background device compiled {} pipelines, the window's {}",
+            background.pipelines_compiled(),
+            window.pipelines_compiled()
+        );
+    } else {
+        // Other drivers compile outside submissions: nothing is rehearsed.
+        assert_eq!(background.pipelines_compiled(), 0);
+    }
+    assert!(window.pipelines_compiled() >= 1);
+}
+
 #[test]
 fn the_viewport_renders_one_pixel_per_pixel_size_squared_of_the_window() {
     // Tall enough that the Render tab's last section, the viewport's, is on screen.

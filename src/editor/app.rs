@@ -72,6 +72,11 @@ pub struct EditorOptions {
     /// Why the editor this one replaces lost its device, if it did: said at start,
     /// beside the recovery of its unsaved changes.
     pub restarted_after_device_loss: Option<String>,
+    /// On a software driver, compile the viewport's kernels on the background device
+    /// first ([`GpuContext::rehearse_compiles_on`]), so that the window never waits for
+    /// one (it froze for a minute on a cold shader cache): `kiln edit` does; tests, which
+    /// have no window to keep responsive, leave it off unless they test it.
+    pub rehearse_compiles: bool,
 }
 
 /// A GPU device lost under the editor, and what of its document was kept.
@@ -299,12 +304,16 @@ impl EditorApp {
             }
         };
         let background_gpu = gpu.as_ref().map(|ctx| {
-            ctx.sibling().unwrap_or_else(|e| {
+            let background = ctx.sibling().unwrap_or_else(|e| {
                 tracing::warn!(
                     "no second device for background renders, sharing the window's: {e}"
                 );
                 Arc::clone(ctx)
-            })
+            });
+            if options.rehearse_compiles {
+                ctx.rehearse_compiles_on(Arc::clone(&background));
+            }
+            background
         });
         let viewport = gpu.as_ref().map(|ctx| {
             let egui_ctx = cc.egui_ctx.clone();
@@ -431,6 +440,12 @@ impl EditorApp {
     /// The device the viewport renders on.
     pub fn gpu(&self) -> Option<&Arc<GpuContext>> {
         self.gpu.as_ref()
+    }
+
+    /// The device of the thumbnails, node previews and final renders (see
+    /// [`GpuContext::sibling`]).
+    pub fn background_gpu(&self) -> Option<&Arc<GpuContext>> {
+        self.background_gpu.as_ref()
     }
 
     /// Where the viewport was laid out in the last frame (points).

@@ -59,6 +59,9 @@ pub struct GpuContext {
     /// Why the device was lost, once the driver says it was (a crash, a reset after a
     /// dispatch ran too long, `destroy`): every later wait and read fails naming it.
     lost: Arc<std::sync::Mutex<Option<String>>>,
+    /// Where a renderer's kernel is compiled first when this context has not compiled
+    /// it (see [`GpuContext::rehearse_compiles_on`]).
+    rehearsal: std::sync::OnceLock<Arc<GpuContext>>,
 }
 
 /// Records in the returned slot why `device` is lost, when it is.
@@ -187,6 +190,7 @@ impl GpuContext {
             info,
             pipelines_compiled: Default::default(),
             lost,
+            rehearsal: Default::default(),
         }))
     }
 
@@ -197,6 +201,24 @@ impl GpuContext {
     /// are submissions, froze for a thumbnail's compile.
     pub fn sibling(&self) -> Result<Arc<Self>, GpuError> {
         Self::open_device(self.adapter.clone(), self.adapter.limits())
+    }
+
+    /// From now on a renderer whose kernel this context has not compiled first builds a
+    /// small copy of itself on `other` (a [`sibling`](Self::sibling)), where the driver
+    /// compiles it, and only then its own. On a software driver that compiles at the first
+    /// dispatch (lavapipe) the compile then holds up `other`'s submissions, not this
+    /// device's, and this device's compile finds the machine code in the driver's shader
+    /// cache. Does nothing on other adapters, whose drivers compile when the pipeline is
+    /// created, outside any submission; set once.
+    pub fn rehearse_compiles_on(&self, other: Arc<GpuContext>) {
+        if self.info.device_type == wgpu::DeviceType::Cpu && other.device != self.device {
+            let _ = self.rehearsal.set(other);
+        }
+    }
+
+    /// The context [`rehearse_compiles_on`](Self::rehearse_compiles_on) named, if any.
+    pub fn rehearsal(&self) -> Option<&Arc<GpuContext>> {
+        self.rehearsal.get()
     }
 
     /// Wraps a device another part of the program opened (the editor's window, whose
@@ -227,6 +249,7 @@ impl GpuContext {
             info,
             pipelines_compiled: Default::default(),
             lost,
+            rehearsal: Default::default(),
         }))
     }
 

@@ -504,6 +504,26 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
     }
 }
 
+/// Builds a small renderer of `scene` with `settings` on `ctx` and drops it, so that the
+/// driver has compiled its kernel there (see [`GpuContext::rehearse_compiles_on`]). The
+/// film's size is not part of what the driver compiles for: 8 × 8 pixels serve.
+fn rehearse(ctx: &Arc<GpuContext>, scene: &Scene, settings: &RenderSettings) {
+    let small = RenderSettings {
+        width: settings.width.min(8),
+        height: settings.height.min(8),
+        ..*settings
+    };
+    let started = Instant::now();
+    match Renderer::new(Arc::clone(ctx), scene, small) {
+        Ok(_) => tracing::debug!(
+            "kernel rehearsed on the second device in {:.0} ms",
+            started.elapsed().as_secs_f64() * 1e3
+        ),
+        // The real build reports what went wrong.
+        Err(e) => tracing::debug!("the kernel's rehearsal failed: {e}"),
+    }
+}
+
 impl Renderer {
     pub fn new(
         ctx: Arc<GpuContext>,
@@ -511,6 +531,7 @@ impl Renderer {
         settings: RenderSettings,
     ) -> Result<Self, RenderError> {
         scene.validate().map_err(RenderError::Scene)?;
+        let original = scene;
         // A world graph renders as the environment map and sun lights it bakes into.
         let world_texels = scene
             .world
@@ -571,6 +592,9 @@ impl Renderer {
         }
         let kernel = path_tracing_kernel(&features, &materials.wgsl);
         let kernel_compiled = !kernel.is_cached(&ctx, 1, "render");
+        if kernel_compiled && let Some(rehearsal) = ctx.rehearsal() {
+            rehearse(rehearsal, original, &settings);
+        }
         let pipeline = kernel.create_pipeline(&ctx, &[&layout], "render")?;
         let bake_pipeline = if gpu_scene.volume_grids.grids.is_empty() {
             None

@@ -45,6 +45,9 @@ pub struct Setup {
     /// What a lost device does (by default the test fails naming the reason).
     pub on_device_lost: Box<dyn FnMut(DeviceLost)>,
     pub restarted_after_device_loss: Option<String>,
+    /// Compile the viewport's kernels on the background device first, as `kiln edit`
+    /// does (off: it builds each new kernel's scene twice).
+    pub rehearse_compiles: bool,
 }
 
 impl Default for Setup {
@@ -62,6 +65,7 @@ impl Default for Setup {
             pixel_size: PIXEL_SIZE,
             on_device_lost: Box::new(|lost| panic!("the GPU device was lost: {}", lost.reason)),
             restarted_after_device_loss: None,
+            rehearse_compiles: false,
         }
     }
 }
@@ -85,6 +89,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
         pixel_size,
         on_device_lost,
         restarted_after_device_loss,
+        rehearse_compiles,
     } = setup;
     Harness::builder()
         .with_size(size)
@@ -105,6 +110,7 @@ pub fn start(setup: Setup) -> Harness<'static, EditorApp> {
                     pixel_size: Some(pixel_size),
                     on_device_lost,
                     restarted_after_device_loss,
+                    rehearse_compiles,
                 },
             )
         })
