@@ -362,6 +362,10 @@ impl<V> PipelineCache<V> {
     pub(crate) fn contains(&self, key: u64) -> bool {
         self.entries.contains_key(&key)
     }
+
+    pub(crate) fn remove(&mut self, key: u64) {
+        self.entries.remove(&key);
+    }
 }
 
 impl<V: Clone> PipelineCache<V> {

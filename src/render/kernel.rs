@@ -143,6 +143,16 @@ impl KernelSource {
         ctx.pipelines.lock().is_ok_and(|p| p.contains(key))
     }
 
+    /// Drops this kernel's pipelines for `entry_points` from `ctx`'s pipeline cache (their
+    /// machine code goes once no renderer holds them).
+    pub fn forget(&self, ctx: &GpuContext, layouts: usize, entry_points: &[&str]) {
+        if let Ok(mut cache) = ctx.pipelines.lock() {
+            for entry_point in entry_points {
+                cache.remove(self.cache_key(layouts, entry_point));
+            }
+        }
+    }
+
     /// Validates, then creates the compute pipeline for `entry_point`.
     pub fn create_pipeline(
         &self,
