@@ -53,7 +53,7 @@ pub struct GpuContext {
     /// Compiled pipelines by kernel source and entry point (`KernelSource::create_pipeline`):
     /// a scene rendered again with the same features and materials, or a restarted
     /// render, skips naga and the driver's compile.
-    pub(crate) pipelines: std::sync::Mutex<PipelineCache<wgpu::ComputePipeline>>,
+    pub(crate) pipelines: std::sync::Mutex<PipelineCache<PipelineKey, wgpu::ComputePipeline>>,
     /// Pipelines compiled on this context (cache misses), so the cache can be checked.
     pub(crate) pipelines_compiled: std::sync::atomic::AtomicUsize,
     /// Why the device was lost, once the driver says it was (a crash, a reset after a
@@ -325,28 +325,32 @@ pub fn pipeline_cache_capacity(device_type: wgpu::DeviceType, available: Option<
 /// A pipeline cache sized for `info`'s adapter and the memory free now.
 fn pipeline_cache_for(
     info: &wgpu::AdapterInfo,
-) -> std::sync::Mutex<PipelineCache<wgpu::ComputePipeline>> {
+) -> std::sync::Mutex<PipelineCache<PipelineKey, wgpu::ComputePipeline>> {
     let capacity =
         pipeline_cache_capacity(info.device_type, super::film_pieces::available_memory());
     std::sync::Mutex::new(PipelineCache::with_capacity(capacity))
 }
 
+/// A compiled pipeline's key: the hash of its kernel's source and layouts, and of its entry
+/// point (so that every pipeline of one kernel can be dropped at once).
+pub(crate) type PipelineKey = (u64, u64);
+
 /// A cache of at most `capacity` values by key that drops the least recently used first.
 #[derive(Debug)]
-pub(crate) struct PipelineCache<V> {
-    entries: std::collections::HashMap<u64, (V, u64)>,
+pub(crate) struct PipelineCache<K, V> {
+    entries: std::collections::HashMap<K, (V, u64)>,
     capacity: usize,
     /// Incremented on every use; an entry's stamp is its last use.
     clock: u64,
 }
 
-impl<V> Default for PipelineCache<V> {
+impl<K, V> Default for PipelineCache<K, V> {
     fn default() -> Self {
         Self::with_capacity(PIPELINE_CACHE_CAPACITY)
     }
 }
 
-impl<V> PipelineCache<V> {
+impl<K, V> PipelineCache<K, V> {
     pub(crate) fn with_capacity(capacity: usize) -> Self {
         Self {
             entries: Default::default(),
@@ -358,19 +362,20 @@ impl<V> PipelineCache<V> {
     pub(crate) fn len(&self) -> usize {
         self.entries.len()
     }
+}
 
-    pub(crate) fn contains(&self, key: u64) -> bool {
+impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
+    pub(crate) fn contains(&self, key: K) -> bool {
         self.entries.contains_key(&key)
     }
 
-    pub(crate) fn remove(&mut self, key: u64) {
-        self.entries.remove(&key);
+    /// Drops the entries whose key `keep` refuses.
+    pub(crate) fn retain(&mut self, keep: impl Fn(&K) -> bool) {
+        self.entries.retain(|key, _| keep(key));
     }
-}
 
-impl<V: Clone> PipelineCache<V> {
     /// The value of `key`, which becomes the most recently used.
-    pub(crate) fn get(&mut self, key: u64) -> Option<V> {
+    pub(crate) fn get(&mut self, key: K) -> Option<V> {
         self.clock += 1;
         let entry = self.entries.get_mut(&key)?;
         entry.1 = self.clock;
@@ -378,7 +383,7 @@ impl<V: Clone> PipelineCache<V> {
     }
 
     /// Adds `value` as the most recently used, dropping the least recently used when full.
-    pub(crate) fn insert(&mut self, key: u64, value: V) {
+    pub(crate) fn insert(&mut self, key: K, value: V) {
         self.clock += 1;
         if !self.entries.contains_key(&key) && self.entries.len() >= self.capacity {
             let oldest = self

@@ -7,7 +7,7 @@
 
 use thiserror::Error;
 
-use super::context::GpuContext;
+use super::context::{GpuContext, PipelineKey};
 use crate::shader::bindings::bindings_wgsl;
 use crate::shader::features::{features_wgsl, paging_wgsl};
 use crate::shader::{ADAPTIVE, KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
@@ -129,11 +129,13 @@ impl KernelSource {
         Ok(module)
     }
 
-    fn cache_key(&self, layouts: usize, entry_point: &str) -> u64 {
-        use std::hash::{Hash, Hasher};
-        let mut hasher = std::collections::hash_map::DefaultHasher::new();
-        (&self.text, entry_point, layouts).hash(&mut hasher);
-        hasher.finish()
+    fn cache_key(&self, layouts: usize, entry_point: &str) -> PipelineKey {
+        (self.source_key(layouts), hash(&entry_point))
+    }
+
+    /// The part of [`cache_key`](Self::cache_key) every entry point shares.
+    fn source_key(&self, layouts: usize) -> u64 {
+        hash(&(&self.text, layouts))
     }
 
     /// Whether [`KernelSource::create_pipeline`] would find this kernel in `ctx`'s
@@ -143,13 +145,12 @@ impl KernelSource {
         ctx.pipelines.lock().is_ok_and(|p| p.contains(key))
     }
 
-    /// Drops this kernel's pipelines for `entry_points` from `ctx`'s pipeline cache (their
-    /// machine code goes once no renderer holds them).
-    pub fn forget(&self, ctx: &GpuContext, layouts: usize, entry_points: &[&str]) {
+    /// Drops this kernel's pipelines (every entry point) from `ctx`'s pipeline cache
+    /// (their machine code goes once no renderer holds them).
+    pub fn forget(&self, ctx: &GpuContext, layouts: usize) {
+        let source = self.source_key(layouts);
         if let Ok(mut cache) = ctx.pipelines.lock() {
-            for entry_point in entry_points {
-                cache.remove(self.cache_key(layouts, entry_point));
-            }
+            cache.retain(|&(s, _)| s != source);
         }
     }
 
@@ -224,6 +225,15 @@ pub fn path_tracing_kernel(
         source.push(ADAPTIVE.path, ADAPTIVE.source);
     }
     source
+}
+
+/// A value's hash with the standard library's hasher (stable within a process, which is
+/// as long as a pipeline cache lives).
+fn hash(value: &impl std::hash::Hash) -> u64 {
+    use std::hash::Hasher;
+    let mut hasher = std::collections::hash_map::DefaultHasher::new();
+    value.hash(&mut hasher);
+    hasher.finish()
 }
 
 #[cfg(test)]

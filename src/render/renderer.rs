@@ -596,13 +596,7 @@ impl Renderer {
             rehearse(rehearsal, original, &settings);
             // The driver's cache keeps the machine code; the rehearsal's device would hold
             // a second copy of every viewport kernel for nothing.
-            let entry_points = [
-                "render",
-                "bake_volume_grid",
-                "adaptive_error",
-                "adaptive_converge",
-            ];
-            kernel.forget(rehearsal, 1, &entry_points);
+            kernel.forget(rehearsal, 1);
         }
         let pipeline = kernel.create_pipeline(&ctx, &[&layout], "render")?;
         let bake_pipeline = if gpu_scene.volume_grids.grids.is_empty() {
