@@ -40,6 +40,49 @@ fn sky(elevation: f32, [air, dust, ozone]: [f32; 3], disc: bool) -> World {
     world
 }
 
+/// The editor's window device on a CPU adapter hands its compiles to a second device
+/// (`GpuContext::rehearse_compiles_on`): a world's bake runs there, and gives the same
+/// map as on a device of its own.
+#[test]
+fn a_world_bakes_on_the_rehearsal_device_where_there_is_one() {
+    let map = |baked: kiln::render::world_bake::BakedWorld| match baked.environment {
+        Environment::Map(map) => map,
+        Environment::Constant(c) => panic!("a sky bakes into a map, not {c}"),
+    };
+    let window = gpu();
+    let background = window.sibling().expect("a second device on the adapter");
+    window.rehearse_compiles_on(Arc::clone(&background));
+    // A world no other test bakes, so that the last bake's memory does not serve it.
+    let mut world = sky(20.0, [1.0, 1.0, 1.0], false);
+    world.resolution = 32;
+    let rehearsed = map(bake_world(&window, &world).unwrap_or_else(|e| panic!("{e}")));
+    if window.info.device_type == wgpu::DeviceType::Cpu {
+        assert_eq!(
+            window.pipelines_compiled(),
+            0,
+            "the window's device compiled the bake"
+        );
+        assert!(background.pipelines_compiled() >= 1);
+    } else {
+        assert!(
+            window.pipelines_compiled() >= 1,
+            "nothing is rehearsed on a GPU"
+        );
+    }
+    // The same world baked again on a device without a rehearsal, once another world has
+    // taken the last bake's place.
+    let plain = gpu();
+    let mut other = world.clone();
+    other.resolution = 16;
+    bake_world(&plain, &other).unwrap_or_else(|e| panic!("{e}"));
+    let direct = map(bake_world(&plain, &world).unwrap_or_else(|e| panic!("{e}")));
+    assert_eq!((rehearsed.width, rehearsed.height), (32, 16));
+    assert!(
+        rehearsed.texels == direct.texels,
+        "the two devices' maps differ"
+    );
+}
+
 /// The luminance of the irradiance of `world`'s one sun, on a surface facing it.
 fn sun_irradiance(world: &World) -> f32 {
     let baked = bake_world(&gpu(), world).unwrap_or_else(|e| panic!("{e}"));

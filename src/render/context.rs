@@ -292,6 +292,14 @@ impl GpuContext {
         self.pipelines.lock().map_or(0, |p| p.capacity)
     }
 
+    /// Keeps at most `capacity` compiled pipelines from now on (at least one), dropping
+    /// the least recently used beyond it. Renderers keep the pipelines they hold.
+    pub fn set_pipeline_capacity(&self, capacity: usize) {
+        if let Ok(mut cache) = self.pipelines.lock() {
+            cache.set_capacity(capacity);
+        }
+    }
+
     pub fn limits(&self) -> wgpu::Limits {
         self.device.limits()
     }
@@ -386,16 +394,28 @@ impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
     pub(crate) fn insert(&mut self, key: K, value: V) {
         self.clock += 1;
         if !self.entries.contains_key(&key) && self.entries.len() >= self.capacity {
-            let oldest = self
-                .entries
-                .iter()
-                .min_by_key(|(_, (_, used))| *used)
-                .map(|(&k, _)| k);
-            if let Some(oldest) = oldest {
-                self.entries.remove(&oldest);
-            }
+            self.drop_oldest();
         }
         self.entries.insert(key, (value, self.clock));
+    }
+
+    /// Keeps at most `capacity` entries (at least one), the most recently used.
+    pub(crate) fn set_capacity(&mut self, capacity: usize) {
+        self.capacity = capacity.max(1);
+        while self.entries.len() > self.capacity {
+            self.drop_oldest();
+        }
+    }
+
+    fn drop_oldest(&mut self) {
+        let oldest = self
+            .entries
+            .iter()
+            .min_by_key(|(_, (_, used))| *used)
+            .map(|(&k, _)| k);
+        if let Some(oldest) = oldest {
+            self.entries.remove(&oldest);
+        }
     }
 }
 
@@ -456,5 +476,12 @@ mod tests {
         }
         assert_eq!(cache.len(), 3);
         assert!(cache.contains(1099) && cache.contains(1098) && cache.contains(1097));
+        // A smaller capacity keeps the most recently used.
+        assert_eq!(cache.get(1097), Some(1097));
+        cache.set_capacity(1);
+        assert_eq!(cache.len(), 1);
+        assert!(cache.contains(1097));
+        cache.set_capacity(0);
+        assert_eq!(cache.len(), 1, "a cache keeps one at least");
     }
 }

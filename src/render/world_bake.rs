@@ -81,6 +81,11 @@ pub fn resolve_world<'a>(
 
 /// [`bake_world_now`], remembering the last world baked: the editor builds a renderer for
 /// every edit of the scene's structure, and most of those leave the world as it was.
+///
+/// The bake runs on the context's rehearsal device where it has one (the editor's, on a
+/// CPU adapter: see [`GpuContext::rehearse_compiles_on`]): the map comes back to the host,
+/// so any device of the adapter serves, and lavapipe compiles the bake's kernel inside
+/// the submission, which on the window's device would hold up its frames.
 pub fn bake_world(ctx: &GpuContext, world: &World) -> Result<BakedWorld, RenderError> {
     static LAST: Mutex<Option<(World, BakedWorld)>> = Mutex::new(None);
     if let Some((w, baked)) = LAST.lock().expect("no panic holds it").as_ref()
@@ -88,7 +93,7 @@ pub fn bake_world(ctx: &GpuContext, world: &World) -> Result<BakedWorld, RenderE
     {
         return Ok(baked.clone());
     }
-    let baked = bake_world_now(ctx, world)?;
+    let baked = bake_world_now(ctx.rehearsal().map_or(ctx, |r| r), world)?;
     *LAST.lock().expect("no panic holds it") = Some((world.clone(), baked.clone()));
     Ok(baked)
 }
