@@ -4,7 +4,9 @@
 //! still), material thumbnails and autosave on, editing `materials.kiln` (or `KILN_SOAK_SCENE`, a path under `assets/`) without pause.
 //! Every minute it prints the process's resident memory (on lavapipe the device's
 //! buffers are host memory, so a leaked GPU buffer shows there too), the pipelines the
-//! context holds and has compiled, and the viewport's counters. Run it with
+//! two devices hold (at most `SOAK_PIPELINES` each) and have compiled, and the
+//! viewport's counters; at the end it compares memory's floor late in the session with
+//! earlier (`GROWTH_LIMIT_MIB`). Run it with
 //!
 //! ```sh
 //! KILN_SOAK_SECONDS=3600 cargo test --test editor_soak -- --ignored --nocapture

@@ -208,7 +208,9 @@ impl GpuContext {
     /// compiles it, and only then its own. On a software driver that compiles at the first
     /// dispatch (lavapipe) the compile then holds up `other`'s submissions, not this
     /// device's, and this device's compile finds the machine code in the driver's shader
-    /// cache. Does nothing on other adapters, whose drivers compile when the pipeline is
+    /// cache. Work of this context whose result comes back to the host, not to this
+    /// device (a world graph's bake, `world_bake::bake_world`), runs on `other` whole.
+    /// Does nothing on other adapters, whose drivers compile when the pipeline is
     /// created, outside any submission; set once.
     pub fn rehearse_compiles_on(&self, other: Arc<GpuContext>) {
         if self.info.device_type == wgpu::DeviceType::Cpu && other.device != self.device {
@@ -372,7 +374,7 @@ impl<K, V> PipelineCache<K, V> {
     }
 }
 
-impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
+impl<K: std::hash::Hash + Eq + Copy, V> PipelineCache<K, V> {
     pub(crate) fn contains(&self, key: K) -> bool {
         self.entries.contains_key(&key)
     }
@@ -380,14 +382,6 @@ impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
     /// Drops the entries whose key `keep` refuses.
     pub(crate) fn retain(&mut self, keep: impl Fn(&K) -> bool) {
         self.entries.retain(|key, _| keep(key));
-    }
-
-    /// The value of `key`, which becomes the most recently used.
-    pub(crate) fn get(&mut self, key: K) -> Option<V> {
-        self.clock += 1;
-        let entry = self.entries.get_mut(&key)?;
-        entry.1 = self.clock;
-        Some(entry.0.clone())
     }
 
     /// Adds `value` as the most recently used, dropping the least recently used when full.
@@ -416,6 +410,16 @@ impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
         if let Some(oldest) = oldest {
             self.entries.remove(&oldest);
         }
+    }
+}
+
+impl<K: std::hash::Hash + Eq + Copy, V: Clone> PipelineCache<K, V> {
+    /// The value of `key`, which becomes the most recently used.
+    pub(crate) fn get(&mut self, key: K) -> Option<V> {
+        self.clock += 1;
+        let entry = self.entries.get_mut(&key)?;
+        entry.1 = self.clock;
+        Some(entry.0.clone())
     }
 }
 
