@@ -7,7 +7,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{gpu, settings};
+use common::{fresh_gpu, gpu, settings};
 use kiln::render::{RenderControl, RenderSettings, Renderer};
 use kiln::scene;
 
@@ -75,7 +75,7 @@ fn a_film_row_wider_than_a_piece_is_refused_with_the_numbers() {
 #[test]
 fn a_device_lost_in_the_middle_of_a_render_fails_it_naming_the_cause_and_the_scene() {
     // A device of its own: destroying it must not touch other tests' renders.
-    let ctx = gpu();
+    let ctx = fresh_gpu();
     let scene = scene::default_scene().expect("bundled scene");
     let mut r = Renderer::new(Arc::clone(&ctx), &scene, settings(64, 64, 4096)).unwrap();
     r.render(0..1, RenderControl::default()).unwrap();

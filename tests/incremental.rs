@@ -8,7 +8,7 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{gpu, settings};
+use common::{fresh_gpu, gpu, settings};
 use glam::{Affine3A, Quat, Vec3};
 use kiln::film::Film;
 use kiln::material::graph::{Input, Value};
@@ -61,7 +61,8 @@ fn fresh(ctx: &Arc<GpuContext>, scene: &Scene, s: RenderSettings) -> Film {
 /// checks the result against a renderer built for `new` and that no kernel was
 /// compiled for the update. Returns what the update wrote.
 fn check_update(old: &Scene, new: &Scene, specialize: bool) -> Updated {
-    let ctx = gpu();
+    // A device of its own: it counts the kernels compiled.
+    let ctx = fresh_gpu();
     let s = RenderSettings {
         volume_resolution: old.settings.volume_resolution,
         ..render_settings(specialize)

@@ -8,7 +8,7 @@ mod common;
 use std::path::Path;
 use std::sync::Arc;
 
-use common::{gpu, settings};
+use common::{fresh_gpu, gpu, settings};
 use kiln::material::compile::link;
 use kiln::material::graph::{Node, Param, SocketType};
 use kiln::material::nodes::{ParamKind, library};
@@ -146,7 +146,8 @@ fn interpreted_graphs_render_what_their_compiled_code_renders() {
 
 #[test]
 fn a_topology_edit_is_a_parameter_write_in_the_interpreting_kernel() {
-    let ctx = gpu();
+    // A device of its own: it counts the kernels compiled.
+    let ctx = fresh_gpu();
     let old = showcase();
     let new = with_inverted_marble(&old);
     let (a, b) = (

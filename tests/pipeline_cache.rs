@@ -6,12 +6,12 @@ mod common;
 
 use std::sync::Arc;
 
-use common::{furnace_scene, gpu, render, settings};
+use common::{fresh_gpu, furnace_scene, render, settings};
 use kiln::render::Renderer;
 
 #[test]
 fn a_kernel_source_is_compiled_once_per_context() {
-    let ctx = gpu();
+    let ctx = fresh_gpu();
     let compiled = |expected: usize, what: &str| {
         assert_eq!(ctx.pipelines_compiled(), expected, "{what}");
     };
@@ -55,7 +55,7 @@ fn a_kernel_source_is_compiled_once_per_context() {
     compiled(5, "AOVs compile a kernel that writes them");
 
     // The cache belongs to the context: another one compiles its own.
-    let other = gpu();
+    let other = fresh_gpu();
     Renderer::new(Arc::clone(&other), &diffuse, settings(8, 8, 1)).unwrap();
     assert_eq!(other.pipelines_compiled(), 1);
     compiled(5, "another context's compile is not counted here");

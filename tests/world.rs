@@ -9,7 +9,7 @@ mod common;
 
 use std::f32::consts::PI;
 
-use common::{furnace_render, furnace_scene, gpu, mean, render, settings};
+use common::{fresh_gpu, furnace_render, furnace_scene, gpu, mean, render, settings};
 use glam::{Affine3A, Vec3};
 use kiln::material::{Graph, Input, Link, Node, Param, Value};
 use kiln::render::environment_cdf::luminance;
@@ -49,7 +49,8 @@ fn a_world_bakes_on_the_rehearsal_device_where_there_is_one() {
         Environment::Map(map) => map,
         Environment::Constant(c) => panic!("a sky bakes into a map, not {c}"),
     };
-    let window = gpu();
+    // Devices of their own: the window's gets a rehearsal, and both count compiles.
+    let window = fresh_gpu();
     let background = window.sibling().expect("a second device on the adapter");
     window.rehearse_compiles_on(Arc::clone(&background));
     // A world no other test bakes, so that the last bake's memory does not serve it.
@@ -71,7 +72,7 @@ fn a_world_bakes_on_the_rehearsal_device_where_there_is_one() {
     }
     // The same world baked again on a device without a rehearsal, once another world has
     // taken the last bake's place.
-    let plain = gpu();
+    let plain = fresh_gpu();
     let mut other = world.clone();
     other.resolution = 16;
     bake_world(&plain, &other).unwrap_or_else(|e| panic!("{e}"));

@@ -5,15 +5,26 @@ pub mod exr;
 pub mod node_reference;
 pub mod resource;
 
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 
 use glam::{Affine3A, Vec3};
 use kiln::film::Film;
 use kiln::render::{GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use kiln::scene::{Camera, Material, Scene, shapes};
 
-/// The test adapter: whatever wgpu picks (lavapipe in CI).
+/// The test adapter's device, whatever wgpu picks (lavapipe in CI), opened once per test
+/// binary and shared by its tests, so that a kernel one test compiled is in the pipeline
+/// cache for the next: lavapipe translates and optimises every new pipeline again (seconds
+/// each, even for tests/bsdf.rs's small lobe kernels, which build on the whole library),
+/// even when Mesa's disk cache holds its machine code. Tests that count the kernels a
+/// context compiles, change its cache or lose the device use [`fresh_gpu`].
 pub fn gpu() -> Arc<GpuContext> {
+    static SHARED: OnceLock<Arc<GpuContext>> = OnceLock::new();
+    Arc::clone(SHARED.get_or_init(fresh_gpu))
+}
+
+/// A device of its own on the test adapter, with an empty pipeline cache.
+pub fn fresh_gpu() -> Arc<GpuContext> {
     GpuContext::new(None).unwrap_or_else(|e| panic!("GPU tests need an adapter: {e}"))
 }
 
