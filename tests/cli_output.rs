@@ -122,3 +122,78 @@ fn an_image_that_cannot_be_written_at_the_end_goes_to_a_fallback_file() {
     assert!(image.mean().iter().all(|&m| m > 0.0), "{:?}", image.mean());
     assert!(!Path::new(&target).exists());
 }
+
+/// A tmpfs mounted over a folder for as long as it lives, unmounted on drop.
+struct SmallDisk {
+    folder: PathBuf,
+}
+
+impl SmallDisk {
+    /// A `size` tmpfs over `folder`; None where this process may not mount (not root).
+    fn mount(folder: &Path, size: &str) -> Option<Self> {
+        // SAFETY: geteuid has no preconditions.
+        if unsafe { libc::geteuid() } != 0 {
+            return None;
+        }
+        let status = Command::new("mount")
+            .args(["-t", "tmpfs", "-o", &format!("size={size}"), "tmpfs"])
+            .arg(folder)
+            .status()
+            .expect("mount runs");
+        assert!(status.success(), "mount a tmpfs on {}", folder.display());
+        Some(Self {
+            folder: folder.to_path_buf(),
+        })
+    }
+}
+
+impl Drop for SmallDisk {
+    fn drop(&mut self) {
+        let _ = Command::new("umount").arg(&self.folder).status();
+    }
+}
+
+/// A real full disk, the case: a 16 KiB tmpfs takes the check's probe file but not
+/// a 128 × 128 EXR. The render goes to the fallback file the error names, and the small
+/// disk is left without a half-written image. Needs root to mount (CI runs as root);
+/// elsewhere it says so and checks nothing.
+#[test]
+fn an_image_that_does_not_fit_on_a_full_disk_goes_to_a_fallback_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let (disk_folder, temp) = (dir.path().join("disk"), dir.path().join("tmp"));
+    std::fs::create_dir(&disk_folder).unwrap();
+    std::fs::create_dir(&temp).unwrap();
+    let Some(disk) = SmallDisk::mount(&disk_folder, "16k") else {
+        eprintln!("not root: no tmpfs can be mounted, so the full disk is not tested here");
+        return;
+    };
+    let target = disk.folder.join("final.exr");
+    let out = Command::new(env!("CARGO_BIN_EXE_kiln"))
+        .args(["render", "--size", "128x128", "--spp", "2", "-q", "-o"])
+        .arg(&target)
+        // The fallback goes to the temporary folder: this test's own.
+        .env("TMPDIR", &temp)
+        .output()
+        .expect("kiln runs");
+    let err = stderr(&out);
+    assert!(!out.status.success(), "{err}");
+    assert!(
+        err.contains("No space left on device"),
+        "the error names the cause:\n{err}"
+    );
+    let saved = err
+        .split("the render was saved to ")
+        .nth(1)
+        .and_then(|rest| rest.split(" instead").next())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| panic!("no fallback named in:\n{err}"));
+    assert!(saved.starts_with(&temp), "{}", saved.display());
+    let image = read_exr(&saved);
+    assert_eq!((image.width, image.height), (128, 128));
+    assert!(image.mean().iter().all(|&m| m > 0.0), "{:?}", image.mean());
+    let left: Vec<_> = std::fs::read_dir(&disk.folder)
+        .unwrap()
+        .map(|e| e.unwrap().file_name())
+        .collect();
+    assert!(left.is_empty(), "left on the full disk: {left:?}");
+}
