@@ -26,6 +26,15 @@ fn stderr(out: &Output) -> String {
     String::from_utf8_lossy(&out.stderr).into_owned()
 }
 
+/// The fallback file an error says the render was saved to.
+fn fallback_named(err: &str) -> PathBuf {
+    err.split("the render was saved to ")
+        .nth(1)
+        .and_then(|rest| rest.split(" instead").next())
+        .map(PathBuf::from)
+        .unwrap_or_else(|| panic!("no fallback named in:\n{err}"))
+}
+
 /// Refused before the GPU is even opened: no "adapter:" line, a non-zero exit, the message.
 fn assert_refused_up_front(out: &Output, message: &str) {
     let err = stderr(out);
@@ -105,12 +114,7 @@ fn an_image_that_cannot_be_written_at_the_end_goes_to_a_fallback_file() {
     let status = child.wait().unwrap();
     let err = seen.join("\n");
     assert!(!status.success(), "{err}");
-    let saved = err
-        .split("the render was saved to ")
-        .nth(1)
-        .and_then(|rest| rest.split(" instead").next())
-        .map(PathBuf::from)
-        .unwrap_or_else(|| panic!("no fallback named in:\n{err}"));
+    let saved = fallback_named(&err);
     let image = read_exr(&saved);
     std::fs::remove_file(&saved).unwrap();
     assert_eq!((image.width, image.height), (64, 64));
@@ -181,12 +185,7 @@ fn an_image_that_does_not_fit_on_a_full_disk_goes_to_a_fallback_file() {
         err.contains("No space left on device"),
         "the error names the cause:\n{err}"
     );
-    let saved = err
-        .split("the render was saved to ")
-        .nth(1)
-        .and_then(|rest| rest.split(" instead").next())
-        .map(PathBuf::from)
-        .unwrap_or_else(|| panic!("no fallback named in:\n{err}"));
+    let saved = fallback_named(&err);
     assert!(saved.starts_with(&temp), "{}", saved.display());
     let image = read_exr(&saved);
     assert_eq!((image.width, image.height), (128, 128));
