@@ -6,10 +6,10 @@ mod common;
 
 use std::path::Path;
 use std::process::Command;
-use std::sync::Arc;
+use std::sync::{Arc, OnceLock};
 use std::time::Instant;
 
-use common::exr::read_exr;
+use common::exr::{Exr, read_exr};
 use common::{gpu, settings};
 use kiln::render::{RenderControl, RenderSettings, Renderer};
 use kiln::scene::default_scene;
@@ -88,10 +88,25 @@ fn kiln(args: &[&str], output: &Path) -> (bool, String) {
     )
 }
 
-/// Asserts that the colour, sample counts, noise estimate and AOVs of two EXRs agree bit
-/// for bit.
-fn assert_same_render(whole: &Path, resumed: &Path) {
-    let (whole, resumed) = (read_exr(whole), read_exr(resumed));
+/// The render both resume tests interrupt: 300 spp at 48×48 takes ~4 s here.
+const ARGS: [&str; 4] = ["--size", "48x48", "--spp", "300"];
+
+/// `ARGS` rendered without interruption, once for both tests.
+fn uninterrupted() -> &'static Exr {
+    static WHOLE: OnceLock<Exr> = OnceLock::new();
+    WHOLE.get_or_init(|| {
+        let dir = tempfile::tempdir().unwrap();
+        let path = dir.path().join("whole.exr");
+        let (ok, err) = kiln(&ARGS, &path);
+        assert!(ok, "{err}");
+        read_exr(&path)
+    })
+}
+
+/// Asserts that the colour, sample counts, noise estimate and AOVs of a resumed render
+/// agree with the uninterrupted one's bit for bit.
+fn assert_uninterrupted(resumed: &Path) {
+    let (whole, resumed) = (uninterrupted(), read_exr(resumed));
     for channel in [
         "R",
         "G",
@@ -113,17 +128,16 @@ fn assert_same_render(whole: &Path, resumed: &Path) {
 /// `--resume`d from the last checkpoint it wrote: the uninterrupted render, bit for bit.
 #[test]
 fn a_render_killed_mid_way_resumes_to_the_uninterrupted_render_bit_for_bit() {
+    // The reference first, so that its render does not share the cores with the one
+    // interrupted below.
+    uninterrupted();
     let dir = tempfile::tempdir().unwrap();
-    let (whole_path, killed_path) = (dir.path().join("whole.exr"), dir.path().join("killed.exr"));
-    // 300 spp at 48×48 takes ~4 s here, after the first checkpoint ~3 s to kill it in.
-    let args = ["--size", "48x48", "--spp", "300"];
-    let (ok, err) = kiln(&args, &whole_path);
-    assert!(ok, "{err}");
-
+    let killed_path = dir.path().join("killed.exr");
+    // After the first checkpoint, ~3 s of the render are left to kill it in.
     let checkpoint = dir.path().join("killed.exr.kiln-checkpoint");
     let mut child = Command::new(env!("CARGO_BIN_EXE_kiln"))
         .arg("render")
-        .args(args)
+        .args(ARGS)
         .args(["--checkpoint-every", "0.1", "-q", "-o"])
         .arg(&killed_path)
         .stderr(std::process::Stdio::null())
@@ -148,25 +162,23 @@ fn a_render_killed_mid_way_resumes_to_the_uninterrupted_render_bit_for_bit() {
     child.wait().unwrap();
     assert!(!killed_path.exists(), "a killed render wrote its image");
 
-    let resume = [&args[..], &["--resume"]].concat();
+    let resume = [&ARGS[..], &["--resume"]].concat();
     let (ok, err) = kiln(&resume, &killed_path);
     assert!(ok, "{err}");
     assert!(err.contains("resuming from"), "{err}");
     assert!(!checkpoint.exists());
-    assert_same_render(&whole_path, &killed_path);
+    assert_uninterrupted(&killed_path);
 }
 
 #[test]
 fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
+    // The reference first, as above.
+    uninterrupted();
     let dir = tempfile::tempdir().unwrap();
-    let (whole_path, stopped_path) = (dir.path().join("whole.exr"), dir.path().join("cut.exr"));
-    let args = ["--size", "48x48", "--spp", "300"];
-    let (ok, err) = kiln(&args, &whole_path);
-    assert!(ok, "{err}");
-
-    // Stopped by its time limit after a few checkpoints (300 spp at 48×48 takes ~4 s here).
+    let stopped_path = dir.path().join("cut.exr");
+    // Stopped by its time limit after a few checkpoints.
     let stop = [
-        &args[..],
+        &ARGS[..],
         &["--time-limit", "1", "--checkpoint-every", "0.1"],
     ]
     .concat();
@@ -178,7 +190,7 @@ fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
 
     // Other settings: refused, the checkpoint and the image left as they were.
     let before = std::fs::read(&stopped_path).unwrap();
-    let other = [&args[..], &["--seed", "3", "--resume"]].concat();
+    let other = [&ARGS[..], &["--seed", "3", "--resume"]].concat();
     let (ok, err) = kiln(&other, &stopped_path);
     assert!(
         !ok && err.contains("another scene or other settings"),
@@ -186,7 +198,7 @@ fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
     );
     assert_eq!(std::fs::read(&stopped_path).unwrap(), before);
 
-    let resume = [&args[..], &["--resume"]].concat();
+    let resume = [&ARGS[..], &["--resume"]].concat();
     let (ok, err) = kiln(&resume, &stopped_path);
     assert!(ok, "{err}");
     assert!(err.contains("resuming from"), "{err}");
@@ -194,7 +206,7 @@ fn kiln_render_resume_continues_a_stopped_render_bit_for_bit() {
         !checkpoint.exists(),
         "a finished render removes its checkpoint"
     );
-    assert_same_render(&whole_path, &stopped_path);
+    assert_uninterrupted(&stopped_path);
 
     // Nothing to resume from: said, and nothing written.
     let (ok, err) = kiln(&resume, &dir.path().join("new.exr"));
