@@ -83,14 +83,20 @@ struct Params {
 
 const FILTER_TABLE_SIZE: u32 = 128u;
 
-// A BVH node. Inner nodes (count == 0) have their children at `first` and `first + 1`;
-// leaves hold `count` primitives starting at `first`.
-struct BvhNode {
-    min: vec3<f32>,
-    first: u32,
-    max: vec3<f32>,
-    count: u32,
+// A node of a four-wide BVH (src/accel/wide.rs, WideNode in src/shader/gpu_types.rs): its
+// children's boxes in bytes of steps from `origin` (exponents: per axis the step's exponent
+// biased by 127, a byte each; steps: lo x, y, z, hi x, then hi y, z, a byte per child), and
+// per child a leaf (its primitive count shifted by WIDE_COUNT_SHIFT over its first
+// primitive), an inner node's index (count 0), or WIDE_EMPTY. wide_boxes decodes them.
+struct WideNode {
+    origin: vec3<f32>,
+    exponents: u32,
+    child: vec4<u32>,
+    steps: array<vec4<u32>, 2>,
 };
+
+const WIDE_COUNT_SHIFT: u32 = 28u;
+const WIDE_EMPTY: u32 = 0xffffffffu;
 
 // The three vertices of a triangle in object space, in BVH leaf order.
 struct Triangle {
@@ -103,12 +109,17 @@ struct Instance {
     // Rows of the 3x4 object-to-world and world-to-object matrices.
     to_world: array<vec4<f32>, 3>,
     to_object: array<vec4<f32>, 3>,
+    // Where traversal enters its mesh's BVH: the root node, or the root's only child when
+    // that is a leaf.
     blas_root: u32,
     material: u32,
     flags: u32,
     // The word of `volume_grid` its heterogeneous volume's grid starts at, or NO_GRID
     // (src/render/volume_grid.rs).
     volume_grid: u32,
+    // Its mesh's bounds in object space (w unused).
+    mesh_min: vec4<f32>,
+    mesh_max: vec4<f32>,
 };
 
 const NO_GRID: u32 = 0xffffffffu;

@@ -6,7 +6,7 @@
 // differs between lanes a loop over the lanes for every word.
 
 // What traversal reads of an instance: the world-to-object rows and the root of its mesh's
-// BVH, texels 3–6 of its seven (`Instance` in shaders/scene.wgsl).
+// BVH, texels 3–6 of its nine (`Instance` in shaders/scene.wgsl).
 struct Placement {
     to_object: array<vec4<f32>, 3>,
     blas_root: u32,
@@ -18,10 +18,13 @@ fn texel_of(t: texture_2d<u32>, i: u32, texels: u32, per_row: u32, k: u32) -> ve
     return textureLoad(t, vec2<u32>(texels * (i % per_row) + k, i / per_row), 0);
 }
 
-fn node_from_texels(t: texture_2d<u32>, i: u32) -> BvhNode {
+fn node_from_texels(t: texture_2d<u32>, i: u32) -> WideNode {
     let a = texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 0u);
-    let b = texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 1u);
-    return BvhNode(bitcast<vec3<f32>>(a.xyz), a.w, bitcast<vec3<f32>>(b.xyz), b.w);
+    let steps = array<vec4<u32>, 2>(
+        texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 2u),
+        texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 3u),
+    );
+    return WideNode(bitcast<vec3<f32>>(a.xyz), a.w, texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 1u), steps);
 }
 
 fn triangle_from_texels(t: texture_2d<u32>, i: u32) -> Triangle {
@@ -32,7 +35,7 @@ fn triangle_from_texels(t: texture_2d<u32>, i: u32) -> Triangle {
     );
 }
 
-fn fetch_tlas_node(i: u32) -> BvhNode {
+fn fetch_tlas_node(i: u32) -> WideNode {
     return node_from_texels(tlas_texels, i);
 }
 
@@ -62,7 +65,9 @@ fn fetch_instance(i: u32) -> Instance {
         bitcast<vec4<f32>>(instance_texel(i, 5u)),
     );
     let last = instance_texel(i, 6u);
-    return Instance(to_world, to_object, last.x, last.y, last.z, last.w);
+    let mesh_min = bitcast<vec4<f32>>(instance_texel(i, 7u));
+    let mesh_max = bitcast<vec4<f32>>(instance_texel(i, 8u));
+    return Instance(to_world, to_object, last.x, last.y, last.z, last.w, mesh_min, mesh_max);
 }
 
 // The attributes of vertex `i` (`vertex_texels`).

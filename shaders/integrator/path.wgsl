@@ -67,9 +67,9 @@ fn instance_random(i: u32) -> f32 {
 // Where a world-space point lies in an instance's object: its object-space position and
 // its generated coordinates (the position within the object's bounds, [0, 1]³ inside).
 fn generated_coordinates(inst: Instance, p_object: vec3<f32>) -> vec3<f32> {
-    let bounds = fetch_blas_node(inst.blas_root);
-    let extent = bounds.max - bounds.min;
-    return (p_object - bounds.min) / select(extent, vec3<f32>(1.0), extent <= vec3<f32>(0.0));
+    let lo = inst.mesh_min.xyz;
+    let extent = inst.mesh_max.xyz - lo;
+    return (p_object - lo) / select(extent, vec3<f32>(1.0), extent <= vec3<f32>(0.0));
 }
 
 fn instance_location(inst: Instance) -> vec3<f32> {

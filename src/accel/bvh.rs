@@ -10,7 +10,24 @@
 
 use glam::Vec3;
 
-use crate::shader::gpu_types::BvhNode;
+use super::wide::{WideBvh, widen};
+
+/// A node of a binary BVH (the CPU's queries walk these; the kernel walks them collapsed
+/// into [`WideNode`]s): inner nodes (`count == 0`) have their children at `first` and
+/// `first + 1`; leaves hold primitives `first .. first + count`.
+#[derive(Clone, Copy, Debug, Default, PartialEq)]
+pub struct BvhNode {
+    pub min: [f32; 3],
+    pub first: u32,
+    pub max: [f32; 3],
+    pub count: u32,
+}
+
+impl BvhNode {
+    pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
+        (self.min.into(), self.max.into())
+    }
+}
 
 #[derive(Clone, Debug, Default)]
 pub struct Bvh {
@@ -21,6 +38,8 @@ pub struct Bvh {
     pub primitive_order: Vec<u32>,
     /// Largest number of nodes on a root-to-leaf path, counting both ends.
     pub depth: u32,
+    /// The same tree collapsed four-wide, as the kernel walks it.
+    pub wide: WideBvh,
 }
 
 const BINS: usize = 16;
@@ -101,10 +120,12 @@ pub fn build_bvh(boxes: &[(Vec3, Vec3)], max_leaf_size: u32) -> Bvh {
             }
         }
     }
+    let wide = widen(&nodes);
     Bvh {
         nodes,
         primitive_order: order,
         depth,
+        wide,
     }
 }
 

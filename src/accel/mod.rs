@@ -1,16 +1,20 @@
 //! Acceleration structures, built on the CPU: one BVH per mesh (BLAS) and one over the
 //! instances (TLAS), laid out as the kernel's `shaders/traverse.wgsl` walks them.
 //!
-//! Trees are built top-down with binned SAH ([`bvh`]) straight into the flat GPU node
-//! layout, and checked against the depth of the kernel's traversal stacks.
+//! Trees are built top-down with binned SAH ([`bvh`]) into a flat binary layout, which the
+//! CPU's queries walk, collapsed four-wide for the kernel ([`wide`]), and checked against
+//! the kernel's traversal stacks.
 
 mod bvh;
 pub mod query;
 mod two_level;
+mod wide;
 
-pub use bvh::{Bvh, build_bvh};
+pub use bvh::{Bvh, BvhNode, build_bvh};
 pub use two_level::{AccelError, SceneAccel, build_scene_accel, build_tlas};
+pub use wide::{WIDE_INDEX_LIMIT, WIDE_MAX_LEAF, WideBvh, rebase, widen};
 
-/// Traversal stack sizes of `shaders/traverse.wgsl`; a deeper tree cannot be traversed.
-pub const BLAS_STACK_SIZE: u32 = 64;
-pub const TLAS_STACK_SIZE: u32 = 48;
+/// Traversal stack sizes of `shaders/traverse.wgsl`; a tree whose wide form needs more
+/// ([`WideBvh::stack_need`]) cannot be traversed.
+pub const BLAS_STACK_SIZE: u32 = 96;
+pub const TLAS_STACK_SIZE: u32 = 64;

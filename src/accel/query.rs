@@ -7,8 +7,8 @@ use std::collections::BTreeMap;
 use glam::{Affine3A, Vec3};
 
 use super::Bvh;
+use super::BvhNode;
 use crate::scene::Scene;
-use crate::shader::gpu_types::BvhNode;
 
 fn hit_box(node: &BvhNode, origin: Vec3, inv_dir: Vec3, t_max: f32) -> bool {
     let (lo, hi) = node.bounds();

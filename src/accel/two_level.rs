@@ -6,17 +6,18 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use thiserror::Error;
 
-use super::{BLAS_STACK_SIZE, Bvh, TLAS_STACK_SIZE, build_bvh};
+use super::{BLAS_STACK_SIZE, Bvh, TLAS_STACK_SIZE, WIDE_INDEX_LIMIT, WIDE_MAX_LEAF, build_bvh};
 use crate::scene::Scene;
 
 /// Triangles per BLAS leaf at most; SAH makes smaller leaves where they pay.
 const BLAS_MAX_LEAF_SIZE: u32 = 4;
 const TLAS_MAX_LEAF_SIZE: u32 = 1;
+const _: () = assert!(BLAS_MAX_LEAF_SIZE <= WIDE_MAX_LEAF && TLAS_MAX_LEAF_SIZE <= WIDE_MAX_LEAF);
 
 #[derive(Debug, Error)]
 pub enum AccelError {
     #[error(
-        "the BVH of {what} is {depth} levels deep, more than the kernel's traversal stack of {limit}"
+        "the BVH of {what} needs a traversal stack of {depth} entries, more than the kernel's {limit}"
     )]
     TooDeep {
         what: String,
@@ -25,6 +26,14 @@ pub enum AccelError {
     },
     #[error("instance {instance} uses mesh {mesh}, which has no BVH in this structure")]
     MissingBlas { instance: usize, mesh: usize },
+    #[error(
+        "the scene's BVHs hold {count} {what}, more than the kernel's node references can address ({limit})"
+    )]
+    TooLarge {
+        what: &'static str,
+        count: u64,
+        limit: u32,
+    },
 }
 
 #[derive(Clone, Debug)]
@@ -55,16 +64,33 @@ pub fn build_scene_accel(scene: &Scene) -> Result<SceneAccel, AccelError> {
             })
             .collect();
         let bvh = build_bvh(&boxes, BLAS_MAX_LEAF_SIZE);
-        if bvh.depth > BLAS_STACK_SIZE {
+        if bvh.wide.stack_need > BLAS_STACK_SIZE {
             return Err(AccelError::TooDeep {
                 what: format!("mesh \"{}\"", mesh.name),
-                depth: bvh.depth,
+                depth: bvh.wide.stack_need,
                 limit: BLAS_STACK_SIZE,
             });
         }
         blas.push(Some(bvh));
     }
 
+    // The kernel addresses every mesh's nodes and triangles in one table each.
+    let built = || blas.iter().flatten();
+    for (what, count) in [
+        ("nodes", built().map(|b| b.wide.nodes.len() as u64).sum()),
+        (
+            "triangles",
+            built().map(|b| b.primitive_order.len() as u64).sum(),
+        ),
+    ] {
+        if count >= u64::from(WIDE_INDEX_LIMIT) {
+            return Err(AccelError::TooLarge {
+                what,
+                count,
+                limit: WIDE_INDEX_LIMIT,
+            });
+        }
+    }
     let tlas = build_tlas(scene, &blas)?;
     Ok(SceneAccel {
         blas,
@@ -79,6 +105,13 @@ pub fn build_scene_accel(scene: &Scene) -> Result<SceneAccel, AccelError> {
 pub fn build_tlas(scene: &Scene, blas: &[Option<Bvh>]) -> Result<Option<Bvh>, AccelError> {
     if scene.instances.is_empty() {
         return Ok(None);
+    }
+    if scene.instances.len() >= WIDE_INDEX_LIMIT as usize {
+        return Err(AccelError::TooLarge {
+            what: "instances",
+            count: scene.instances.len() as u64,
+            limit: WIDE_INDEX_LIMIT,
+        });
     }
     let mut boxes: Vec<(Vec3, Vec3)> = Vec::with_capacity(scene.instances.len());
     for (i, inst) in scene.instances.iter().enumerate() {
@@ -108,10 +141,10 @@ pub fn build_tlas(scene: &Scene, blas: &[Option<Bvh>]) -> Result<Option<Bvh>, Ac
         boxes.push((wlo - pad, whi + pad));
     }
     let bvh = build_bvh(&boxes, TLAS_MAX_LEAF_SIZE);
-    if bvh.depth > TLAS_STACK_SIZE {
+    if bvh.wide.stack_need > TLAS_STACK_SIZE {
         return Err(AccelError::TooDeep {
             what: "the instances".into(),
-            depth: bvh.depth,
+            depth: bvh.wide.stack_need,
             limit: TLAS_STACK_SIZE,
         });
     }

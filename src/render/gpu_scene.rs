@@ -13,7 +13,7 @@ use super::context::GpuContext;
 use super::environment_cdf::environment_data;
 use super::light_distribution::{emissive_triangles, light_selection};
 use super::volume_grid::{VolumeGrids, kernel_indices};
-use crate::accel::SceneAccel;
+use crate::accel::{SceneAccel, rebase};
 use crate::scene::{Scene, shapes};
 use crate::shader::bindings::{
     INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_PARAMS, MATERIAL_TEXELS,
@@ -21,8 +21,9 @@ use crate::shader::bindings::{
     VERTEX_TEXELS, bound, scene_layout_entries,
 };
 use crate::shader::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
+    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
     INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, INSTANCE_SHADOW_CATCHER,
+    WIDE_COUNT_SHIFT, WIDE_EMPTY, WideNode,
 };
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -106,9 +107,8 @@ pub struct GpuScene {
     pub light_split: [f32; 4],
     pub local_lights: [f32; 4],
     pub bytes: u64,
-    /// Per mesh, as [`SceneArrays::blas_root`] and [`SceneArrays::mesh_flags`].
-    pub blas_root: Vec<u32>,
-    pub mesh_flags: Vec<u32>,
+    /// Per mesh, as [`SceneArrays::meshes`].
+    pub meshes: Vec<MeshEntry>,
     /// The heterogeneous volumes' grids: headers written, voxels zero until baked
     /// (`Renderer::bake_volume_grids`).
     pub volume_grid: wgpu::Buffer,
@@ -118,9 +118,9 @@ pub struct GpuScene {
 /// CPU-side arrays in upload order; separate from the upload so tests can inspect them.
 #[derive(Default)]
 pub struct SceneArrays {
-    pub tlas_nodes: Vec<BvhNode>,
+    pub tlas_nodes: Vec<WideNode>,
     pub instances: Vec<GpuInstance>,
-    pub blas_nodes: Vec<BvhNode>,
+    pub blas_nodes: Vec<WideNode>,
     pub triangles: Vec<GpuTriangle>,
     /// Three global vertex indices per triangle and a word of padding.
     pub triangle_vertices: Vec<[u32; 4]>,
@@ -141,11 +141,9 @@ pub struct SceneArrays {
     pub triangle_pick: f32,
     pub light_split: [f32; 4],
     pub local_lights: [f32; 4],
-    /// Per mesh: the index of its BLAS root in `blas_nodes` (0 for meshes no instance
-    /// uses), and its `INSTANCE_HAS_*` flags. Kept so instances can be packed again
-    /// without the meshes.
-    pub blas_root: Vec<u32>,
-    pub mesh_flags: Vec<u32>,
+    /// Per mesh, what its instances' records hold of it. Kept so instances can be packed
+    /// again without the meshes.
+    pub meshes: Vec<MeshEntry>,
     /// Where the heterogeneous volumes' grids lie, and their headers.
     pub volume_grids: VolumeGrids,
     pub volume_grid_headers: Vec<(u32, [u32; 16])>,
@@ -181,14 +179,26 @@ pub fn light_arrays(scene: &Scene) -> LightArrays {
     }
 }
 
-/// The instances of `scene` in the leaf order of `tlas`, given each mesh's BLAS root and
-/// flags (`SceneArrays::blas_root`, `SceneArrays::mesh_flags`) and each instance's volume
-/// grid (`VolumeGrids::offsets`).
+/// What an instance's record (`GpuInstance`) holds of its mesh.
+#[derive(Clone, Copy, Debug, Default)]
+pub struct MeshEntry {
+    /// Where traversal enters the mesh's BLAS in `blas_nodes`: its root's index, or the
+    /// root's only child when that is a leaf (a mesh of a few triangles then costs no node
+    /// fetch). 0 for meshes no instance uses.
+    pub blas_root: u32,
+    /// `INSTANCE_HAS_*`
+    pub flags: u32,
+    /// The mesh's bounds in object space (generated texture coordinates).
+    pub bounds: [[f32; 4]; 2],
+}
+
+/// The instances of `scene` in the leaf order of `tlas`, given what their records hold of
+/// each mesh (`SceneArrays::meshes`) and each instance's volume grid
+/// (`VolumeGrids::offsets`).
 pub fn instance_arrays(
     scene: &Scene,
     tlas: Option<&crate::accel::Bvh>,
-    blas_root: &[u32],
-    mesh_flags: &[u32],
+    meshes: &[MeshEntry],
     grids: &[u32],
 ) -> Vec<GpuInstance> {
     let Some(tlas) = tlas else {
@@ -198,18 +208,21 @@ pub fn instance_arrays(
         .iter()
         .map(|&i| {
             let inst = &scene.instances[i as usize];
+            let mesh = meshes[inst.mesh];
             GpuInstance {
                 to_world: rows(inst.transform),
                 to_object: rows(inst.transform.inverse()),
-                blas_root: blas_root[inst.mesh],
+                blas_root: mesh.blas_root,
                 material: inst.material as u32,
-                flags: mesh_flags[inst.mesh]
+                flags: mesh.flags
                     | if inst.shadow_catcher {
                         INSTANCE_SHADOW_CATCHER
                     } else {
                         0
                     },
                 volume_grid: grids[i as usize],
+                mesh_min: mesh.bounds[0],
+                mesh_max: mesh.bounds[1],
             }
         })
         .collect()
@@ -259,16 +272,23 @@ impl SceneArrays {
     pub fn build(scene: &Scene, accel: &SceneAccel, volume_resolution: u32) -> Self {
         let mut a = SceneArrays::default();
         // Meshes: BLAS nodes, triangles in leaf order, vertex attributes.
-        let mut blas_root = vec![0u32; scene.meshes.len()];
-        let mut mesh_flags = vec![0u32; scene.meshes.len()];
+        let mut meshes = vec![MeshEntry::default(); scene.meshes.len()];
         for (m, (mesh, bvh)) in scene.meshes.iter().zip(&accel.blas).enumerate() {
             let Some(bvh) = bvh else { continue };
             let node_base = a.blas_nodes.len() as u32;
             let tri_base = a.triangles.len() as u32;
             let vertex_base = a.vertices.len() as u32;
-            blas_root[m] = node_base;
-            a.blas_nodes.extend(bvh.nodes.iter().map(|n| BvhNode {
-                first: n.first + if n.count == 0 { node_base } else { tri_base },
+            let root = bvh.wide.nodes[0];
+            let (lo, hi) = bvh.nodes[0].bounds();
+            meshes[m].bounds = [lo.extend(0.0).into(), hi.extend(0.0).into()];
+            meshes[m].blas_root =
+                if root.child[1] == WIDE_EMPTY && root.child[0] >> WIDE_COUNT_SHIFT > 0 {
+                    rebase(root.child[0], node_base, tri_base)
+                } else {
+                    node_base
+                };
+            a.blas_nodes.extend(bvh.wide.nodes.iter().map(|n| WideNode {
+                child: n.child.map(|c| rebase(c, node_base, tri_base)),
                 ..*n
             }));
             for &t in &bvh.primitive_order {
@@ -297,7 +317,7 @@ impl SceneArrays {
                 });
                 a.vertices.push([n, uv.x.to_bits(), uv.y.to_bits(), colour]);
             }
-            mesh_flags[m] = if mesh.normals.is_empty() {
+            meshes[m].flags = if mesh.normals.is_empty() {
                 0
             } else {
                 INSTANCE_HAS_NORMALS
@@ -325,22 +345,15 @@ impl SceneArrays {
 
         // Instances in TLAS leaf order.
         if let Some(tlas) = &accel.tlas {
-            a.tlas_nodes = tlas.nodes.clone();
+            a.tlas_nodes = tlas.wide.nodes.clone();
         }
         a.volume_grids = VolumeGrids::plan(scene, &accel.blas, volume_resolution);
-        a.instances = instance_arrays(
-            scene,
-            accel.tlas.as_ref(),
-            &blas_root,
-            &mesh_flags,
-            &a.volume_grids.offsets,
-        );
+        a.instances = instance_arrays(scene, accel.tlas.as_ref(), &meshes, &a.volume_grids.offsets);
         let order = accel.tlas.as_ref().map_or(&[][..], |t| &t.primitive_order);
         a.volume_grid_headers = a
             .volume_grids
             .headers(scene, &kernel_indices(order, scene.instances.len()));
-        a.blas_root = blas_root;
-        a.mesh_flags = mesh_flags;
+        a.meshes = meshes;
 
         a.materials = scene.materials.iter().map(pack_material).collect();
 
@@ -564,7 +577,7 @@ impl GpuScene {
             )
         } else {
             (
-                texel_table::<BvhNode>(ctx, "BLAS nodes", NODE_TEXELS, &[], &mut bytes)?,
+                texel_table::<WideNode>(ctx, "BLAS nodes", NODE_TEXELS, &[], &mut bytes)?,
                 texel_table::<GpuTriangle>(ctx, "triangles", TRIANGLE_TEXELS, &[], &mut bytes)?,
             )
         };
@@ -646,8 +659,7 @@ impl GpuScene {
             light_split: a.light_split,
             local_lights: a.local_lights,
             bytes,
-            blas_root: a.blas_root,
-            mesh_flags: a.mesh_flags,
+            meshes: a.meshes,
             volume_grid,
             volume_grids: a.volume_grids,
         })

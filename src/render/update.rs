@@ -276,7 +276,7 @@ impl Renderer {
             )));
         }
         let tlas = build_tlas(scene, &self.blas).map_err(RenderError::from)?;
-        let nodes = tlas.as_ref().map_or(0, |t| t.nodes.len());
+        let nodes = tlas.as_ref().map_or(0, |t| t.wide.nodes.len());
         if NODE_TEXELS.rows(nodes) > self.gpu_scene.tlas_texels.height() {
             return Err(UpdateError::rebuild(
                 "the instances' BVH outgrows its buffer",
@@ -285,8 +285,7 @@ impl Renderer {
         let packed = instance_arrays(
             scene,
             tlas.as_ref(),
-            &self.gpu_scene.blas_root,
-            &self.gpu_scene.mesh_flags,
+            &self.gpu_scene.meshes,
             &self.gpu_scene.volume_grids.offsets,
         );
         Ok((tlas, packed))
@@ -297,7 +296,7 @@ impl Renderer {
         tlas: Option<&Bvh>,
         packed: &[GpuInstance],
     ) -> Result<(), UpdateError> {
-        let nodes = tlas.map_or(&[][..], |t| &t.nodes[..]);
+        let nodes = tlas.map_or(&[][..], |t| &t.wide.nodes[..]);
         let queue = &self.ctx.queue;
         write_texels(queue, &self.gpu_scene.tlas_texels, NODE_TEXELS, nodes);
         write_texels(queue, &self.gpu_scene.instances, INSTANCE_TEXELS, packed);

@@ -12,8 +12,8 @@ use std::num::NonZeroU64;
 
 use super::KernelFeatures;
 use super::gpu_types::{
-    BvhNode, GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats,
-    GpuTriangle,
+    GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuParams, GpuStats, GpuTriangle,
+    WideNode,
 };
 
 /// How the kernel sees a buffer.
@@ -88,21 +88,21 @@ impl TexelLayout {
     }
 }
 
-/// BVH nodes (TLAS and BLAS): 32 bytes, two texels.
+/// BVH nodes (TLAS and BLAS, [`WideNode`]): 64 bytes, four texels.
 pub const NODE_TEXELS: TexelLayout = TexelLayout {
-    texels: 2,
-    per_row: 2048,
+    texels: 4,
+    per_row: 1024,
 };
 /// Triangles: 48 bytes, three texels.
 pub const TRIANGLE_TEXELS: TexelLayout = TexelLayout {
     texels: 3,
     per_row: 1365,
 };
-/// Instances (`GpuInstance`): 112 bytes, seven texels. Traversal reads texels 3–6 of one
+/// Instances (`GpuInstance`): 144 bytes, nine texels. Traversal reads texels 3–6 of one
 /// (the world-to-object rows and the BVH root, `fetch_placement`).
 pub const INSTANCE_TEXELS: TexelLayout = TexelLayout {
-    texels: 7,
-    per_row: 585,
+    texels: 9,
+    per_row: 455,
 };
 /// Vertex attributes: one texel each (see the `vertex_texels` binding).
 pub const VERTEX_TEXELS: TexelLayout = TexelLayout {
@@ -150,7 +150,7 @@ pub const TEXEL_LAYOUTS: [(&str, &str, TexelLayout); 8] = [
 
 // The Rust elements uploaded to each table fill its texels exactly.
 const _: () = {
-    assert!(bytes::<BvhNode>() == NODE_TEXELS.texels as u64 * 16);
+    assert!(bytes::<WideNode>() == NODE_TEXELS.texels as u64 * 16);
     assert!(bytes::<GpuTriangle>() == TRIANGLE_TEXELS.texels as u64 * 16);
     assert!(bytes::<GpuInstance>() == INSTANCE_TEXELS.texels as u64 * 16);
     assert!(bytes::<[u32; 4]>() == VERTEX_TEXELS.texels as u64 * 16);
@@ -261,8 +261,8 @@ const fn blas_page(name: &'static str, binding: u32, page: u32) -> Binding {
         name,
         binding,
         space: Space::ReadOnly,
-        wgsl_type: "array<BvhNode>",
-        element_bytes: bytes::<BvhNode>(),
+        wgsl_type: "array<WideNode>",
+        element_bytes: bytes::<WideNode>(),
         stand_in: None,
         doc: "",
     }
@@ -373,7 +373,7 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         Resource::TlasTexels,
         "tlas_texels",
         4,
-        bytes::<BvhNode>(),
+        bytes::<WideNode>(),
         "The BVH over instances and the instances in its leaf order, as texels: read them\n\
          through fetch_tlas_node, fetch_placement and fetch_instance (shaders/texels.wgsl).",
     ),
@@ -529,7 +529,7 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         Resource::NodeTexels,
         "blas_nodes_texels",
         28,
-        bytes::<BvhNode>(),
+        bytes::<WideNode>(),
         "The BLAS nodes and the triangles as texels, when they fit: read them through\n\
          fetch_blas_node and fetch_triangle too.",
     ),

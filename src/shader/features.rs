@@ -190,7 +190,7 @@ pub fn paging_wgsl(features: &KernelFeatures) -> String {
         features.triangle_pages,
         accessor(
             "fetch_blas_node",
-            "BvhNode",
+            "WideNode",
             "node_from_texels",
             "blas_nodes",
             "node_page_shift",

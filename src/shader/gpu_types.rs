@@ -28,9 +28,15 @@ pub const LIGHT_POINT: u32 = 0;
 pub const LIGHT_SPOT: u32 = 1;
 pub const LIGHT_DISTANT: u32 = 2;
 
+/// `WideNode.child`: a leaf's primitive count sits above this shift (0 for an inner
+/// node), its first primitive (or an inner node's index) below it.
+pub const WIDE_COUNT_SHIFT: u32 = 28;
+/// `WideNode.child` of a slot without a child.
+pub const WIDE_EMPTY: u32 = u32::MAX;
+
 /// Every constant above with its WGSL name, for the test that compares them with
 /// `shaders/scene.wgsl`.
-pub const MIRRORED_CONSTANTS: [(&str, u32); 15] = [
+pub const MIRRORED_CONSTANTS: [(&str, u32); 17] = [
     ("FLAG_LIGHT_SAMPLING", FLAG_LIGHT_SAMPLING),
     ("FLAG_ENVIRONMENT_MAP", FLAG_ENVIRONMENT_MAP),
     ("FLAG_SHADOW_CATCHER", FLAG_SHADOW_CATCHER),
@@ -46,6 +52,8 @@ pub const MIRRORED_CONSTANTS: [(&str, u32); 15] = [
     ("LIGHT_SPOT", LIGHT_SPOT),
     ("LIGHT_DISTANT", LIGHT_DISTANT),
     ("PRINCIPLED_VEC4S", super::principled::PACKED_VEC4S as u32),
+    ("WIDE_COUNT_SHIFT", WIDE_COUNT_SHIFT),
+    ("WIDE_EMPTY", WIDE_EMPTY),
 ];
 
 #[repr(C)]
@@ -120,6 +128,9 @@ pub struct GpuInstance {
     /// The word of `volume_grid` its heterogeneous volume's grid starts at
     /// ([`crate::render::volume_grid`]), or `NO_GRID`.
     pub volume_grid: u32,
+    /// Its mesh's bounds in object space (w unused).
+    pub mesh_min: [f32; 4],
+    pub mesh_max: [f32; 4],
 }
 
 #[repr(C)]
@@ -185,21 +196,24 @@ pub struct GpuStats {
     pub skipped_samples: u32,
 }
 
-/// One node as `BvhNode` in `shaders/scene.wgsl`: inner nodes (`count == 0`) have their
-/// children at `first` and `first + 1`; leaves hold primitives `first .. first + count`.
+/// A node of the four-wide BVH the kernel walks, as `WideNode` in `shaders/scene.wgsl`
+/// ([`crate::accel::widen`] collapses a binary BVH into them): its four children's boxes
+/// quantised to a byte per bound and axis against the node's own box (Ylitie et al.,
+/// "Efficient Incoherent Ray Traversal on GPUs Through Compressed Wide BVHs", 2017), and
+/// per child a leaf (`count << WIDE_COUNT_SHIFT | first`), an inner node's index, or
+/// [`WIDE_EMPTY`]. Four texels: a software rasteriser's traversal step costs about what
+/// the texels it fetches cost.
 #[repr(C)]
 #[derive(Clone, Copy, Debug, Default, PartialEq, Pod, Zeroable)]
-pub struct BvhNode {
-    pub min: [f32; 3],
-    pub first: u32,
-    pub max: [f32; 3],
-    pub count: u32,
-}
-
-impl BvhNode {
-    pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
-        (self.min.into(), self.max.into())
-    }
+pub struct WideNode {
+    /// The lower corner the children's bounds count steps from.
+    pub origin: [f32; 3],
+    /// Per axis a byte (x lowest): the exponent of its step, a power of two, biased by 127.
+    pub exponents: u32,
+    pub child: [u32; 4],
+    /// Per bound and axis, a byte per child (child 0 lowest): its bound in steps from the
+    /// origin, rounded outwards. `[[lo x, lo y, lo z, hi x], [hi y, hi z, 0, 0]]`.
+    pub steps: [[u32; 4]; 2],
 }
 
 #[cfg(test)]
@@ -319,13 +333,27 @@ mod tests {
                 filter_quantiles,
             ]
         );
-        assert_same_layout!(&module, BvhNode, "BvhNode", [min, first, max, count]);
+        assert_same_layout!(
+            &module,
+            WideNode,
+            "WideNode",
+            [origin, exponents, child, steps]
+        );
         assert_same_layout!(&module, GpuTriangle, "Triangle", [p0, p1, p2]);
         assert_same_layout!(
             &module,
             GpuInstance,
             "Instance",
-            [to_world, to_object, blas_root, material, flags, volume_grid]
+            [
+                to_world,
+                to_object,
+                blas_root,
+                material,
+                flags,
+                volume_grid,
+                mesh_min,
+                mesh_max
+            ]
         );
         assert_same_layout!(
             &module,
