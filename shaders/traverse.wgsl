@@ -11,13 +11,13 @@
 const TLAS_STACK_SIZE: u32 = 64u;
 const BLAS_STACK_SIZE: u32 = 96u;
 
-// Traversal stacks live at module scope: WGSL zero-initialises function-scope arrays at
-// every call, which for a call per instance visited costs more than the traversal itself.
-// An entry is a child reference (WideNode.child) and its entry distance.
-var<private> blas_stack_child: array<u32, BLAS_STACK_SIZE>;
-var<private> blas_stack_t: array<f32, BLAS_STACK_SIZE>;
-var<private> tlas_stack_child: array<u32, TLAS_STACK_SIZE>;
-var<private> tlas_stack_t: array<f32, TLAS_STACK_SIZE>;
+// One traversal stack for both levels: an instance's BLAS traversal pushes above the TLAS
+// entries and leaves them as it found them. It lives at module scope: WGSL
+// zero-initialises function-scope arrays at every call, which for a call per instance
+// visited costs more than the traversal itself. An entry is a child reference
+// (WideNode.child) and its entry distance.
+var<private> stack_child: array<u32, TLAS_STACK_SIZE + BLAS_STACK_SIZE>;
+var<private> stack_t: array<f32, TLAS_STACK_SIZE + BLAS_STACK_SIZE>;
 
 struct SceneHit {
     hit: bool,
@@ -110,6 +110,41 @@ fn wide_step(origin: vec3<f32>, inv_dir: vec3<f32>, t_max: f32, n: WideNode) -> 
     return s;
 }
 
+// Pushes the hits of step `s` after its nearest, farthest first (so the nearest of them is
+// popped first), above `top`; returns the new top.
+fn push_hits(top: u32, s: WideStep) -> u32 {
+    var sp = top;
+    if (s.t.w < WIDE_MISS) {
+        stack_child[sp] = s.child.w;
+        stack_t[sp] = s.t.w;
+        sp++;
+    }
+    if (s.t.z < WIDE_MISS) {
+        stack_child[sp] = s.child.z;
+        stack_t[sp] = s.t.z;
+        sp++;
+    }
+    if (s.t.y < WIDE_MISS) {
+        stack_child[sp] = s.child.y;
+        stack_t[sp] = s.t.y;
+        sp++;
+    }
+    return sp;
+}
+
+// Pops entries above `bottom` until one can still hold a hit nearer than `t`, and makes it
+// `current`; false when none is left.
+fn pop_nearer(sp: ptr<function, u32>, bottom: u32, t: f32, current: ptr<function, u32>) -> bool {
+    while (*sp > bottom) {
+        *sp -= 1u;
+        if (stack_t[*sp] <= t * BOX_T_SLACK) {
+            *current = stack_child[*sp];
+            return true;
+        }
+    }
+    return false;
+}
+
 fn wide_count(child: u32) -> u32 {
     return child >> WIDE_COUNT_SHIFT;
 }
@@ -118,12 +153,12 @@ fn wide_first(child: u32) -> u32 {
     return child & ((1u << WIDE_COUNT_SHIFT) - 1u);
 }
 
-// Searches one mesh's BVH; updates `best` with any closer hit. With `any_hit` it returns
-// at the first hit found (shadow rays).
-fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: ptr<function, SceneHit>) -> bool {
+// Searches one mesh's BVH, pushing above the stack's entry `bottom`; updates `best` with any
+// closer hit. With `any_hit` it returns at the first hit found (shadow rays).
+fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: ptr<function, SceneHit>, bottom: u32) -> bool {
     let inv_dir = safe_inverse(ray.dir);
     let rs = ray_shear(ray.dir);
-    var sp = 0u;
+    var sp = bottom;
     var found = false;
     // The root is always an inner node (a lone leaf hangs under one).
     var current = root;
@@ -142,22 +177,7 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
                 leaf = false;
                 break;
             }
-            // The others farthest first, so the nearest of them is popped first.
-            if (s.t.w < WIDE_MISS) {
-                blas_stack_child[sp] = s.child.w;
-                blas_stack_t[sp] = s.t.w;
-                sp++;
-            }
-            if (s.t.z < WIDE_MISS) {
-                blas_stack_child[sp] = s.child.z;
-                blas_stack_t[sp] = s.t.z;
-                sp++;
-            }
-            if (s.t.y < WIDE_MISS) {
-                blas_stack_child[sp] = s.child.y;
-                blas_stack_t[sp] = s.t.y;
-                sp++;
-            }
+            sp = push_hits(sp, s);
             current = s.child.x;
         }
         if (leaf) {
@@ -174,17 +194,7 @@ fn traverse_blas(instance_index: u32, root: u32, ray: Ray, any_hit: bool, best: 
                 }
             }
         }
-        // Pop the next subtree that can still hold a closer hit.
-        var popped = false;
-        while (sp > 0u) {
-            sp--;
-            if (blas_stack_t[sp] <= (*best).t * BOX_T_SLACK) {
-                current = blas_stack_child[sp];
-                popped = true;
-                break;
-            }
-        }
-        if (!popped) {
+        if (!pop_nearer(&sp, bottom, (*best).t, &current)) {
             break;
         }
     }
@@ -212,21 +222,7 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
                 leaf = false;
                 break;
             }
-            if (s.t.w < WIDE_MISS) {
-                tlas_stack_child[sp] = s.child.w;
-                tlas_stack_t[sp] = s.t.w;
-                sp++;
-            }
-            if (s.t.z < WIDE_MISS) {
-                tlas_stack_child[sp] = s.child.z;
-                tlas_stack_t[sp] = s.t.z;
-                sp++;
-            }
-            if (s.t.y < WIDE_MISS) {
-                tlas_stack_child[sp] = s.child.y;
-                tlas_stack_t[sp] = s.t.y;
-                sp++;
-            }
+            sp = push_hits(sp, s);
             current = s.child.x;
         }
         if (leaf) {
@@ -235,21 +231,12 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
                 let placement = fetch_placement(i);
                 // The direction is not renormalised, so t means the same in both spaces.
                 let local = Ray(transform_point(placement.to_object, ray.origin), transform_vector(placement.to_object, ray.dir));
-                if (traverse_blas(i, placement.blas_root, local, any_hit, &best) && any_hit) {
+                if (traverse_blas(i, placement.blas_root, local, any_hit, &best, sp) && any_hit) {
                     return best;
                 }
             }
         }
-        var popped = false;
-        while (sp > 0u) {
-            sp--;
-            if (tlas_stack_t[sp] <= best.t * BOX_T_SLACK) {
-                current = tlas_stack_child[sp];
-                popped = true;
-                break;
-            }
-        }
-        if (!popped) {
+        if (!pop_nearer(&sp, 0u, best.t, &current)) {
             break;
         }
     }

@@ -209,10 +209,11 @@ fn choose_split(
 }
 
 #[cfg(test)]
-mod tests {
+pub(super) mod tests {
     use super::*;
 
-    fn random_boxes(n: usize) -> Vec<(Vec3, Vec3)> {
+    /// `n` boxes up to 0.6 wide scattered over a cube of side 10, the same every call.
+    pub fn random_boxes(n: usize) -> Vec<(Vec3, Vec3)> {
         let mut state = 0x9e37_79b9u32;
         let mut rnd = move || {
             state ^= state << 13;

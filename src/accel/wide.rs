@@ -164,6 +164,7 @@ pub fn rebase(child: u32, nodes: u32, primitives: u32) -> u32 {
 mod tests {
     use super::*;
     use crate::accel::build_bvh;
+    use crate::accel::bvh::tests::random_boxes;
 
     /// The box of slot `slot` of `node`, as the kernel decodes it.
     fn decoded_box(node: &WideNode, slot: usize) -> (Vec3, Vec3) {
@@ -177,23 +178,6 @@ mod tests {
             }))
         };
         (axis(lo_words), axis(hi_words))
-    }
-
-    fn random_boxes(n: usize) -> Vec<(Vec3, Vec3)> {
-        let mut state = 0x2545_f491u32;
-        let mut rnd = move || {
-            state ^= state << 13;
-            state ^= state >> 17;
-            state ^= state << 5;
-            state as f32 / u32::MAX as f32
-        };
-        (0..n)
-            .map(|_| {
-                let c = Vec3::new(rnd(), rnd(), rnd()) * 10.0;
-                let h = Vec3::new(rnd(), rnd(), rnd()) * 0.3;
-                (c - h, c + h)
-            })
-            .collect()
     }
 
     /// Walks the wide tree: every primitive in exactly one leaf and inside the decoded box
