@@ -27,6 +27,15 @@ impl BvhNode {
     pub fn bounds(&self) -> (glam::Vec3, glam::Vec3) {
         (self.min.into(), self.max.into())
     }
+
+    /// Half the surface area of its box, as the builder's SAH weighs boxes.
+    pub(super) fn half_area(&self) -> f32 {
+        Aabb {
+            lo: self.min.into(),
+            hi: self.max.into(),
+        }
+        .half_area()
+    }
 }
 
 #[derive(Clone, Debug, Default)]

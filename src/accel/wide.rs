@@ -1,16 +1,18 @@
 //! The four-wide BVH the kernel walks, collapsed from a binary one (Wald et al., "Getting
 //! Rid of Packets", 2008; pbrt-v4 and Embree collapse the same way): each wide node takes
 //! its binary node's two children, then keeps opening the child with the largest surface
-//! area until it has four. A software rasteriser runs one traversal step for the whole
-//! SIMD batch, so a step that tests four boxes at once halves the steps a ray takes.
+//! area until it has four; each child's box is quantised to bytes ([`WideNode`]). On a
+//! software rasteriser a traversal step costs about the texels it fetches: four texels for
+//! four children here, where a binary step fetched four for two (docs/BENCHMARKS.md).
 
 use glam::Vec3;
 
 use super::bvh::BvhNode;
 use crate::shader::gpu_types::{WIDE_COUNT_SHIFT, WIDE_EMPTY, WideNode};
 
-/// The largest primitive count a wide leaf can hold, and one past the largest index.
+/// The largest primitive count a leaf's reference holds.
 pub const WIDE_MAX_LEAF: u32 = (1 << (32 - WIDE_COUNT_SHIFT)) - 1;
+/// A reference's index mask; indices stay below it, so no reference is `WIDE_EMPTY`.
 pub const WIDE_INDEX_LIMIT: u32 = (1 << WIDE_COUNT_SHIFT) - 1;
 
 #[derive(Clone, Debug, Default)]
@@ -21,11 +23,6 @@ pub struct WideBvh {
     /// Entries the kernel's traversal stack needs at most: on the worst root-to-leaf path,
     /// every node pushes all but one of its children.
     pub stack_need: u32,
-}
-
-fn half_area(n: &BvhNode) -> f32 {
-    let d = (Vec3::from(n.max) - Vec3::from(n.min)).max(Vec3::ZERO);
-    d.x * d.y + d.y * d.z + d.z * d.x
 }
 
 /// The binary nodes that become `node`'s wide children.
@@ -40,7 +37,7 @@ fn open(nodes: &[BvhNode], node: usize) -> Vec<usize> {
         let widest = (0..children.len())
             .filter(|&i| nodes[children[i]].count == 0)
             .max_by(|&a, &b| {
-                half_area(&nodes[children[a]]).total_cmp(&half_area(&nodes[children[b]]))
+                (nodes[children[a]].half_area()).total_cmp(&nodes[children[b]].half_area())
             });
         let Some(i) = widest else { break };
         let inner = nodes[children.swap_remove(i)];
@@ -146,6 +143,19 @@ pub fn widen(nodes: &[BvhNode]) -> WideBvh {
     WideBvh {
         nodes: wide,
         stack_need,
+    }
+}
+
+impl WideBvh {
+    /// Where traversal enters the tree: the root (0), or the root's only child when that
+    /// is a leaf, so a mesh of a few triangles costs no node fetch.
+    pub fn entry(&self) -> u32 {
+        let [first, second, ..] = self.nodes[0].child;
+        if second == WIDE_EMPTY && first >> WIDE_COUNT_SHIFT > 0 {
+            first
+        } else {
+            0
+        }
     }
 }
 
@@ -301,6 +311,11 @@ mod tests {
     fn a_single_leaf_becomes_a_root_with_one_child() {
         let (wide, _) = check(&random_boxes(1), 4);
         assert_eq!(wide, 1);
+        assert_eq!(
+            build_bvh(&random_boxes(1), 4).wide.entry(),
+            1 << WIDE_COUNT_SHIFT
+        );
+        assert_eq!(build_bvh(&random_boxes(50), 4).wide.entry(), 0);
     }
 
     #[test]

@@ -22,8 +22,7 @@ use crate::shader::bindings::{
 };
 use crate::shader::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
-    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, INSTANCE_SHADOW_CATCHER,
-    WIDE_COUNT_SHIFT, WIDE_EMPTY, WideNode,
+    INSTANCE_HAS_NORMALS, INSTANCE_HAS_UV1, INSTANCE_HAS_UVS, INSTANCE_SHADOW_CATCHER, WideNode,
 };
 use crate::shader::{Ablation, KernelFeatures};
 
@@ -278,15 +277,9 @@ impl SceneArrays {
             let node_base = a.blas_nodes.len() as u32;
             let tri_base = a.triangles.len() as u32;
             let vertex_base = a.vertices.len() as u32;
-            let root = bvh.wide.nodes[0];
             let (lo, hi) = bvh.nodes[0].bounds();
             meshes[m].bounds = [lo.extend(0.0).into(), hi.extend(0.0).into()];
-            meshes[m].blas_root =
-                if root.child[1] == WIDE_EMPTY && root.child[0] >> WIDE_COUNT_SHIFT > 0 {
-                    rebase(root.child[0], node_base, tri_base)
-                } else {
-                    node_base
-                };
+            meshes[m].blas_root = rebase(bvh.wide.entry(), node_base, tri_base);
             a.blas_nodes.extend(bvh.wide.nodes.iter().map(|n| WideNode {
                 child: n.child.map(|c| rebase(c, node_base, tri_base)),
                 ..*n
