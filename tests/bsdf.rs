@@ -360,15 +360,22 @@ fn empty_scene() -> Scene {
 }
 
 /// Runs the test kernel `shaders/tests/{name}.wgsl` (entry point `name`) with the lobe
-/// dispatch, returning `output_bytes` of its output.
+/// dispatch, returning `output_bytes` of its output. With a `kind`, every configuration in
+/// `input` must have it, and the kernel is compiled for it alone (`LOBE_KIND` in
+/// `shaders/tests/lobe_dispatch.wgsl`).
 fn run_lobe_kernel(
     name: &str,
     wgsl: &str,
+    kind: Option<u32>,
     input: &[u8],
     output_bytes: u64,
     invocations: u32,
 ) -> Vec<u8> {
     let path = format!("shaders/tests/{name}.wgsl");
+    let kind = match kind {
+        Some(kind) => format!("const LOBE_KIND: u32 = {kind}u;"),
+        None => "const LOBE_KIND: u32 = ANY_KIND;".to_string(),
+    };
     run_probe(
         &gpu(),
         &empty_scene(),
@@ -376,6 +383,7 @@ fn run_lobe_kernel(
         &Probe {
             name,
             parts: &[
+                ("lobe kind", &kind),
                 ("shaders/tests/lobe_dispatch.wgsl", DISPATCH),
                 (&path, wgsl),
             ],
@@ -401,7 +409,32 @@ struct SampleStats {
     max_error: f32,
 }
 
+/// The configurations in runs of one kind, each with the index of its first: the kernels
+/// sample and integrate a run at a time, compiled for its kind (see `run_lobe_kernel`).
+fn kind_runs(lobes: &[Lobe]) -> impl Iterator<Item = (usize, &[Lobe])> {
+    lobes
+        .chunk_by(|a, b| a.kind == b.kind)
+        .scan(0, |first, run| {
+            let start = *first;
+            *first += run.len();
+            Some((start, run))
+        })
+}
+
 fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Vec<SampleStats> {
+    kind_runs(lobes)
+        .flat_map(|(first, run)| sample_run(run, first, bins, samples, seed))
+        .collect()
+}
+
+/// Samples `lobes`, all of one kind, the whole set's configurations from `first` on.
+fn sample_run(
+    lobes: &[Lobe],
+    first: usize,
+    bins: SphereBins,
+    samples: u32,
+    seed: u32,
+) -> Vec<SampleStats> {
     let mut input = vec![
         [
             lobes.len() as u32,
@@ -409,7 +442,7 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
             bins.theta_bins as u32,
             bins.phi_bins as u32,
         ],
-        [seed, 0, 0, 0],
+        [seed, first as u32, 0, 0],
     ];
     for l in lobes {
         input.extend(l.encode());
@@ -420,6 +453,7 @@ fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Ve
     let out = run_lobe_kernel(
         "bsdf_sample",
         include_str!("../shaders/tests/bsdf_sample.wgsl"),
+        Some(lobes[0].kind),
         bytemuck::cast_slice(&input),
         4 * words as u64,
         invocations,
@@ -499,6 +533,13 @@ fn richardson_bound(change: f64, (num, den): (u32, u32)) -> f64 {
 /// Integrates every configuration's pdf over every cell, with the kernel's quadrature orders
 /// scaled by the fraction `scale` (`FULL_ORDER` or one of `COARSER_ORDERS`).
 fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins, scale: (u32, u32)) -> Vec<Vec<f64>> {
+    kind_runs(lobes)
+        .flat_map(|(_, run)| integrate_run(run, bins, scale))
+        .collect()
+}
+
+/// `integrate_pdfs` for lobes of one kind.
+fn integrate_run(lobes: &[Lobe], bins: SphereBins, scale: (u32, u32)) -> Vec<Vec<f64>> {
     let mut input = vec![
         [
             lobes.len() as u32,
@@ -529,6 +570,7 @@ fn integrate_pdfs(lobes: &[Lobe], bins: SphereBins, scale: (u32, u32)) -> Vec<Ve
     let out = run_lobe_kernel(
         "bsdf_pdf",
         include_str!("../shaders/tests/bsdf_pdf.wgsl"),
+        Some(lobes[0].kind),
         bytemuck::cast_slice(&input),
         4 * n as u64,
         n,
@@ -858,6 +900,26 @@ fn refine_pdfs(
     points: u32,
     expected: &mut [Vec<f64>],
 ) {
+    for (first, run) in kind_runs(lobes) {
+        let configs = first..first + run.len();
+        let in_run: Vec<(usize, usize)> = (cells.iter())
+            .filter(|(c, _)| configs.contains(c))
+            .map(|&(c, cell)| (c - first, cell))
+            .collect();
+        if !in_run.is_empty() {
+            refine_run(run, bins, &in_run, points, &mut expected[configs]);
+        }
+    }
+}
+
+/// `refine_pdfs` for lobes of one kind.
+fn refine_run(
+    lobes: &[Lobe],
+    bins: SphereBins,
+    cells: &[(usize, usize)],
+    points: u32,
+    expected: &mut [Vec<f64>],
+) {
     let (rows, cols) = (bins.theta_bins, bins.phi_bins);
     // Blocks in θ per cell: the polar bands get eight times as many.
     let theta_blocks = |cell: usize| {
@@ -882,6 +944,7 @@ fn refine_pdfs(
     let out = run_lobe_kernel(
         "bsdf_pdf_refine",
         include_str!("../shaders/tests/bsdf_pdf_refine.wgsl"),
+        Some(lobes[0].kind),
         bytemuck::cast_slice(&input),
         4 * tasks as u64,
         tasks,
@@ -965,6 +1028,7 @@ fn no_nan_or_inf_at_random_and_extreme_inputs() {
     let out = run_lobe_kernel(
         "bsdf_extremes",
         include_str!("../shaders/tests/bsdf_extremes.wgsl"),
+        None,
         bytemuck::cast_slice(&input),
         16 * n as u64,
         n,
@@ -1012,6 +1076,7 @@ fn raw_samples(lobes: &[Lobe], count: u32, seed: u32) -> Vec<Vec<RawSample>> {
     let out = run_lobe_kernel(
         "bsdf_raw",
         include_str!("../shaders/tests/bsdf_raw.wgsl"),
+        None,
         bytemuck::cast_slice(&input),
         48 * total as u64,
         total,
@@ -1208,6 +1273,7 @@ fn cross_check_kernel(lobe: &Lobe, bins: SphereBins, mode: u32, dirs: &[Vec3]) -
     let out = run_lobe_kernel(
         "chi2_cross_check",
         include_str!("../shaders/tests/chi2_cross_check.wgsl"),
+        None,
         bytemuck::cast_slice(&input),
         4 * dirs.len() as u64,
         dirs.len() as u32,

@@ -50,6 +50,7 @@ fn probe(scene: &Scene, entry: &str, input: &[[u32; 4]], words: u64, invocations
         &Probe {
             name: entry,
             parts: &[
+                ("lobe kind", "const LOBE_KIND: u32 = ANY_KIND;"),
                 (
                     "shaders/tests/lobe_dispatch.wgsl",
                     include_str!("../shaders/tests/lobe_dispatch.wgsl"),

@@ -2,8 +2,10 @@
 // SAMPLES_PER_INVOCATION samples of one configuration, adds their directions to that
 // configuration's histogram (atomics), and writes its partial sums.
 //
-// probe_in: [0] = (configs, samples per config, theta bins, phi bins), [1] = (seed, 0, 0, 0),
-// then CONFIG_STRIDE vec4s per configuration (tests/lobe_dispatch.wgsl).
+// probe_in: [0] = (configs, samples per config, theta bins, phi bins), [1] = (seed, first,
+// 0, 0), then CONFIG_STRIDE vec4s per configuration (tests/lobe_dispatch.wgsl). `first` is
+// the index of the first configuration in the whole set, which the random numbers follow:
+// a set sampled in parts (one per lobe kind) draws what it would draw in one dispatch.
 // probe_out (u32): configs × cells histogram counts, then per invocation 8 words:
 // valid, delta, non-finite, weight sum r, g, b (f32 bits),
 // samples whose weight or pdf disagrees with eval / pdf(wi) by over 1e-2 relative, and the
@@ -32,6 +34,7 @@ fn bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
         return;
     }
     let config = index / per_config;
+    let first = probe_in[1].y;
     let cells = header.z * header.w;
     let p = lobe_params(2u + CONFIG_STRIDE * config);
     var valid = 0u;
@@ -41,7 +44,7 @@ fn bsdf_sample(@builtin(global_invocation_id) gid: vec3<u32>, @builtin(num_workg
     var inconsistent = 0u;
     var max_error = 0.0;
     for (var i = 0u; i < SAMPLES_PER_INVOCATION; i++) {
-        rng_seed(index * SAMPLES_PER_INVOCATION + i, config, probe_in[1].x);
+        rng_seed((index + first * per_config) * SAMPLES_PER_INVOCATION + i, config + first, probe_in[1].x);
         let s = lobe_sample(p);
         if (!all_finite(vec4<f32>(s.wi, s.pdf)) || !all_finite(vec4<f32>(s.weight, 0.0))) {
             non_finite++;

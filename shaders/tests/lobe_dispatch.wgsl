@@ -9,7 +9,15 @@
 // reflection only (scale in tint), 5 the principled surface, 6 single-scattering rough
 // diffuse (sigma in alpha.x), 7 the subsurface entry (its IOR in eta).
 
+//
+// The kernel including this file also declares `const LOBE_KIND: u32`: the one kind its
+// configurations all have, or ANY_KIND. Lavapipe runs both sides of every branch for a
+// whole SIMD batch, so a kernel that switches on the kind at run time pays for every lobe
+// (the principled mixture's included) at each evaluation; a constant kind folds the switch
+// away.
+
 const CONFIG_STRIDE: u32 = 5u + PRINCIPLED_VEC4S;
+const ANY_KIND: u32 = 0xffffffffu;
 
 struct LobeParams {
     kind: u32,
@@ -29,7 +37,7 @@ fn lobe_params(base: u32) -> LobeParams {
         packed[i] = bitcast<vec4<f32>>(probe_in[base + 5u + i]);
     }
     return LobeParams(
-        probe_in[base].x,
+        select(probe_in[base].x, LOBE_KIND, LOBE_KIND != ANY_KIND),
         a.xy,
         a.z,
         probe_in[base].y != 0u,
