@@ -421,6 +421,16 @@ fn kind_runs(lobes: &[Lobe]) -> impl Iterator<Item = (usize, &[Lobe])> {
         })
 }
 
+/// The kind all of `lobes` (a run from `kind_runs`) have, which the kernel is compiled for.
+fn kind_of_run(lobes: &[Lobe]) -> u32 {
+    let kind = lobes[0].kind;
+    assert!(
+        lobes.iter().all(|l| l.kind == kind),
+        "a run of lobes of several kinds"
+    );
+    kind
+}
+
 fn sample_lobes(lobes: &[Lobe], bins: SphereBins, samples: u32, seed: u32) -> Vec<SampleStats> {
     kind_runs(lobes)
         .flat_map(|(first, run)| sample_run(run, first, bins, samples, seed))
@@ -453,7 +463,7 @@ fn sample_run(
     let out = run_lobe_kernel(
         "bsdf_sample",
         include_str!("../shaders/tests/bsdf_sample.wgsl"),
-        Some(lobes[0].kind),
+        Some(kind_of_run(lobes)),
         bytemuck::cast_slice(&input),
         4 * words as u64,
         invocations,
@@ -570,7 +580,7 @@ fn integrate_run(lobes: &[Lobe], bins: SphereBins, scale: (u32, u32)) -> Vec<Vec
     let out = run_lobe_kernel(
         "bsdf_pdf",
         include_str!("../shaders/tests/bsdf_pdf.wgsl"),
-        Some(lobes[0].kind),
+        Some(kind_of_run(lobes)),
         bytemuck::cast_slice(&input),
         4 * n as u64,
         n,
@@ -944,7 +954,7 @@ fn refine_run(
     let out = run_lobe_kernel(
         "bsdf_pdf_refine",
         include_str!("../shaders/tests/bsdf_pdf_refine.wgsl"),
-        Some(lobes[0].kind),
+        Some(kind_of_run(lobes)),
         bytemuck::cast_slice(&input),
         4 * tasks as u64,
         tasks,

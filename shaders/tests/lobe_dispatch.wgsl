@@ -8,7 +8,6 @@
 // Kinds: 0 diffuse, 1 conductor, 2 dielectric, 3 sheen (roughness in alpha.x), 4 dielectric
 // reflection only (scale in tint), 5 the principled surface, 6 single-scattering rough
 // diffuse (sigma in alpha.x), 7 the subsurface entry (its IOR in eta).
-
 //
 // The kernel including this file also declares `const LOBE_KIND: u32`: the one kind its
 // configurations all have, or ANY_KIND. Lavapipe runs both sides of every branch for a
