@@ -300,8 +300,8 @@ const OFFSET: f32 = 100.0;
 /// [`OFFSET`]) is the emission of a quad of its own, rendered head-on by Kiln's kernel,
 /// one sample, no bounces, so that each quad's pixels are the value.
 ///
-/// The cases are rendered together, through the interpreter, in as few renders as its
-/// parameter buffer allows: a scene whose programs do not fit it is rendered as compiled
+/// The cases are rendered through the interpreter, halved until each render's programs
+/// fit its parameter buffer: a scene whose programs do not fit is rendered as compiled
 /// graphs instead, whose code differs from render to render, and each such kernel took
 /// lavapipe about a minute to build on a clean machine.
 fn kiln_values(cases: &[(Node, &str)]) -> Vec<V> {
