@@ -30,7 +30,7 @@ fn the_cornell_box_compiles_only_diffuse_and_its_area_light() {
     let f = features(&default_scene().unwrap());
     assert_eq!(f.lobes, lobes::DIFFUSE);
     assert!(
-        !f.environment_map && !f.analytic_lights && f.emissive_triangles,
+        !f.environment_map && !f.analytic_lights && f.emissive_triangles && !f.shadow_catcher,
         "{f:?}"
     );
     let consts = features_wgsl(&f);
@@ -66,6 +66,51 @@ fn lobes_follow_the_materials_and_graphs() {
     let (_, graph) = kiln::material::parse_material(text, "m.kmat").unwrap();
     let m = Material::from_graph("varying metal", graph).unwrap();
     assert_eq!(m.lobes(), lobes::METAL | lobes::DIFFUSE | lobes::SPECULAR);
+    // An alpha that varies may cut the surface out anywhere.
+    let text = r#"(version: 1, nodes: {
+        "n": (type: "noise_texture"),
+        "s": (type: "principled_bsdf", inputs: { "alpha": "n.fac" }),
+        "o": (type: "material_output", inputs: { "surface": "s.bsdf" }),
+    })"#;
+    let (_, graph) = kiln::material::parse_material(text, "m.kmat").unwrap();
+    let m = Material::from_graph("varying alpha", graph).unwrap();
+    assert_eq!(m.lobes() & lobes::CUTOUT, lobes::CUTOUT);
+
+    let f = features(&cutout_glass_and_catcher());
+    assert_eq!(
+        f.lobes & (lobes::CUTOUT | lobes::GLASS),
+        lobes::CUTOUT | lobes::GLASS
+    );
+    assert!(f.shadow_catcher, "{f:?}");
+}
+
+/// The Cornell box with what a specialised kernel leaves out unless the scene has it: a
+/// cut-out (the short block at alpha ½), a medium (the tall block of glass) and a shadow
+/// catcher (the floor).
+fn cutout_glass_and_catcher() -> Scene {
+    let mut scene = default_scene().unwrap();
+    let half = scene.add_material(Material {
+        name: "half".into(),
+        principled: Principled {
+            alpha: 0.5,
+            ..Principled::default()
+        },
+        ..Material::default()
+    });
+    let glass = scene.add_material(Material {
+        name: "tinted glass".into(),
+        principled: Principled {
+            transmission_weight: 1.0,
+            transmission_color: glam::Vec3::new(0.9, 0.5, 0.3),
+            transmission_depth: 100.0,
+            ..Principled::default()
+        },
+        ..Material::default()
+    });
+    scene.instances[6].material = half;
+    scene.instances[7].material = glass;
+    scene.instances[0].shadow_catcher = true;
+    scene
 }
 
 #[test]
@@ -77,6 +122,7 @@ fn specialised_and_everything_kernels_render_the_same_image() {
             "/assets/scenes/materials.kiln"
         )))
         .unwrap(),
+        cutout_glass_and_catcher(),
     ];
     for scene in scenes {
         let mut s = settings(48, 32, 16);

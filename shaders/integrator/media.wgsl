@@ -20,6 +20,11 @@
 
 const MEDIA_DEPTH: u32 = 4u;
 
+// Whether a path can be inside a medium: only volumes and refracting surfaces have an
+// inside. Without them the kernel leaves the media code out (lavapipe would otherwise run
+// it at every bounce under a lane mask, taken or not).
+const FEATURE_MEDIA: bool = FEATURE_VOLUME || FEATURE_HETEROGENEOUS || FEATURE_GLASS;
+
 struct Media {
     count: u32,
     // The material whose inside each entry is, and the instance (for object space).

@@ -300,7 +300,10 @@ fn trace_path(primary: Ray) -> vec3<f32> {
     var prev_delta = true;
     // Where the last scattering event was: what light sampling saw a light from.
     var vertex = primary.origin;
-    media = camera_media();
+    media = media_empty();
+    if (FEATURE_MEDIA) {
+        media = camera_media();
+    }
     let nee = light_sampling_enabled();
     var depth = 0u;
     // Scattering events in media, against params.max_volume_bounces.
@@ -356,7 +359,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             if (FEATURE_ANALYTIC_LIGHTS && params.analytic_light_count > 0u) {
                 light_hit = analytic_light_hit(ray.origin, ray.dir, t_scene, infinite_light_pick(vertex));
             }
-            if (media.count > 0u) {
+            if (FEATURE_MEDIA && media.count > 0u) {
                 // The segment runs through the innermost medium; a medium without an exit
                 // absorbs everything.
                 let top = media.count - 1u;
@@ -417,7 +420,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                     }
                 }
                 if (!hit.hit) {
-                    if (depth == 0u && (params.flags & FLAG_SHADOW_CATCHER) != 0u) {
+                    if (FEATURE_SHADOW_CATCHER && depth == 0u && (params.flags & FLAG_SHADOW_CATCHER) != 0u) {
                         // Beside a shadow catcher the background is transparent: the
                         // camera sees nothing here (alpha 0).
                         break;
@@ -436,7 +439,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 s = surface_at(hit);
                 let material = fetch_material(s.material);
                 let front = dot(ray.dir, s.ng) < 0.0;
-                if (depth == 0u && (fetch_instance(hit.instance).flags & INSTANCE_SHADOW_CATCHER) != 0u) {
+                if (FEATURE_SHADOW_CATCHER && depth == 0u && (fetch_instance(hit.instance).flags & INSTANCE_SHADOW_CATCHER) != 0u) {
                     // The camera sees a shadow catcher: only its shadow, as alpha.
                     aov_alpha = catcher_shadow(s.pe, select(-s.ng, s.ng, front));
                     break;
@@ -464,7 +467,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
 
                 // Alpha cut-out: the path continues through the surface without scattering.
                 let opacity = me.opacity;
-                if (opacity < 1.0 && rand() >= opacity) {
+                if (FEATURE_CUTOUT && opacity < 1.0 && rand() >= opacity) {
                     passes++;
                     if (passes > MAX_PASS_THROUGH) {
                         break;
@@ -578,7 +581,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
             walking = true;
             walk_medium = subsurface_medium(p);
             walk_steps = 0u;
-        } else if (transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
+        } else if (FEATURE_MEDIA && transmissive && !p.thin_walled && dot(wi, s.ng) * dot(ray.dir, s.ng) > 0.0) {
             // Crossed the surface: entering through the front, or leaving through it.
             if (principled_sampled_lobe == LOBE_GLASS) {
                 let ior = max(p.ior, 1e-4);

@@ -243,6 +243,16 @@ pub fn materials_wgsl(materials: &[(u32, &CompiledMaterial)]) -> Vec<(String, St
     parts
 }
 
+/// [`crate::shader::lobes::CUTOUT`] for a surface whose alpha is below 1 somewhere
+/// (`None`: it varies over the surface), else nothing.
+pub fn cutout_lobes(alpha: Option<f32>) -> u32 {
+    if alpha.is_none_or(|a| a < 1.0) {
+        crate::shader::lobes::CUTOUT
+    } else {
+        0
+    }
+}
+
 /// The principled lobes a surface with these weights can reach ([`crate::shader::lobes`]);
 /// `None` is a weight that varies over the surface. A thin wall's subsurface is diffuse
 /// transmission, not a random walk.

@@ -2089,7 +2089,7 @@ fn principled_bsdf_traits(known: &dyn Fn(&str) -> Option<Value>, params: Params)
         weight("specular_weight"),
         weight("subsurface_weight"),
         params.flag("thin_walled"),
-    );
+    ) | super::cutout_lobes(weight("alpha"));
     MaterialTraits {
         transmissive,
         constant_emission,

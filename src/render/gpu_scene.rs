@@ -84,6 +84,8 @@ pub struct GpuScene {
     pub analytic_light_count: u32,
     pub environment_data: wgpu::Buffer,
     pub has_environment_map: bool,
+    /// An instance is a shadow catcher.
+    pub has_shadow_catcher: bool,
     /// Principled lobes the scene's instanced materials can reach.
     pub lobes: u32,
     /// The image textures (`material::texture::TextureTable::gpu_words`).
@@ -629,6 +631,7 @@ impl GpuScene {
                 &mut bytes,
             )?,
             has_environment_map: !a.environment_data.is_empty(),
+            has_shadow_catcher: scene.instances.iter().any(|i| i.shadow_catcher),
             textures: storage_buffer(
                 ctx,
                 "textures",
@@ -742,6 +745,7 @@ impl GpuScene {
             environment_map: self.has_environment_map,
             analytic_lights: self.analytic_light_count > 0,
             emissive_triangles: self.light_count > 0,
+            shadow_catcher: self.has_shadow_catcher,
             textures: self.texture_count > 0,
             aovs: false,
             noise: false,

@@ -261,6 +261,7 @@ mod tests {
             environment_map: false,
             analytic_lights: false,
             emissive_triangles: false,
+            shadow_catcher: false,
             textures: false,
             aovs: false,
             uv1: false,

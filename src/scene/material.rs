@@ -122,7 +122,7 @@ impl Material {
             Some(p.specular_weight),
             Some(p.subsurface_weight),
             p.thin_walled,
-        )
+        ) | crate::material::cutout_lobes(Some(p.alpha))
     }
 
     /// The emitted radiance known in advance (a graph's constant emission).

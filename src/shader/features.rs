@@ -18,6 +18,8 @@ pub struct KernelFeatures {
     /// Point, spot and distant lights.
     pub analytic_lights: bool,
     pub emissive_triangles: bool,
+    /// An instance is a shadow catcher: the camera ray's light sample and shadow ray there.
+    pub shadow_catcher: bool,
     /// Image textures: binds `texture_data`.
     pub textures: bool,
     /// AOV layers (albedo, normal, depth): binds `film_aov`.
@@ -80,6 +82,7 @@ impl Default for KernelFeatures {
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,
+            shadow_catcher: true,
             textures: true,
             aovs: true,
             uv1: true,
@@ -90,7 +93,7 @@ impl Default for KernelFeatures {
 }
 
 impl KernelFeatures {
-    /// Every lobe and light type compiled in: the unspecialised kernel. What changes the
+    /// Every lobe, light type and the shadow catcher compiled in: the unspecialised kernel. What changes the
     /// bindings (pages, textures, AOVs, the second UV set) stays the scene's, so the
     /// kernel fits the scene's bind group layout. Volumes too stay the scene's: their
     /// code (the media, transmittance rays) makes the kernel's build on lavapipe several
@@ -101,6 +104,7 @@ impl KernelFeatures {
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,
+            shadow_catcher: true,
             ..self
         }
     }
@@ -119,6 +123,7 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
         ("ENVIRONMENT_MAP", features.environment_map),
         ("ANALYTIC_LIGHTS", features.analytic_lights),
         ("EMISSIVE_TRIANGLES", features.emissive_triangles),
+        ("SHADOW_CATCHER", features.shadow_catcher),
     ] {
         text.push_str(&format!("const FEATURE_{name}: bool = {on};\n"));
     }

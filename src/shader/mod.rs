@@ -100,8 +100,10 @@ pub mod lobes {
     pub const VOLUMES: u32 = VOLUME | HETEROGENEOUS;
     /// Diffuse transmission through a thin wall: the subsurface of a thin-walled surface.
     pub const TRANSLUCENT: u32 = 512;
-    pub const ALL: u32 = 1023;
-    pub const NAMES: [(u32, &str); 10] = [
+    /// Not a lobe either: an alpha below 1 somewhere (cut-outs the path passes through).
+    pub const CUTOUT: u32 = 1024;
+    pub const ALL: u32 = 2047;
+    pub const NAMES: [(u32, &str); 11] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
         (METAL, "METAL"),
@@ -112,5 +114,6 @@ pub mod lobes {
         (VOLUME, "VOLUME"),
         (HETEROGENEOUS, "HETEROGENEOUS"),
         (TRANSLUCENT, "TRANSLUCENT"),
+        (CUTOUT, "CUTOUT"),
     ];
 }
