@@ -24,6 +24,9 @@ const MEDIA_DEPTH: u32 = 4u;
 // inside. Without them the kernel leaves the media code out (lavapipe would otherwise run
 // it at every bounce under a lane mask, taken or not).
 const FEATURE_MEDIA: bool = FEATURE_VOLUME || FEATURE_HETEROGENEOUS || FEATURE_GLASS;
+// Whether a medium can scatter, emit or vary inside (a volume). Without one a medium is a
+// transmissive surface's Beer–Lambert absorption alone, and its other fields stay unset.
+const FEATURE_VOLUME_MEDIA: bool = FEATURE_VOLUME || FEATURE_HETEROGENEOUS;
 
 struct Media {
     count: u32,
@@ -55,13 +58,15 @@ fn media_entered(media_in: Media, material: u32, instance: u32, absorption: vec3
         media.material[i] = material;
         media.instance[i] = instance;
         media.medium[i] = material_medium(material, absorption);
-        media.majorant[i] = 0.0;
-        let majorant = fetch_material(material).volume_majorant;
-        if (FEATURE_HETEROGENEOUS && majorant > 0.0) {
-            let a = max(absorption, vec3<f32>(0.0));
-            media.majorant[i] = majorant + max(a.x, max(a.y, a.z));
+        if (FEATURE_VOLUME_MEDIA) {
+            media.majorant[i] = 0.0;
+            let majorant = fetch_material(material).volume_majorant;
+            if (FEATURE_HETEROGENEOUS && majorant > 0.0) {
+                let a = max(absorption, vec3<f32>(0.0));
+                media.majorant[i] = majorant + max(a.x, max(a.y, a.z));
+            }
+            media.emission[i] = fetch_material(material).volume_emission.xyz;
         }
-        media.emission[i] = fetch_material(material).volume_emission.xyz;
         media.count = i + 1u;
     }
     return media;
@@ -104,8 +109,10 @@ fn media_left(media_in: Media, material: u32) -> Media {
                 media.material[j] = media.material[j + 1u];
                 media.instance[j] = media.instance[j + 1u];
                 media.medium[j] = media.medium[j + 1u];
-                media.majorant[j] = media.majorant[j + 1u];
-                media.emission[j] = media.emission[j + 1u];
+                if (FEATURE_VOLUME_MEDIA) {
+                    media.majorant[j] = media.majorant[j + 1u];
+                    media.emission[j] = media.emission[j + 1u];
+                }
             }
         }
     }
@@ -118,6 +125,9 @@ fn media_left(media_in: Media, material: u32) -> Media {
 // The medium inside material `id`: its homogeneous volume (the material buffer's), with
 // `absorption` more (a transmissive surface's Beer–Lambert extinction).
 fn material_medium(id: u32, absorption: vec3<f32>) -> Medium {
+    if (!FEATURE_VOLUME_MEDIA) {
+        return Medium(max(absorption, vec3<f32>(0.0)), vec3<f32>(0.0), 0.0);
+    }
     let m = fetch_material(id);
     let sigma_s = max(m.volume_scattering.xyz, vec3<f32>(0.0));
     let sigma_t = max(m.volume_absorption.xyz, vec3<f32>(0.0)) + max(absorption, vec3<f32>(0.0)) + sigma_s;
