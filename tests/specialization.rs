@@ -58,23 +58,12 @@ fn lobes_follow_the_materials_and_graphs() {
     scene.instances[0].material = glass;
     assert_eq!(features(&scene).lobes & lobes::GLASS, lobes::GLASS);
     // A graph whose metallic varies could be metal anywhere.
-    let text = r#"(version: 1, nodes: {
-        "n": (type: "noise_texture"),
-        "s": (type: "principled_bsdf", inputs: { "metallic": "n.fac" }),
-        "o": (type: "material_output", inputs: { "surface": "s.bsdf" }),
-    })"#;
-    let (_, graph) = kiln::material::parse_material(text, "m.kmat").unwrap();
-    let m = Material::from_graph("varying metal", graph).unwrap();
-    assert_eq!(m.lobes(), lobes::METAL | lobes::DIFFUSE | lobes::SPECULAR);
+    assert_eq!(
+        varying("metallic").lobes(),
+        lobes::METAL | lobes::DIFFUSE | lobes::SPECULAR
+    );
     // An alpha that varies may cut the surface out anywhere.
-    let text = r#"(version: 1, nodes: {
-        "n": (type: "noise_texture"),
-        "s": (type: "principled_bsdf", inputs: { "alpha": "n.fac" }),
-        "o": (type: "material_output", inputs: { "surface": "s.bsdf" }),
-    })"#;
-    let (_, graph) = kiln::material::parse_material(text, "m.kmat").unwrap();
-    let m = Material::from_graph("varying alpha", graph).unwrap();
-    assert_eq!(m.lobes() & lobes::CUTOUT, lobes::CUTOUT);
+    assert_eq!(varying("alpha").lobes() & lobes::CUTOUT, lobes::CUTOUT);
 
     let f = features(&cutout_glass_and_catcher());
     assert_eq!(
@@ -82,6 +71,19 @@ fn lobes_follow_the_materials_and_graphs() {
         lobes::CUTOUT | lobes::GLASS
     );
     assert!(f.shadow_catcher, "{f:?}");
+}
+
+/// A graph material whose principled `input` varies over the surface (a noise texture).
+fn varying(input: &str) -> Material {
+    let text = format!(
+        r#"(version: 1, nodes: {{
+        "n": (type: "noise_texture"),
+        "s": (type: "principled_bsdf", inputs: {{ "{input}": "n.fac" }}),
+        "o": (type: "material_output", inputs: {{ "surface": "s.bsdf" }}),
+    }})"#
+    );
+    let (_, graph) = kiln::material::parse_material(&text, "m.kmat").unwrap();
+    Material::from_graph(&format!("varying {input}"), graph).unwrap()
 }
 
 /// The Cornell box with what a specialised kernel leaves out unless the scene has it: a

@@ -472,7 +472,7 @@ pub fn base_params(scene: &Scene, gpu: &GpuScene, settings: &RenderSettings) -> 
             FLAG_ENVIRONMENT_MAP
         } else {
             0
-        } | if scene.instances.iter().any(|i| i.shadow_catcher) {
+        } | if gpu.has_shadow_catcher {
             FLAG_SHADOW_CATCHER
         } else {
             0

@@ -102,7 +102,7 @@ pub mod lobes {
     pub const TRANSLUCENT: u32 = 512;
     /// Not a lobe either: an alpha below 1 somewhere (cut-outs the path passes through).
     pub const CUTOUT: u32 = 1024;
-    pub const ALL: u32 = 2047;
+    pub const ALL: u32 = (CUTOUT << 1) - 1;
     pub const NAMES: [(u32, &str); 11] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
