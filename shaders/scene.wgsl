@@ -143,7 +143,8 @@ struct Material {
     // A heterogeneous volume inside: the extinction per unit length no point of it
     // exceeds (its coefficients come from `evaluate_volume`); 0 for a homogeneous one.
     volume_majorant: f32,
-    _pad: u32,
+    // 1 if its alpha can be below 1 somewhere: shadow rays evaluate its opacity.
+    cutout: u32,
     // The homogeneous volume inside: absorption per unit length (w: the phase function's
     // g), scattering, emission per unit length; zero without one.
     volume_absorption: vec4<f32>,

@@ -4,6 +4,9 @@
 //! rendered with both strategies over several seeds. Both converge to the same image, and
 //! the pixel variance with NEE + MIS is at most that of BSDF sampling (within the noise of
 //! the variance estimate itself).
+//!
+//! Cut-outs let light through shadow rays as camera paths pass them: a floor in the shadow
+//! of a half-transparent plane comes out the same with and without light sampling.
 
 mod common;
 
@@ -59,6 +62,35 @@ fn scene(material: Material) -> Scene {
         Affine3A::from_translation(Vec3::new(1.0, 2.5, 1.0))
             * Affine3A::from_rotation_x(std::f32::consts::PI)
             * Affine3A::from_scale(Vec3::splat(0.4)),
+    );
+    scene
+}
+
+/// A floor lit by an area light through a plane with `cutout`'s alpha, seen from
+/// below the plane: most of what the camera sees lies in its shadow.
+fn cutout_scene(cutout: Material) -> Scene {
+    let mut scene = Scene::empty(Camera::look_at(
+        Vec3::new(0.0, 0.5, 2.0),
+        Vec3::new(0.0, 0.0, 0.0),
+        40.0,
+    ));
+    let cutout = scene.add_material(cutout);
+    let floor = scene.add_material(Material::diffuse("floor", Vec3::splat(0.5)));
+    let lamp = scene.add_material(Material::emitter("lamp", Vec3::splat(6.0)));
+    let quad = scene.add_mesh(shapes::quad());
+    scene.add_instance(quad, floor, Affine3A::from_scale(Vec3::splat(8.0)));
+    scene.add_instance(
+        quad,
+        cutout,
+        Affine3A::from_translation(Vec3::new(0.0, 0.8, 0.0))
+            * Affine3A::from_scale(Vec3::splat(2.0)),
+    );
+    scene.add_instance(
+        quad,
+        lamp,
+        Affine3A::from_translation(Vec3::new(0.0, 2.0, 0.0))
+            * Affine3A::from_rotation_x(std::f32::consts::PI)
+            * Affine3A::from_scale(Vec3::splat(0.8)),
     );
     scene
 }
@@ -148,6 +180,47 @@ fn mis_is_never_noisier_than_bsdf_sampling_and_agrees_with_it() {
         assert!(
             (mean_mis - mean_bsdf).abs() < 0.02 * mean_bsdf + 5.0 * standard_error,
             "{name}: means differ, {mean_mis} vs {mean_bsdf}"
+        );
+    }
+}
+
+#[test]
+fn shadows_through_cutouts_agree_with_bsdf_sampling() {
+    let constant = Material {
+        name: "half".into(),
+        principled: Principled {
+            base_color: Vec3::splat(0.8),
+            alpha: 0.5,
+            ..Principled::default()
+        },
+        ..Material::default()
+    };
+    // Alpha from a texture: shadow rays evaluate the graph where they cross it.
+    let (_, graph) = kiln::material::parse_material(
+        r#"(version: 1, nodes: {
+            "n": (type: "noise_texture", inputs: { "scale": 3.0 }),
+            "s": (type: "principled_bsdf", inputs: { "alpha": "n.fac" }),
+            "o": (type: "material_output", inputs: { "surface": "s.bsdf" }),
+        })"#,
+        "cutout.kmat",
+    )
+    .unwrap();
+    let textured = Material::from_graph("noise alpha", graph).unwrap();
+    for material in [constant, textured] {
+        let name = material.name.clone();
+        let scene = cutout_scene(material);
+        let (mean_nee, var_nee) = statistics(&scene, true);
+        let (mean_bsdf, var_bsdf) = statistics(&scene, false);
+        // Shadow rays stopped by the cut-out would leave the light-sampled floor about
+        // half as bright in its shadow.
+        let standard_error = ((var_nee + var_bsdf) / (SEEDS as f64 * (SIZE * SIZE) as f64)).sqrt();
+        eprintln!(
+            "{name}: mean {mean_nee:.4} (light sampling) vs {mean_bsdf:.4} (BSDF only), \
+             standard error {standard_error:.4}"
+        );
+        assert!(
+            (mean_nee - mean_bsdf).abs() < 0.03 * mean_bsdf + 5.0 * standard_error,
+            "{name}: means differ, {mean_nee} (light sampling) vs {mean_bsdf} (BSDF only)"
         );
     }
 }

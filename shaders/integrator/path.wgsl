@@ -122,25 +122,30 @@ var<private> media: Media;
 
 // The fraction of light that crosses the segment from `origin` along `dir` to `t_max`:
 // through the media `start` (the media at the origin), across the bare boundaries of
-// volumes (entering and leaving their media on the way); 0 where any other surface
-// blocks it. Without volumes in the kernel, only whether it is blocked.
+// volumes (entering and leaving their media on the way) and through cut-outs by their
+// transparency; 0 where any other surface blocks it. Without volumes or cut-outs in the
+// kernel, only whether it is blocked.
 fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) -> vec3<f32> {
-    if (!FEATURE_VOLUME) {
+    if (!FEATURE_VOLUME && !FEATURE_CUTOUT) {
         rays_traced++;
         return select(vec3<f32>(1.0), vec3<f32>(0.0), occluded(Ray(origin, dir), t_max));
     }
     var inside = start;
     var o = origin;
     var tr = vec3<f32>(1.0);
-    for (var i = 0u; i <= MAX_PASS_THROUGH; i++) {
+    // Media attenuate in order, so volumes need the nearest hit each time. Without them
+    // any hit settles the common cases (nothing in the way, or an opaque surface); the
+    // first cut-out met restarts the segment nearest-first. One traversal in the kernel.
+    var nearest = FEATURE_VOLUME;
+    for (var i = 0u; i <= MAX_PASS_THROUGH + 1u; i++) {
         let remaining = t_max - dot(o - origin, dir);
         if (!(remaining > 0.0)) {
             return tr;
         }
         rays_traced++;
-        let hit = traverse_scene(Ray(o, dir), remaining, false);
+        let hit = traverse_scene(Ray(o, dir), remaining, !nearest);
         let t = select(remaining, hit.t, hit.hit);
-        if (inside.count > 0u) {
+        if (FEATURE_VOLUME && inside.count > 0u) {
             if (FEATURE_HETEROGENEOUS && inside.majorant[inside.count - 1u] > 0.0) {
                 tr *= ratio_tracking(inside, o, dir, t);
             } else {
@@ -150,14 +155,29 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
         if (!hit.hit) {
             return tr;
         }
+        let material = fetch_material(fetch_instance(hit.instance).material);
+        if (FEATURE_CUTOUT && !nearest && material.cutout != 0u) {
+            nearest = true;
+            continue;
+        }
         let s = surface_at(hit);
-        if (fetch_material(s.material).boundary_only == 0u || !any(tr > vec3<f32>(0.0))) {
+        if (FEATURE_VOLUME && material.boundary_only != 0u) {
+            if (dot(dir, s.ng) < 0.0) {
+                inside = media_entered(inside, s.material, hit.instance, vec3<f32>(0.0));
+            } else {
+                inside = media_left(inside, s.material);
+            }
+        } else if (FEATURE_CUTOUT && material.cutout != 0u) {
+            // Cycles' transparent shadows: the expected value of the camera path's
+            // stochastic pass through a cut-out.
+            let front = dot(dir, s.ng) < 0.0;
+            let opacity = evaluate_material(s.material, shading_point(s, hit, -dir, front)).opacity;
+            tr *= 1.0 - saturate(opacity);
+        } else {
             return vec3<f32>(0.0);
         }
-        if (dot(dir, s.ng) < 0.0) {
-            inside = media_entered(inside, s.material, hit.instance, vec3<f32>(0.0));
-        } else {
-            inside = media_left(inside, s.material);
+        if (!any(tr > vec3<f32>(0.0))) {
+            return vec3<f32>(0.0);
         }
         o = offset_ray_origin(s.pe, s.ng, dir);
     }

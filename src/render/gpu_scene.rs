@@ -260,7 +260,7 @@ pub fn pack_material(m: &crate::scene::Material) -> GpuMaterial {
         transmissive: m.is_transmissive() as u32,
         boundary_only: m.is_boundary_only() as u32,
         volume_majorant: m.volume_majorant().unwrap_or(0.0),
-        _pad: 0,
+        cutout: (m.lobes() & crate::shader::lobes::CUTOUT != 0) as u32,
         volume_absorption: [v.absorption[0], v.absorption[1], v.absorption[2], v.g],
         volume_scattering: [v.scattering[0], v.scattering[1], v.scattering[2], 0.0],
         volume_emission: [v.emission[0], v.emission[1], v.emission[2], 0.0],

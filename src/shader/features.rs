@@ -95,13 +95,12 @@ impl Default for KernelFeatures {
 impl KernelFeatures {
     /// Every lobe and light type compiled in: the unspecialised kernel. What changes the
     /// bindings (pages, textures, AOVs, the second UV set) stays the scene's, so the
-    /// kernel fits the scene's bind group layout. Volumes too stay the scene's: their
-    /// code (the media, transmittance rays) makes the kernel's build on lavapipe several
-    /// times longer, so a scene gains it when it gains a volume (a kernel build). So does
-    /// the shadow catcher: setting or clearing one rebuilds the renderer anyway.
+    /// kernel fits the scene's bind group layout. Volumes and cut-outs too stay the
+    /// scene's ([`lobes::FROM_SCENE`]), and so does the shadow catcher: setting or
+    /// clearing one rebuilds the renderer anyway.
     pub fn everything(self) -> Self {
         Self {
-            lobes: (lobes::ALL & !lobes::VOLUMES) | (self.lobes & lobes::VOLUMES),
+            lobes: (lobes::ALL & !lobes::FROM_SCENE) | (self.lobes & lobes::FROM_SCENE),
             environment_map: true,
             analytic_lights: true,
             emissive_triangles: true,

@@ -156,7 +156,9 @@ pub struct GpuMaterial {
     /// A heterogeneous volume's majorant: the extinction per unit length no point of it
     /// exceeds; 0 for a homogeneous one.
     pub volume_majorant: f32,
-    pub _pad: u32,
+    /// 1 if its alpha can be below 1 somewhere ([`super::lobes::CUTOUT`]): shadow rays
+    /// evaluate its opacity instead of stopping at it.
+    pub cutout: u32,
     /// The homogeneous volume inside: absorption per unit length (w: the phase
     /// function's g), scattering, emission per unit length; zero without one.
     pub volume_absorption: [f32; 4],
@@ -365,7 +367,7 @@ mod tests {
                 transmissive,
                 boundary_only,
                 volume_majorant,
-                _pad,
+                cutout,
                 volume_absorption,
                 volume_scattering,
                 volume_emission

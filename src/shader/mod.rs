@@ -103,6 +103,12 @@ pub mod lobes {
     /// Not a lobe either: an alpha below 1 somewhere (cut-outs the path passes through).
     pub const CUTOUT: u32 = 1024;
     pub const ALL: u32 = (CUTOUT << 1) - 1;
+    /// What the unspecialised kernels take from the scene rather than always compile in
+    /// ([`super::KernelFeatures::everything`]): volumes make their build on lavapipe
+    /// several times longer, and cut-outs make every shadow ray evaluate the material it
+    /// meets (an interpreted material twice as slow). A scene gains them with a kernel
+    /// build.
+    pub const FROM_SCENE: u32 = VOLUMES | CUTOUT;
     pub const NAMES: [(u32, &str); 11] = [
         (COAT, "COAT"),
         (SHEEN, "SHEEN"),
