@@ -503,11 +503,10 @@ fn an_import_without_lights_or_camera_gets_the_lookdev_default() {
     );
 }
 
-/// `--ground catcher`: the ground is a shadow catcher, so the camera sees the ball, the
-/// ball's shadow as alpha (a shadow's opacity: the share of light the ball blocks) and a
-/// transparent background; the export's alpha is that coverage, its colour black there.
-#[test]
-fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
+/// A ball imported from glTF with `--ground catcher`'s ground under it, rendered at
+/// 96×64 with AOVs: the renderer, and the pixels of the ball, its shadow, the ground far
+/// from it and the sky.
+fn catcher_render(ball_alpha: f32) -> (Scene, Renderer, [usize; 4]) {
     let dir = tempfile::tempdir().unwrap();
     let glb = dir.path().join("ball.glb");
     kiln::bench::write_glb(&shapes::uv_sphere(48, 24, true), &glb).unwrap();
@@ -516,22 +515,15 @@ fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
         .expect("imports")
         .scene;
     lookdev::add_ground(&mut scene, lookdev::Ground::Catcher);
+    let material = scene.instances[0].material;
+    scene.materials[material].principled.alpha = ball_alpha;
     let (width, height) = (96u32, 64u32);
     let mut s = settings(width, height, 64);
     s.aovs = true;
-    let ctx = gpu();
-    let mut renderer = Renderer::new(Arc::clone(&ctx), &scene, s).expect("renderer");
+    let mut renderer = Renderer::new(gpu(), &scene, s).expect("renderer");
     renderer
         .render(0..64, RenderControl::default())
         .expect("render");
-    assert!(renderer.transparent());
-    let film = renderer.read_film().expect("film");
-    let alpha = renderer
-        .read_aovs()
-        .expect("aovs")
-        .expect("asked for")
-        .alpha;
-    let radiance = film.radiance();
     let at = |p: Vec3| {
         let (x, y) = project(&scene.camera, p, width, height);
         y as usize * width as usize + x as usize
@@ -551,8 +543,28 @@ fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
         lo.y,
         c.z + 0.5 * (hi.z - lo.z),
     ));
-    let ball = at(c);
     let sky = 0; // the top-left pixel looks above the horizon
+    let pixels = [at(c), shadow, far, sky];
+    (scene, renderer, pixels)
+}
+
+fn alpha_aov(renderer: &Renderer) -> Vec<f32> {
+    renderer
+        .read_aovs()
+        .expect("aovs")
+        .expect("asked for")
+        .alpha
+}
+
+/// `--ground catcher`: the ground is a shadow catcher, so the camera sees the ball, the
+/// ball's shadow as alpha (a shadow's opacity: the share of light the ball blocks) and a
+/// transparent background; the export's alpha is that coverage, its colour black there.
+#[test]
+fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
+    let (scene, renderer, [ball, shadow, far, sky]) = catcher_render(1.0);
+    assert!(renderer.transparent());
+    let radiance = renderer.read_film().expect("film").radiance();
+    let alpha = alpha_aov(&renderer);
     eprintln!(
         "catcher: alpha ball {:.3}, shadow {:.3}, far ground {:.3}, sky {:.3}",
         alpha[ball], alpha[shadow], alpha[far], alpha[sky]
@@ -578,4 +590,19 @@ fn a_shadow_catcher_keeps_the_shadow_as_alpha_over_a_transparent_background() {
     for i in [ball, shadow, far, sky] {
         assert_eq!(export.radiance[4 * i + 3], alpha[i].clamp(0.0, 1.0));
     }
+}
+
+/// A half-transparent ball casts a lighter shadow on a catcher: light crosses its two
+/// surfaces at ½ each, so the catcher keeps ¾ of the opaque ball's shadow.
+#[test]
+fn a_cutout_casts_a_partial_shadow_on_a_shadow_catcher() {
+    let (_, opaque, [_, shadow, _, _]) = catcher_render(1.0);
+    let (_, half, _) = catcher_render(0.5);
+    let (opaque, half) = (alpha_aov(&opaque)[shadow], alpha_aov(&half)[shadow]);
+    eprintln!("catcher shadow: opaque ball {opaque:.3}, half-transparent ball {half:.3}");
+    // 64 samples of the sky and sun: the ratio is uncertain by a few per cent.
+    assert!(
+        (half / opaque - 0.75).abs() < 0.1,
+        "the half-transparent ball's shadow is {half}, the opaque ball's {opaque}"
+    );
 }

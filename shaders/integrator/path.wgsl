@@ -261,17 +261,22 @@ fn sample_direct(v: ScatterVertex, p: Principled, beyond: Media) -> vec3<f32> {
 }
 
 // A shadow catcher met by the camera ray (Cycles' shadow catcher, as the opacity of the
-// shadow alone): 1 when the light sampled from its point `pe`, on the side `n` faces, is
-// blocked by an object, 0 when it arrives or gives the point nothing. Averaged over a
-// pixel's samples, the share of light blocked, lights picked by power as next-event
-// estimation picks them.
+// shadow alone): the share of the light sampled from its point `pe`, on the side `n`
+// faces, that objects block (cut-outs and volumes block part of it), 0 when the light
+// gives the point nothing. Averaged over a pixel's samples, the share of light blocked,
+// lights picked by power as next-event estimation picks them.
 fn catcher_shadow(pe: PointError, n: vec3<f32>) -> f32 {
     let ls = sample_light(pe.p);
     if (ls.pdf <= 0.0 || dot(ls.wi, n) <= 0.0 || all(ls.radiance == vec3<f32>(0.0))) {
         return 0.0;
     }
     let ray = Ray(offset_ray_origin(pe, n, ls.wi), ls.wi);
-    return select(0.0, 1.0, occluded(ray, ls.dist * (1.0 - 1e-4)));
+    let t_max = ls.dist * (1.0 - 1e-4);
+    if (FEATURE_CUTOUT || FEATURE_VOLUME) {
+        let tr = transmittance(ray.origin, ray.dir, t_max, media);
+        return 1.0 - (tr.x + tr.y + tr.z) / 3.0;
+    }
+    return select(0.0, 1.0, occluded(ray, t_max));
 }
 
 // What a random walk leaves by: a white Lambertian surface.
