@@ -261,6 +261,28 @@ fn edits_that_need_a_new_renderer_are_refused_and_change_nothing() {
     );
 }
 
+/// The editor's kernel takes cut-outs from the scene (`lobes::FROM_SCENE`): shadows
+/// through them evaluate materials, which a scene without them should not pay for. The
+/// first alpha below 1 needs a new kernel; edits of it below 1 are written in place.
+#[test]
+fn the_editors_kernel_gains_cutouts_with_a_new_kernel() {
+    let old = scene();
+    let mut cut = old.clone();
+    cut.materials[0].principled.alpha = 0.5;
+    let mut renderer = Renderer::new(gpu(), &old, render_settings(false)).expect("renderer");
+    assert!(
+        matches!(
+            renderer.update(&old, &cut),
+            Err(UpdateError::NeedsRebuild { kernel: true, .. })
+        ),
+        "a first cut-out in the editor's kernel"
+    );
+    let mut cut_more = cut.clone();
+    cut_more.materials[0].principled.alpha = 0.25;
+    let updated = check_update(&cut, &cut_more, false);
+    assert!(updated.materials, "{updated:?}");
+}
+
 #[test]
 fn interactive_pacing_renders_the_same_bits() {
     let ctx = gpu();
