@@ -221,7 +221,7 @@ principled_parameters! {
     sheen_roughness: f32 = 0.3, Unit, "Sheen roughness.";
     emission_color: Vec3 = Vec3::ONE, NonNegative, "Emitted colour, from the front side.";
     emission_strength: f32 = 0.0, NonNegative, "Emitted radiance per unit of colour.";
-    alpha: f32 = 1.0, Unit, "Opacity: 1 opaque, 0 invisible (alpha cut-out).";
+    alpha: f32 = 1.0, Unit, "Opacity: 1 opaque, 0 invisible (alpha cut-out); shadows let 1 − alpha of the light through.";
     thin_walled: bool = false, Flag,
         "A surface with no inside (leaves, paper, soap film): light passes without bending, and subsurface becomes diffuse transmission.";
 }
