@@ -270,13 +270,8 @@ fn catcher_shadow(pe: PointError, n: vec3<f32>) -> f32 {
     if (ls.pdf <= 0.0 || dot(ls.wi, n) <= 0.0 || all(ls.radiance == vec3<f32>(0.0))) {
         return 0.0;
     }
-    let ray = Ray(offset_ray_origin(pe, n, ls.wi), ls.wi);
-    let t_max = ls.dist * (1.0 - 1e-4);
-    if (FEATURE_CUTOUT || FEATURE_VOLUME) {
-        let tr = transmittance(ray.origin, ray.dir, t_max, media);
-        return 1.0 - (tr.x + tr.y + tr.z) / 3.0;
-    }
-    return select(0.0, 1.0, occluded(ray, t_max));
+    let tr = transmittance(offset_ray_origin(pe, n, ls.wi), ls.wi, ls.dist * (1.0 - 1e-4), media);
+    return 1.0 - (tr.x + tr.y + tr.z) / 3.0;
 }
 
 // What a random walk leaves by: a white Lambertian surface.
