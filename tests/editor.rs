@@ -149,6 +149,107 @@ fn a_transform_edit_restarts_accumulation_without_compiling_and_undo_restores_it
     );
 }
 
+/// Once the scene is still, the viewport samples with the final render's specialised
+/// kernel. An edit that kernel takes in place stays on it; one that needs another lobe goes
+/// into the general renderers it replaced, which come back at once, without a build, and
+/// are replaced again once the scene is still.
+#[test]
+fn a_still_viewport_samples_with_the_specialised_kernel_and_edits_need_no_build() {
+    use kiln::editor::Command;
+    use kiln::editor::viewport::{GraphKernels, ViewportStatus};
+    use kiln::render::KernelKind;
+    use kiln::shader::principled::ParamValue;
+
+    let mut harness = start(Setup {
+        graph_kernels: GraphKernels::InterpretedThenSpecialized(Duration::from_millis(300)),
+        // Still accumulating throughout.
+        sample_limit: 100_000,
+        ..Setup::default()
+    });
+    let status =
+        |h: &Harness<'_, EditorApp>| -> ViewportStatus { h.state().viewport_status().unwrap() };
+    let shown = |after: u64| {
+        move |app: &EditorApp| {
+            app.viewport_status().is_some_and(|s| {
+                s.restarts > after && s.shown_restart == s.restarts && s.samples >= 2
+            })
+        }
+    };
+    // The Cornell box has no graphs: the general kernel first, then the specialised one.
+    step_until(&mut harness, "the general kernel's image", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.samples >= 2 && s.kernel == Some(KernelKind::General))
+    });
+    let general = status(&harness);
+    step_until(&mut harness, "the specialised renderers", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.compiled_swaps >= 1 && s.samples >= 4)
+    });
+    let still = status(&harness);
+    assert_eq!(still.kernel, Some(KernelKind::Specialized));
+    assert_eq!(still.renderer_builds, general.renderer_builds);
+    eprintln!(
+        "viewport samples/s: general kernel {:.0}, specialised {:.0}",
+        general.samples_per_second(),
+        still.samples_per_second()
+    );
+
+    // A transform edit: written into the specialised renderers in place.
+    let mut transform = harness.state().document().scene().instances[6].transform;
+    transform.translation.x += 20.0;
+    harness.state_mut().apply_command(Command::SetTransform {
+        object: 6,
+        transform,
+    });
+    step_until(&mut harness, "the moved block", shown(still.restarts));
+    let moved = status(&harness);
+    assert_eq!(moved.kernel, Some(KernelKind::Specialized));
+    assert!(moved.instance_uploads > still.instance_uploads);
+    assert_eq!(
+        (moved.renderer_builds, moved.standby_returns),
+        (still.renderer_builds, still.standby_returns)
+    );
+
+    // A metallic white: a lobe the specialised kernel lacks. The general renderers take
+    // both edits (they were kept before the move) and come back.
+    let white = harness
+        .state()
+        .document()
+        .scene()
+        .materials
+        .iter()
+        .position(|m| m.name == "white")
+        .unwrap();
+    harness
+        .state_mut()
+        .apply_command(Command::SetMaterialParameter {
+            material: white,
+            parameter: "metallic",
+            value: ParamValue::Float(1.0),
+        });
+    step_until(&mut harness, "the metallic walls", shown(moved.restarts));
+    let metallic = status(&harness);
+    assert_eq!(metallic.kernel, Some(KernelKind::General));
+    assert_eq!(metallic.standby_returns, moved.standby_returns + 1);
+    assert_eq!(
+        (metallic.renderer_builds, metallic.kernel_builds),
+        (moved.renderer_builds, moved.kernel_builds),
+        "no renderer built, no kernel compiled"
+    );
+
+    // Still again: a specialised kernel with the conductor lobe.
+    step_until(&mut harness, "the specialised renderers again", |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.compiled_swaps > metallic.compiled_swaps)
+    });
+    let again = status(&harness);
+    assert_eq!(again.kernel, Some(KernelKind::Specialized));
+    assert!(
+        again.kernel_builds > metallic.kernel_builds,
+        "a kernel with the new lobe"
+    );
+}
+
 #[test]
 fn clicking_the_viewport_selects_the_object_under_the_pointer() {
     let mut harness = harness(ScriptedDialogs::default());

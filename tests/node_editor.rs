@@ -739,7 +739,7 @@ fn marble_box(dir: &std::path::Path) -> std::path::PathBuf {
 }
 
 #[test]
-fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_background() {
+fn a_topology_edit_shows_at_once_and_the_specialised_kernel_follows_in_the_background() {
     use kiln::editor::graph_edit::GraphEdit;
     use kiln::editor::viewport::GraphKernels;
     use kiln::editor::{Command, viewport::ViewportStatus};
@@ -748,7 +748,9 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
     let dir = tempfile::tempdir().unwrap();
     let mut harness = start(Setup {
         file: Some(marble_box(dir.path())),
-        graph_kernels: GraphKernels::InterpretedThenCompiled(std::time::Duration::from_millis(300)),
+        graph_kernels: GraphKernels::InterpretedThenSpecialized(std::time::Duration::from_millis(
+            300,
+        )),
         // Enough that the viewport is still accumulating while the compile runs.
         sample_limit: 100_000,
         ..Setup::default()
@@ -760,19 +762,20 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
         app.viewport_status()
             .is_some_and(|s| s.passes >= 1 && s.kernel == Some(KernelKind::Interpreted))
     });
-    // Still: the compiled kernel is built in the background while frames keep coming.
+    // Still: the final render's kernel is built in the background while frames keep
+    // coming.
     step_until(&mut harness, "the background compile", |app| {
         app.viewport_status().is_some_and(|s| s.compiling)
     });
     let compiling = status(&harness);
     assert!(compiling.passes >= 1, "the interpreted image is on screen");
     let mut frames = 0;
-    step_until(&mut harness, "the compiled renderers", |app| {
+    step_until(&mut harness, "the specialised renderers", |app| {
         frames += 1;
         app.viewport_status().is_some_and(|s| s.compiled_swaps >= 1)
     });
     let compiled = status(&harness);
-    assert_eq!(compiled.kernel, Some(KernelKind::General));
+    assert_eq!(compiled.kernel, Some(KernelKind::Specialized));
     assert!(
         frames > 10,
         "the window kept drawing while the kernel compiled ({frames} frames)"
@@ -808,11 +811,14 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
         posted.elapsed(),
         edited.last_edit_latency
     );
-    // The interpreting kernel was built before: the edit compiled nothing.
+    // The specialised kernel, with the graph folded in, cannot take the edit: it went
+    // into the interpreted renderers kept aside, which came back without a build.
     assert_eq!(edited.kernel, Some(KernelKind::Interpreted));
+    assert_eq!(edited.standby_returns, before.standby_returns + 1);
     assert_eq!(
-        edited.kernel_builds, before.kernel_builds,
-        "no kernel compiled"
+        (edited.renderer_builds, edited.kernel_builds),
+        (before.renderer_builds, before.kernel_builds),
+        "no renderer built, no kernel compiled"
     );
     // And once still again, the edited graph is compiled in the background too.
     step_until(&mut harness, "the edited graph compiled", |app| {
@@ -820,10 +826,10 @@ fn a_topology_edit_shows_at_once_and_the_compiled_kernel_follows_in_the_backgrou
             .is_some_and(|s| s.compiled_swaps > edited.compiled_swaps)
     });
     eprintln!(
-        "topology edit → compiled renderers swapped in: {:?}",
+        "topology edit → specialised renderers swapped in: {:?}",
         posted.elapsed()
     );
-    assert_eq!(status(&harness).kernel, Some(KernelKind::General));
+    assert_eq!(status(&harness).kernel, Some(KernelKind::Specialized));
 }
 
 /// Home over the canvas: the view frames every node.

@@ -57,8 +57,8 @@ pub struct EditorOptions {
     /// leave the device to the viewport).
     pub thumbnails: bool,
     /// How the viewport's kernels hold graph materials: the editor interprets them (a
-    /// graph edit shows at once) and compiles them once the scene is still
-    /// ([`GRAPH_KERNELS`]); tests that count builds keep them interpreted.
+    /// graph edit shows at once) and switches to the final render's specialised kernel once
+    /// the scene is still ([`GRAPH_KERNELS`]); tests that count builds keep them interpreted.
     pub graph_kernels: GraphKernels,
     /// Screen pixels per viewport pixel along each axis ([`PIXEL_SIZES`]): 2 renders a
     /// quarter of the pixels (Blender's Preferences ▸ Viewport ▸ Pixel Size). None: the
@@ -93,10 +93,10 @@ pub struct DeviceLost {
 /// The viewport's pixel sizes the Render tab offers.
 pub const PIXEL_SIZES: [u32; 4] = [1, 2, 4, 8];
 
-/// The editor's viewport: graphs interpreted, compiled once the scene has been still for
-/// 1.5 s.
+/// The editor's viewport: graphs interpreted, the final render's specialised kernel once
+/// the scene has been still for 1.5 s.
 pub const GRAPH_KERNELS: GraphKernels =
-    GraphKernels::InterpretedThenCompiled(Duration::from_millis(1500));
+    GraphKernels::InterpretedThenSpecialized(Duration::from_millis(1500));
 
 /// What an editor session rendered, for the caller of [`super::run`].
 #[derive(Clone, Debug, Default)]
@@ -1356,16 +1356,20 @@ impl EditorApp {
                     if status.building {
                         ui.label(RichText::new("· preparing…").weak());
                     }
-                    if status.kernel == Some(KernelKind::Interpreted) {
-                        let text = if status.compiling {
-                            "· graphs interpreted, compiling…"
-                        } else {
-                            "· graphs interpreted"
-                        };
+                    let interpreted = status.kernel == Some(KernelKind::Interpreted);
+                    let text = match (interpreted, status.compiling) {
+                        (true, true) => Some("· graphs interpreted, compiling…"),
+                        (true, false) => Some("· graphs interpreted"),
+                        (false, true) => Some("· compiling…"),
+                        (false, false) => None,
+                    };
+                    if let Some(text) = text {
                         ui.label(RichText::new(text).weak()).on_hover_text(
-                            "Material graphs run through the interpreter, so that every graph \
-                             edit shows at once; they are compiled for faster sampling once \
-                             the scene is still.",
+                            "While you edit, the viewport's kernel holds every lobe and runs \
+                             material graphs through the interpreter, so that an edit shows at \
+                             once; once the scene is still, the final render's kernel (only \
+                             what the scene uses, graphs compiled) is built in the background \
+                             and samples faster.",
                         );
                     }
                 }

@@ -61,10 +61,15 @@ pub enum GraphKernels {
     /// Interpreted ([`KernelKind::Interpreted`]): any graph edit is a buffer write, at a
     /// cost in sampling speed.
     Interpreted,
-    /// Interpreted, and once the scene has been still this long, compiled renderers are
-    /// built in the background and replace the interpreted ones (the editor): a graph
-    /// edit shows at once and sampling is fast while nothing changes.
-    InterpretedThenCompiled(Duration),
+    /// Interpreted (or [`KernelKind::General`] where the interpreter cannot run a
+    /// graph), and once the scene has been still this long, renderers with the final
+    /// render's kernel ([`KernelKind::Specialized`]: only the lobes and lights the scene
+    /// uses, graphs compiled with their constants folded in) are built in the background
+    /// and replace them (the editor): an edit shows at once and sampling is as fast as a
+    /// final render's while nothing changes. The replaced renderers are kept: an edit the
+    /// specialised kernel cannot take in place is written into them and they come back
+    /// at once, without a build.
+    InterpretedThenSpecialized(Duration),
 }
 
 impl Target {
@@ -119,12 +124,14 @@ pub struct ViewportStatus {
     pub tile_size: u32,
     /// How the shown image's kernel holds the graph materials.
     pub kernel: Option<KernelKind>,
-    /// True while compiled renderers are being built to replace the interpreted ones
-    /// ([`GraphKernels::InterpretedThenCompiled`]); the interpreted ones keep accumulating meanwhile.
+    /// True while specialised renderers are being built to replace the ones on screen
+    /// ([`GraphKernels::InterpretedThenSpecialized`]), which keep accumulating meanwhile.
     pub compiling: bool,
-    /// Interpreted renderers replaced by compiled ones; not counted in
-    /// `renderer_builds`.
+    /// Renderers replaced by specialised ones; not counted in `renderer_builds`.
     pub compiled_swaps: u64,
+    /// Edits the specialised renderers could not take in place, written instead into the
+    /// renderers they had replaced, which came back without a build.
+    pub standby_returns: u64,
 }
 
 impl ViewportStatus {
@@ -292,9 +299,18 @@ struct Build {
     result: mpsc::Receiver<Result<Built, String>>,
 }
 
-/// Compiled renderers being built to replace interpreted ones ([`GraphKernels::InterpretedThenCompiled`]).
+/// Specialised renderers being built to replace the ones on screen
+/// ([`GraphKernels::InterpretedThenSpecialized`]).
 struct Compile {
     build: Build,
+}
+
+/// The renderers specialised ones replaced, and the target they were last brought to:
+/// an edit the specialised kernel cannot take is written into these instead.
+struct Standby {
+    full: Renderer,
+    coarse: Option<Renderer>,
+    target: Target,
 }
 
 /// Builds the renderers for `target` with kernels of kind `kernel` (on the build thread).
@@ -386,14 +402,16 @@ struct Worker {
     /// The newest target, waiting while a build runs, and when it was posted.
     waiting: Option<(Target, Instant)>,
     build: Option<Build>,
-    /// Compiled renderers for the current target, replacing the interpreted layers when
-    /// ready; unlike `build`, it holds no target back.
+    /// Specialised renderers for the current target, replacing the layers when ready;
+    /// unlike `build`, it holds no target back.
     compile: Option<Compile>,
-    /// The scene revision whose compiled build failed: not tried again.
+    /// The scene revision whose specialised build failed: not tried again.
     compile_failed: Option<u64>,
-    /// The scene revision whose compiled renderers went in: a rebuild of that scene (a
-    /// new viewport size) builds compiled renderers at once, their kernels cached.
+    /// The scene revision whose specialised renderers went in: a rebuild of that scene (a
+    /// new viewport size) builds specialised renderers at once, their kernels cached.
     compiled_revision: Option<u64>,
+    /// The renderers the specialised ones on screen replaced.
+    standby: Option<Standby>,
     /// A target whose build failed: not tried again until the scene or size changes.
     failed: Option<(u64, [u32; 2])>,
     started: Instant,
@@ -425,6 +443,7 @@ impl Worker {
             compile: None,
             compile_failed: None,
             compiled_revision: None,
+            standby: None,
             failed: None,
             started: Instant::now(),
             last_change: Instant::now(),
@@ -505,7 +524,7 @@ impl Worker {
     /// rendering what they render until it is done.
     fn start_build(&mut self, target: Target, posted: Instant) {
         let kernel = if self.compiled_revision == Some(target.scene_revision) {
-            KernelKind::General
+            KernelKind::Specialized
         } else {
             first_kernel(&target)
         };
@@ -520,15 +539,16 @@ impl Worker {
         self.full.as_ref().map(|l| l.renderer.settings().kernel)
     }
 
-    /// How long until compiled renderers are due for the current target, if they will be.
+    /// How long until specialised renderers are due for the current target, if they will
+    /// be.
     fn compile_wait(&self) -> Option<Duration> {
         let target = self.current.as_ref()?;
-        let GraphKernels::InterpretedThenCompiled(after) = target.graphs else {
+        let GraphKernels::InterpretedThenSpecialized(after) = target.graphs else {
             return None;
         };
-        // Not before the interpreted image is on screen: the compile would compete with
-        // it for the device and the CPU.
-        let wanted = self.kernel() == Some(KernelKind::Interpreted)
+        // Not before the first image is on screen: the compile would compete with it for
+        // the device and the CPU.
+        let wanted = self.kernel().is_some_and(|k| k != KernelKind::Specialized)
             && self.shown().is_some_and(|l| l.samples > 0)
             && self.build.is_none()
             && self.compile.is_none()
@@ -536,7 +556,7 @@ impl Worker {
         wanted.then(|| after.saturating_sub(self.last_change.elapsed()))
     }
 
-    /// Whether to start building compiled renderers now.
+    /// Whether to start building specialised renderers now.
     fn compile_due(&self) -> bool {
         self.compile_wait().is_some_and(|w| w.is_zero())
     }
@@ -545,14 +565,15 @@ impl Worker {
         let Some(target) = self.current.clone() else {
             return;
         };
-        if let Some(build) = self.spawn_build(target, Instant::now(), KernelKind::General) {
+        if let Some(build) = self.spawn_build(target, Instant::now(), KernelKind::Specialized) {
             self.compile = Some(Compile { build });
             self.publish(|s| s.compiling = true);
         }
     }
 
-    /// Swaps in compiled renderers that finished for the current target; drops them if
-    /// the target moved on meanwhile (the next still moment starts another build).
+    /// Swaps in specialised renderers that finished for the current target, keeping the
+    /// replaced ones as the standby; drops them if the target moved on meanwhile (the
+    /// next still moment starts another build).
     fn finish_compile(&mut self) {
         let Some(compile) = &self.compile else {
             return;
@@ -569,7 +590,7 @@ impl Worker {
         };
         self.publish(|s| s.compiling = false);
         let current = match &self.current {
-            Some(c) if self.kernel() == Some(KernelKind::Interpreted) => c,
+            Some(c) if self.kernel().is_some_and(|k| k != KernelKind::Specialized) => c,
             _ => return,
         };
         let still = build.target.scene_revision == current.scene_revision
@@ -577,6 +598,7 @@ impl Worker {
         match result {
             Ok(built) if still => {
                 let camera = current.camera;
+                let replaced_target = current.clone();
                 let kernels = [Some(&built.full), built.coarse.as_ref()]
                     .into_iter()
                     .flatten()
@@ -589,20 +611,27 @@ impl Worker {
                 }
                 // Accumulation starts over with the faster kernel (from its coarse
                 // film, as after any change).
-                self.full = Some(self.layer(full));
-                self.coarse = coarse.map(|r| self.layer(r));
+                let full = self.layer(full);
+                let coarse = coarse.map(|r| self.layer(r));
+                let replaced_full = self.full.replace(full);
+                let replaced_coarse = std::mem::replace(&mut self.coarse, coarse);
+                self.standby = replaced_full.map(|full| Standby {
+                    full: full.renderer,
+                    coarse: replaced_coarse.map(|c| c.renderer),
+                    target: replaced_target,
+                });
                 self.started = Instant::now();
                 self.compiled_revision = Some(build.target.scene_revision);
                 self.publish(|s| {
                     s.compiled_swaps += 1;
                     s.kernel_builds += kernels;
-                    s.kernel = Some(KernelKind::General);
+                    s.kernel = Some(KernelKind::Specialized);
                 });
             }
             Ok(_) => {}
             Err(message) => {
                 tracing::warn!(
-                    "compiled viewport renderers failed, keeping the interpreted ones: {message}"
+                    "specialised viewport renderers failed, keeping the ones on screen: {message}"
                 );
                 self.compile_failed = Some(build.target.scene_revision);
             }
@@ -676,6 +705,7 @@ impl Worker {
                 let kernel = built.full.settings().kernel;
                 self.full = Some(self.layer(built.full));
                 self.coarse = built.coarse.map(|r| self.layer(r));
+                self.standby = None;
                 self.failed = None;
                 self.publish(|s| {
                     s.renderer_builds += 1;
@@ -738,6 +768,7 @@ impl Worker {
             return;
         }
         let mut updated = Updated::default();
+        let mut returned = false;
         if current.scene_revision != target.scene_revision {
             let result = [&mut self.full, &mut self.coarse]
                 .into_iter()
@@ -749,8 +780,11 @@ impl Worker {
             match result {
                 Ok(()) => {}
                 Err(UpdateError::NeedsRebuild { .. }) => {
-                    self.rebuild(target, posted);
-                    return;
+                    returned = self.return_standby(&target);
+                    if !returned {
+                        self.rebuild(target, posted);
+                        return;
+                    }
                 }
                 Err(UpdateError::Render(e)) => {
                     let message = format!("the viewport cannot show this edit: {e}");
@@ -760,7 +794,7 @@ impl Worker {
             }
         }
         let camera = current.camera != target.camera;
-        if camera || updated.any() {
+        if camera || updated.any() || returned {
             for layer in [&mut self.full, &mut self.coarse].into_iter().flatten() {
                 layer.renderer.set_camera(&target.camera);
             }
@@ -780,6 +814,30 @@ impl Worker {
             }
             self.current = Some(target);
         }
+    }
+
+    /// Writes `target` into the standby renderers and puts them back on screen in place
+    /// of the specialised ones, which could not take it; false (and no standby) when the
+    /// standby cannot take it either.
+    fn return_standby(&mut self, target: &Target) -> bool {
+        let Some(mut standby) = self.standby.take() else {
+            return false;
+        };
+        let taken = [Some(&mut standby.full), standby.coarse.as_mut()]
+            .into_iter()
+            .flatten()
+            .try_for_each(|r| r.update(&standby.target.scene, &target.scene).map(|_| ()));
+        if taken.is_err() {
+            return false;
+        }
+        let kernel = standby.full.settings().kernel;
+        self.full = Some(self.layer(standby.full));
+        self.coarse = standby.coarse.map(|r| self.layer(r));
+        self.publish(|s| {
+            s.standby_returns += 1;
+            s.kernel = Some(kernel);
+        });
+        true
     }
 
     fn rebuild(&mut self, target: Target, posted: Instant) {
