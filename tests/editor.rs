@@ -21,7 +21,8 @@ use kiln::shader::sampling::{FilterKind, PixelFilter, Sampler, Sampling};
 mod editor_harness;
 
 use editor_harness::{
-    PIXEL_SIZE, SAMPLE_LIMIT, Setup, bundled_plugins, quad_glb, start, step_until,
+    PIXEL_SIZE, SAMPLE_LIMIT, Setup, assert_standby_returned, bundled_plugins, quad_glb, start,
+    step_until, step_until_specialised,
 };
 
 fn harness(dialogs: ScriptedDialogs) -> Harness<'static, EditorApp> {
@@ -229,21 +230,10 @@ fn a_still_viewport_samples_with_the_specialised_kernel_and_edits_need_no_build(
         });
     step_until(&mut harness, "the metallic walls", shown(moved.restarts));
     let metallic = status(&harness);
-    assert_eq!(metallic.kernel, Some(KernelKind::General));
-    assert_eq!(metallic.standby_returns, moved.standby_returns + 1);
-    assert_eq!(
-        (metallic.renderer_builds, metallic.kernel_builds),
-        (moved.renderer_builds, moved.kernel_builds),
-        "no renderer built, no kernel compiled"
-    );
+    assert_standby_returned(&moved, &metallic, KernelKind::General);
 
     // Still again: a specialised kernel with the conductor lobe.
-    step_until(&mut harness, "the specialised renderers again", |app| {
-        app.viewport_status()
-            .is_some_and(|s| s.compiled_swaps > metallic.compiled_swaps)
-    });
-    let again = status(&harness);
-    assert_eq!(again.kernel, Some(KernelKind::Specialized));
+    let again = step_until_specialised(&mut harness, "the specialised renderers again", &metallic);
     assert!(
         again.kernel_builds > metallic.kernel_builds,
         "a kernel with the new lobe"

@@ -9,9 +9,10 @@ use std::path::{Path, PathBuf};
 use std::time::{Duration, Instant};
 
 use egui_kittest::Harness;
-use kiln::editor::viewport::GraphKernels;
+use kiln::editor::viewport::{GraphKernels, ViewportStatus};
 use kiln::editor::{DeviceLost, EditorApp, EditorOptions, ScriptedDialogs};
 use kiln::plugin::PluginHost;
+use kiln::render::KernelKind;
 
 /// Samples per pixel the viewport stops at: tests wait for it, then the app rests.
 pub const SAMPLE_LIMIT: u32 = 2;
@@ -136,6 +137,39 @@ pub fn step_until(
         std::thread::sleep(Duration::from_millis(20));
     }
     harness.step();
+}
+
+/// Asserts that the edit between `before` and `after` went into the standby renderers
+/// ([`ViewportStatus::standby_returns`]), which came back with `kernel` and no renderer
+/// built or kernel compiled.
+pub fn assert_standby_returned(
+    before: &ViewportStatus,
+    after: &ViewportStatus,
+    kernel: KernelKind,
+) {
+    assert_eq!(after.kernel, Some(kernel));
+    assert_eq!(after.standby_returns, before.standby_returns + 1);
+    assert_eq!(
+        (after.renderer_builds, after.kernel_builds),
+        (before.renderer_builds, before.kernel_builds),
+        "no renderer built, no kernel compiled"
+    );
+}
+
+/// Steps until specialised renderers have replaced the ones on screen since `before`;
+/// returns the status then.
+pub fn step_until_specialised(
+    harness: &mut Harness<'_, EditorApp>,
+    what: &str,
+    before: &ViewportStatus,
+) -> ViewportStatus {
+    step_until(harness, what, |app| {
+        app.viewport_status()
+            .is_some_and(|s| s.compiled_swaps > before.compiled_swaps)
+    });
+    let status = harness.state().viewport_status().unwrap();
+    assert_eq!(status.kernel, Some(KernelKind::Specialized));
+    status
 }
 
 /// The bundled plugins, as `cargo build` left them next to the test executable.
