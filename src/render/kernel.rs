@@ -9,7 +9,7 @@ use thiserror::Error;
 
 use super::context::{GpuContext, PipelineKey};
 use crate::shader::bindings::bindings_wgsl;
-use crate::shader::features::{features_wgsl, paging_wgsl};
+use crate::shader::features::{features_wgsl, integrator_calls_wgsl, paging_wgsl};
 use crate::shader::{ADAPTIVE, KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
 
 #[derive(Debug, Error)]
@@ -218,6 +218,10 @@ pub fn path_tracing_kernel(
     for file in PATH_INTEGRATOR {
         source.push(file.path, file.source);
     }
+    source.push(
+        "generated: the integrator's feature calls",
+        &integrator_calls_wgsl(features),
+    );
     if features.lobes & lobes::HETEROGENEOUS != 0 {
         source.push(VOLUME_BAKE.path, VOLUME_BAKE.source);
     }

@@ -147,6 +147,31 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
     text
 }
 
+/// The calls the path integrator makes only in kernels with a feature
+/// (shaders/integrator/path.wgsl): a kernel without it gets a body that never makes the
+/// call. A `FEATURE_*` test alone does not spare the compile: Mesa inlines every call
+/// before it drops the branches a constant rules out, so a call to the material graphs
+/// under a false `FEATURE_CUTOUT` cost the showcase's kernel as much to compile as the
+/// shading's own (docs/BENCHMARKS.md).
+pub fn integrator_calls_wgsl(features: &KernelFeatures) -> String {
+    let opacity = if features.lobes & lobes::CUTOUT != 0 {
+        "evaluate_material(material, sp).opacity"
+    } else {
+        "1.0"
+    };
+    let catcher = if features.shadow_catcher {
+        "catcher_shadow(pe, n)"
+    } else {
+        "0.0"
+    };
+    format!(
+        "// The opacity of a cut-out's material at a shadow ray's hit.\n\
+         fn cutout_opacity(material: u32, sp: ShadingPoint) -> f32 {{\n    return {opacity};\n}}\n\
+         // The shadow on a shadow catcher's point (catcher_shadow).\n\
+         fn catcher_shadow_if_any(pe: PointError, n: vec3<f32>) -> f32 {{\n    return {catcher};\n}}\n"
+    )
+}
+
 /// The texel tables' shapes (shaders/texels.wgsl reads them), and `fetch_blas_node` and
 /// `fetch_triangle` from texels (0 pages) or from the pages a scene uses. With one page
 /// the accessor is a plain load: on lavapipe even an untaken branch to the other pages
