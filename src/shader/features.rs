@@ -150,9 +150,10 @@ pub fn features_wgsl(features: &KernelFeatures) -> String {
 /// The calls the path integrator makes only in kernels with a feature
 /// (shaders/integrator/path.wgsl): a kernel without it gets a body that never makes the
 /// call. A `FEATURE_*` test alone does not spare the compile: Mesa inlines every call
-/// before it drops the branches a constant rules out, so a call to the material graphs
-/// under a false `FEATURE_CUTOUT` cost the showcase's kernel as much to compile as the
-/// shading's own (docs/BENCHMARKS.md).
+/// before it drops the branches a constant rules out, so the material graphs under a
+/// false `FEATURE_CUTOUT` and a second `transmittance` under a false
+/// `FEATURE_SHADOW_CATCHER` were a third of the showcase's compile (18.1 s, 12.1 s
+/// without them; docs/BENCHMARKS.md).
 pub fn integrator_calls_wgsl(features: &KernelFeatures) -> String {
     let opacity = if features.lobes & lobes::CUTOUT != 0 {
         "evaluate_material(material, sp).opacity"
