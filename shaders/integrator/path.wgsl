@@ -171,7 +171,7 @@ fn transmittance(origin: vec3<f32>, dir: vec3<f32>, t_max: f32, start: Media) ->
             // Cycles' transparent shadows: the expected value of the camera path's
             // stochastic pass through a cut-out.
             let front = dot(dir, s.ng) < 0.0;
-            let opacity = cutout_opacity(s.material, shading_point(s, hit, -dir, front));
+            let opacity = evaluate_material(s.material, shading_point(s, hit, -dir, front)).opacity;
             tr *= 1.0 - saturate(opacity);
         } else {
             return vec3<f32>(0.0);
@@ -461,7 +461,7 @@ fn trace_path(primary: Ray) -> vec3<f32> {
                 let front = dot(ray.dir, s.ng) < 0.0;
                 if (FEATURE_SHADOW_CATCHER && depth == 0u && (fetch_instance(hit.instance).flags & INSTANCE_SHADOW_CATCHER) != 0u) {
                     // The camera sees a shadow catcher: only its shadow, as alpha.
-                    aov_alpha = catcher_shadow_if_any(s.pe, select(-s.ng, s.ng, front));
+                    aov_alpha = catcher_shadow(s.pe, select(-s.ng, s.ng, front));
                     break;
                 }
                 if (FEATURE_VOLUME && material.boundary_only != 0u) {

@@ -8,8 +8,9 @@
 use thiserror::Error;
 
 use super::context::{GpuContext, PipelineKey};
+use super::prune::prune;
 use crate::shader::bindings::bindings_wgsl;
-use crate::shader::features::{features_wgsl, integrator_calls_wgsl, paging_wgsl};
+use crate::shader::features::{features_wgsl, paging_wgsl};
 use crate::shader::{ADAPTIVE, KernelFeatures, LIBRARY, PATH_INTEGRATOR, VOLUME_BAKE, lobes};
 
 #[derive(Debug, Error)]
@@ -112,14 +113,7 @@ impl KernelSource {
                 e.emit_to_string(&self.text),
             )
         })?;
-        // Half floats packed in 32-bit words (`pack2x16float`, the baked volume grids):
-        // every backend wgpu runs on has them (its downlevel flag `SHADER_F16_IN_F32`).
-        let mut validator = naga::valid::Validator::new(
-            naga::valid::ValidationFlags::all(),
-            naga::valid::Capabilities::default()
-                | naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
-        );
-        validator.validate(&module).map_err(|e| {
+        validator().validate(&module).map_err(|e| {
             self.wgsl_error(
                 e.location(&self.text),
                 e.as_inner().to_string(),
@@ -166,12 +160,19 @@ impl KernelSource {
         if let Some(pipeline) = cached {
             return Ok(pipeline);
         }
-        self.validate()?;
+        let mut module = self.validate()?;
+        let pruned = prune(&mut module);
+        tracing::debug!(
+            kernel = %self.name,
+            branches = pruned.branches,
+            calls = pruned.calls,
+            "pruned the branches the kernel's constants rule out"
+        );
         let device = &ctx.device;
         let scope = device.push_error_scope(wgpu::ErrorFilter::Validation);
         let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
             label: Some(&self.name),
-            source: wgpu::ShaderSource::Wgsl(self.text.as_str().into()),
+            source: wgpu::ShaderSource::Naga(std::borrow::Cow::Owned(module)),
         });
         let bind_group_layouts: Vec<Option<&wgpu::BindGroupLayout>> =
             layouts.iter().map(|l| Some(*l)).collect();
@@ -203,6 +204,16 @@ impl KernelSource {
     }
 }
 
+/// naga's validator with every check and the capabilities every backend has.
+pub(super) fn validator() -> naga::valid::Validator {
+    // Half floats packed in 32-bit words (`pack2x16float`, the baked volume grids):
+    // every backend wgpu runs on has them (its downlevel flag `SHADER_F16_IN_F32`).
+    naga::valid::Validator::new(
+        naga::valid::ValidationFlags::all(),
+        naga::valid::Capabilities::default() | naga::valid::Capabilities::SHADER_FLOAT16_IN_FLOAT32,
+    )
+}
+
 /// The path-tracing kernel's source, with a scene's materials
 /// ([`super::materials::scene_materials_wgsl`]) spliced in before the integrator, and
 /// for a scene with heterogeneous volumes the entry point that bakes them
@@ -218,10 +229,6 @@ pub fn path_tracing_kernel(
     for file in PATH_INTEGRATOR {
         source.push(file.path, file.source);
     }
-    source.push(
-        "generated: the integrator's feature calls",
-        &integrator_calls_wgsl(features),
-    );
     if features.lobes & lobes::HETEROGENEOUS != 0 {
         source.push(VOLUME_BAKE.path, VOLUME_BAKE.source);
     }

@@ -18,6 +18,7 @@ pub mod kernel;
 pub mod light_distribution;
 pub mod materials;
 pub mod probe;
+pub mod prune;
 mod readback;
 mod renderer;
 pub mod tables;

@@ -1,0 +1,561 @@
+//! Drops the code a kernel's constants rule out (`if (FEATURE_CUTOUT && …)` in a kernel
+//! without cut-outs) from its naga module, before the driver sees it.
+//!
+//! Drivers do remove such branches, but Mesa inlines every call first: the material
+//! graphs behind a false `FEATURE_CUTOUT`, or a second `transmittance` behind a false
+//! `FEATURE_SHADOW_CATCHER`, were compiled by LLVM and then thrown away, a third of the
+//! showcase's kernel build (docs/BENCHMARKS.md). Here a branch whose condition is a
+//! constant is replaced by the block it takes, statements after a `return`, `break` or
+//! `continue` go, and [`naga::compact`] drops the functions and expressions nothing uses
+//! any more.
+//!
+//! WGSL's `&&` and `||` reach naga as an `if` that stores into a nameless local, which
+//! the branch then loads (`var t; if (a) { t = b; } else { t = false; } if (t) { … }`).
+//! A load that follows the local's only store, in the same block or one nested in it,
+//! takes the stored constant; so `FEATURE_X && runtime_test` folds too.
+
+use std::collections::HashMap;
+
+use naga::{
+    BinaryOperator, Block, Expression, Function, Handle, Literal, LocalVariable, Module, Statement,
+    UnaryOperator,
+};
+
+/// What [`prune`] removed from a module.
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+pub struct Pruned {
+    /// Branches (`if`s) replaced by the one block they take.
+    pub branches: usize,
+    /// Function calls in the code removed (each would have been inlined).
+    pub calls: usize,
+}
+
+/// Removes what `module`'s constants rule out; the module stays valid and computes
+/// the same (the removed code could never run).
+pub fn prune(module: &mut Module) -> Pruned {
+    let constants = module
+        .constants
+        .iter()
+        .filter_map(|(handle, constant)| Some((handle, global_value(module, constant.init)?)))
+        .collect();
+    let results: HashMap<_, _> = module
+        .functions
+        .iter()
+        .filter_map(|(handle, function)| Some((handle, function.result.as_ref()?.ty)))
+        .collect();
+    let mut pruned = Pruned::default();
+    let functions = module.functions.iter_mut().map(|(_, function)| function);
+    let entry_points = module
+        .entry_points
+        .iter_mut()
+        .map(|entry| &mut entry.function);
+    for function in functions.chain(entry_points) {
+        let mut pass = FunctionPass {
+            constants: &constants,
+            results: &results,
+            function,
+        };
+        pass.run(&mut pruned);
+    }
+    if pruned != Pruned::default() {
+        naga::compact::compact(module, naga::compact::KeepUnused::No);
+    }
+    pruned
+}
+
+/// The value of a module-scope constant expression that is a literal, a constant or a
+/// logical or comparison operator on them.
+fn global_value(module: &Module, expr: Handle<Expression>) -> Option<Literal> {
+    match module.global_expressions[expr] {
+        Expression::Literal(literal) => Some(literal),
+        Expression::Constant(constant) => global_value(module, module.constants[constant].init),
+        Expression::Unary { op, expr } => unary(op, global_value(module, expr)?),
+        Expression::Binary { op, left, right } => binary(
+            op,
+            global_value(module, left)?,
+            global_value(module, right)?,
+        ),
+        _ => None,
+    }
+}
+
+fn unary(op: UnaryOperator, value: Literal) -> Option<Literal> {
+    match (op, value) {
+        (UnaryOperator::LogicalNot, Literal::Bool(b)) => Some(Literal::Bool(!b)),
+        _ => None,
+    }
+}
+
+fn binary(op: BinaryOperator, left: Literal, right: Literal) -> Option<Literal> {
+    let value = match (op, left, right) {
+        (BinaryOperator::LogicalAnd, Literal::Bool(a), Literal::Bool(b)) => a && b,
+        (BinaryOperator::LogicalOr, Literal::Bool(a), Literal::Bool(b)) => a || b,
+        // Literals of the same type are equal exactly when their bits are (floats aside,
+        // which the comparison below leaves out).
+        (BinaryOperator::Equal, a, b) if comparable(a, b) => a == b,
+        (BinaryOperator::NotEqual, a, b) if comparable(a, b) => a != b,
+        _ => return None,
+    };
+    Some(Literal::Bool(value))
+}
+
+fn comparable(a: Literal, b: Literal) -> bool {
+    matches!(
+        (a, b),
+        (Literal::Bool(_), Literal::Bool(_))
+            | (Literal::U32(_), Literal::U32(_))
+            | (Literal::I32(_), Literal::I32(_))
+    )
+}
+
+struct FunctionPass<'a> {
+    constants: &'a HashMap<Handle<naga::Constant>, Literal>,
+    results: &'a HashMap<Handle<Function>, Handle<naga::Type>>,
+    function: &'a mut Function,
+}
+
+impl FunctionPass<'_> {
+    fn run(&mut self, pruned: &mut Pruned) {
+        let start = *pruned;
+        // Each round folds what the previous one made constant (`a && b && c` is a chain
+        // of locals, each stored in both branches of the `if` before).
+        loop {
+            let stores = self.nameless_local_stores();
+            let mut body = std::mem::take(&mut self.function.body);
+            let before = *pruned;
+            self.block(&mut body, &stores, &mut Vec::new(), pruned);
+            self.function.body = body;
+            if *pruned == before {
+                break;
+            }
+        }
+        if *pruned != start {
+            self.settle();
+        }
+    }
+
+    /// How many stores each nameless local has (and `None` for those something other
+    /// than a store or a load uses: a call's argument, an access).
+    fn nameless_local_stores(&self) -> HashMap<Handle<LocalVariable>, Option<usize>> {
+        let function = &*self.function;
+        let mut stores: HashMap<_, _> = function
+            .local_variables
+            .iter()
+            .filter(|(_, local)| local.name.is_none() && local.init.is_none())
+            .map(|(handle, _)| (handle, Some(0)))
+            .collect();
+        for (_, expr) in function.expressions.iter() {
+            let pointer = match *expr {
+                Expression::Load { .. } => continue,
+                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => base,
+                _ => continue,
+            };
+            if let Expression::LocalVariable(local) = function.expressions[pointer] {
+                stores.insert(local, None);
+            }
+        }
+        visit(&function.body, &mut |statement| match *statement {
+            Statement::Store { pointer, .. } => {
+                if let Expression::LocalVariable(local) = function.expressions[pointer]
+                    && let Some(Some(count)) = stores.get_mut(&local)
+                {
+                    *count += 1;
+                }
+            }
+            Statement::Call { ref arguments, .. } => {
+                for &argument in arguments {
+                    if let Expression::LocalVariable(local) = function.expressions[argument] {
+                        stores.insert(local, None);
+                    }
+                }
+            }
+            _ => {}
+        });
+        stores
+    }
+
+    fn value(&self, expr: Handle<Expression>) -> Option<Literal> {
+        match self.function.expressions[expr] {
+            Expression::Literal(literal) => Some(literal),
+            Expression::Constant(constant) => self.constants.get(&constant).copied(),
+            Expression::Unary { op, expr } => unary(op, self.value(expr)?),
+            Expression::Binary { op, left, right } => {
+                binary(op, self.value(left)?, self.value(right)?)
+            }
+            _ => None,
+        }
+    }
+
+    /// Prunes `block` in place. `known`: the nameless locals whose only store came
+    /// before, with the constant it stored (a scope: what a block adds goes at its end).
+    fn block(
+        &mut self,
+        block: &mut Block,
+        stores: &HashMap<Handle<LocalVariable>, Option<usize>>,
+        known: &mut Vec<(Handle<LocalVariable>, Literal)>,
+        pruned: &mut Pruned,
+    ) {
+        let scope = known.len();
+        let original = std::mem::replace(block, Block::with_capacity(block.len()));
+        let mut statements: std::collections::VecDeque<_> = original.span_into_iter().collect();
+        while let Some((mut statement, span)) = statements.pop_front() {
+            match statement {
+                Statement::If {
+                    condition,
+                    ref mut accept,
+                    ref mut reject,
+                } => {
+                    if let Some(Literal::Bool(taken)) = self.value(condition) {
+                        let (taken, dropped) = if taken {
+                            (accept, reject)
+                        } else {
+                            (reject, accept)
+                        };
+                        pruned.branches += 1;
+                        visit(dropped, &mut |s| {
+                            if matches!(s, Statement::Call { .. }) {
+                                pruned.calls += 1;
+                            }
+                        });
+                        // The block taken goes in place of the `if`, its statements
+                        // next in line.
+                        let taken = std::mem::take(taken);
+                        let taken: Vec<_> = taken.span_into_iter().collect();
+                        for item in taken.into_iter().rev() {
+                            statements.push_front(item);
+                        }
+                        continue;
+                    }
+                    self.block(accept, stores, known, pruned);
+                    self.block(reject, stores, known, pruned);
+                }
+                Statement::Block(ref mut inner) => self.block(inner, stores, known, pruned),
+                Statement::Switch { ref mut cases, .. } => {
+                    for case in cases {
+                        self.block(&mut case.body, stores, known, pruned);
+                    }
+                }
+                Statement::Loop {
+                    ref mut body,
+                    ref mut continuing,
+                    ..
+                } => {
+                    // Not in the body's scope: a `continue` may skip the body's store.
+                    self.block(body, stores, known, pruned);
+                    self.block(continuing, stores, known, pruned);
+                }
+                Statement::Emit(ref range) => {
+                    // A load of a known local becomes the constant it loads.
+                    for expr in range.clone() {
+                        let Expression::Load { pointer } = self.function.expressions[expr] else {
+                            continue;
+                        };
+                        let Expression::LocalVariable(local) = self.function.expressions[pointer]
+                        else {
+                            continue;
+                        };
+                        if let Some(&(_, literal)) = known.iter().find(|(l, _)| *l == local) {
+                            self.function.expressions[expr] = Expression::Literal(literal);
+                        }
+                    }
+                }
+                Statement::Store { pointer, value } => {
+                    if let Expression::LocalVariable(local) = self.function.expressions[pointer]
+                        && stores.get(&local) == Some(&Some(1))
+                        && let Some(literal) = self.value(value)
+                    {
+                        known.push((local, literal));
+                    }
+                }
+                _ => {}
+            }
+            let ends = matches!(
+                statement,
+                Statement::Return { .. } | Statement::Kill | Statement::Break | Statement::Continue
+            );
+            block.push(statement, span);
+            if ends {
+                // Nothing after it in this block can run.
+                for (dropped, _) in statements.drain(..) {
+                    visit_statement(&dropped, &mut |s| {
+                        if matches!(s, Statement::Call { .. }) {
+                            pruned.calls += 1;
+                        }
+                    });
+                }
+            }
+        }
+        known.truncate(scope);
+    }
+
+    /// Makes the function valid again: emits no longer cover the loads that became
+    /// literals, and the results of calls removed become zero values (naga requires
+    /// every call result to have its call).
+    fn settle(&mut self) {
+        filter_emits(&mut self.function.body, &self.function.expressions);
+        let mut called = std::collections::HashSet::new();
+        visit(&self.function.body, &mut |statement| match *statement {
+            Statement::Call {
+                result: Some(result),
+                ..
+            }
+            | Statement::Atomic {
+                result: Some(result),
+                ..
+            } => {
+                called.insert(result);
+            }
+            _ => {}
+        });
+        for (handle, expr) in self.function.expressions.iter_mut() {
+            let ty = match *expr {
+                Expression::CallResult(function) => self.results[&function],
+                Expression::AtomicResult { ty, .. } => ty,
+                _ => continue,
+            };
+            if !called.contains(&handle) {
+                *expr = Expression::ZeroValue(ty);
+            }
+        }
+    }
+}
+
+/// Calls `f` on every statement of `block`, nested ones included.
+fn visit(block: &Block, f: &mut impl FnMut(&Statement)) {
+    for statement in block {
+        visit_statement(statement, f);
+    }
+}
+
+fn visit_statement(statement: &Statement, f: &mut impl FnMut(&Statement)) {
+    f(statement);
+    match *statement {
+        Statement::Block(ref inner) => visit(inner, f),
+        Statement::If {
+            ref accept,
+            ref reject,
+            ..
+        } => {
+            visit(accept, f);
+            visit(reject, f);
+        }
+        Statement::Switch { ref cases, .. } => {
+            for case in cases {
+                visit(&case.body, f);
+            }
+        }
+        Statement::Loop {
+            ref body,
+            ref continuing,
+            ..
+        } => {
+            visit(body, f);
+            visit(continuing, f);
+        }
+        _ => {}
+    }
+}
+
+/// Splits emits around the expressions that need none (naga's validator rejects an
+/// emit of a literal), as naga's own override processing does.
+fn filter_emits(block: &mut Block, expressions: &naga::Arena<Expression>) {
+    let original = std::mem::replace(block, Block::with_capacity(block.len()));
+    for (mut statement, span) in original.span_into_iter() {
+        match statement {
+            Statement::Emit(range) => {
+                let mut run: Option<(Handle<Expression>, Handle<Expression>)> = None;
+                for expr in range {
+                    if expressions[expr].needs_pre_emit() {
+                        if let Some((first, last)) = run.take() {
+                            block.push(
+                                Statement::Emit(naga::Range::new_from_bounds(first, last)),
+                                span,
+                            );
+                        }
+                    } else {
+                        run = Some(run.map_or((expr, expr), |(first, _)| (first, expr)));
+                    }
+                }
+                if let Some((first, last)) = run {
+                    block.push(
+                        Statement::Emit(naga::Range::new_from_bounds(first, last)),
+                        span,
+                    );
+                }
+                continue;
+            }
+            Statement::Block(ref mut inner) => filter_emits(inner, expressions),
+            Statement::If {
+                ref mut accept,
+                ref mut reject,
+                ..
+            } => {
+                filter_emits(accept, expressions);
+                filter_emits(reject, expressions);
+            }
+            Statement::Switch { ref mut cases, .. } => {
+                for case in cases {
+                    filter_emits(&mut case.body, expressions);
+                }
+            }
+            Statement::Loop {
+                ref mut body,
+                ref mut continuing,
+                ..
+            } => {
+                filter_emits(body, expressions);
+                filter_emits(continuing, expressions);
+            }
+            _ => {}
+        }
+        block.push(statement, span);
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use crate::render::kernel::{path_tracing_kernel, validator};
+    use crate::shader::{KernelFeatures, lobes};
+
+    fn pruned(wgsl: &str) -> (Module, Pruned) {
+        let mut module = naga::front::wgsl::parse_str(wgsl).unwrap();
+        let pruned = prune(&mut module);
+        if let Err(e) = validator().validate(&module) {
+            panic!("the pruned module is invalid: {}", e.emit_to_string(wgsl));
+        }
+        (module, pruned)
+    }
+
+    fn has_function(module: &Module, name: &str) -> bool {
+        module
+            .functions
+            .iter()
+            .any(|(_, f)| f.name.as_deref() == Some(name))
+    }
+
+    const HEAVY: &str = "
+        @group(0) @binding(0) var<storage, read_write> out: array<f32>;
+        fn heavy(x: f32) -> f32 { return sin(x) * cos(x); }
+        fn other(x: f32) -> f32 { return exp(x); }
+        fn kept(x: f32) -> f32 { return sqrt(x); }
+    ";
+
+    #[test]
+    fn a_false_constant_takes_its_calls_and_their_functions_with_it() {
+        let wgsl = format!(
+            "{HEAVY}
+            const ON: bool = true;
+            const OFF: bool = false;
+            const MODE: u32 = 2u;
+            @compute @workgroup_size(1) fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+                var x = out[id.x];
+                if (OFF && x > 0.0) {{ x = heavy(x); }}
+                if (ON || x > 1.0) {{ x = kept(x); }}
+                if (MODE == 3u) {{ x += other(x); }} else {{ x += 1.0; }}
+                out[id.x] = x;
+            }}"
+        );
+        let (module, pruned) = pruned(&wgsl);
+        assert!(
+            !has_function(&module, "heavy"),
+            "heavy() only ran under OFF"
+        );
+        assert!(
+            !has_function(&module, "other"),
+            "other() only ran when MODE == 3"
+        );
+        assert!(has_function(&module, "kept"), "kept() runs whenever ON");
+        assert_eq!(pruned.calls, 2);
+    }
+
+    #[test]
+    fn an_early_return_under_a_true_constant_drops_the_rest() {
+        let wgsl = format!(
+            "{HEAVY}
+            const SIMPLE: bool = true;
+            const VOLUMES: bool = false;
+            fn shade(x: f32) -> f32 {{
+                if (SIMPLE && !VOLUMES) {{ return kept(x); }}
+                return heavy(x) + other(x);
+            }}
+            @compute @workgroup_size(1) fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+                out[id.x] = shade(out[id.x]);
+            }}"
+        );
+        let (module, pruned) = pruned(&wgsl);
+        assert!(!has_function(&module, "heavy") && !has_function(&module, "other"));
+        assert!(has_function(&module, "kept"));
+        assert_eq!(pruned.calls, 2);
+    }
+
+    #[test]
+    fn runtime_tests_and_named_variables_stay() {
+        // `t` is a variable the code names and stores twice; `u > 0.0` is known only
+        // when the kernel runs. Nothing here may go.
+        let wgsl = format!(
+            "{HEAVY}
+            const ON: bool = true;
+            @compute @workgroup_size(1) fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+                let u = out[id.x];
+                var t = true;
+                if (u > 0.0) {{ t = false; }}
+                if (t) {{ out[id.x] = heavy(u); }}
+                if (ON && u > 1.0) {{ out[id.x] = other(u); }}
+                loop {{
+                    if (ON || u > 2.0) {{ break; }}
+                    out[id.x] = kept(u);
+                }}
+            }}"
+        );
+        let (module, pruned) = pruned(&wgsl);
+        assert!(has_function(&module, "heavy"), "t may be true or false");
+        assert!(has_function(&module, "other"), "ON && u > 1.0 depends on u");
+        // `true || u > 2.0` is true, and the loop ends before kept().
+        assert!(!has_function(&module, "kept"));
+        assert_eq!(pruned.calls, 1);
+    }
+
+    #[test]
+    fn every_specialised_path_kernel_prunes_to_a_valid_module() {
+        let materials = crate::material::materials_wgsl(&[]);
+        let everything = KernelFeatures::default();
+        let mut variants = vec![everything];
+        for (bit, _) in lobes::NAMES {
+            variants.push(KernelFeatures {
+                lobes: everything.lobes & !bit,
+                ..everything
+            });
+        }
+        let bare = KernelFeatures {
+            lobes: lobes::DIFFUSE,
+            environment_map: false,
+            analytic_lights: false,
+            shadow_catcher: false,
+            textures: false,
+            aovs: false,
+            uv1: false,
+            noise: false,
+            ..everything
+        };
+        variants.push(bare);
+        for ablation in crate::shader::Ablation::ALL {
+            variants.push(KernelFeatures { ablation, ..bare });
+        }
+        for features in variants {
+            let mut module = path_tracing_kernel(&features, &materials)
+                .validate()
+                .unwrap();
+            prune(&mut module);
+            if let Err(e) = validator().validate(&module) {
+                panic!("{features:?}: the pruned kernel is invalid: {e:?}");
+            }
+            // The shadow catcher's light sample is called from one branch only.
+            assert_eq!(
+                has_function(&module, "catcher_shadow"),
+                features.shadow_catcher && features.ablation == Default::default(),
+                "{features:?}"
+            );
+        }
+    }
+}
