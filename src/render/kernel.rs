@@ -166,6 +166,7 @@ impl KernelSource {
             kernel = %self.name,
             branches = pruned.branches,
             calls = pruned.calls,
+            functions = pruned.functions,
             "pruned the branches the kernel's constants rule out"
         );
         let device = &ctx.device;

@@ -28,6 +28,8 @@ pub struct Pruned {
     pub branches: usize,
     /// Function calls in the code removed (each would have been inlined).
     pub calls: usize,
+    /// Functions no call reaches any more, dropped from the module.
+    pub functions: usize,
 }
 
 /// Removes what `module`'s constants rule out; the module stays valid and computes
@@ -58,7 +60,9 @@ pub fn prune(module: &mut Module) -> Pruned {
         pass.run(&mut pruned);
     }
     if pruned != Pruned::default() {
+        let before = module.functions.len();
         naga::compact::compact(module, naga::compact::KeepUnused::No);
+        pruned.functions = before - module.functions.len();
     }
     pruned
 }
