@@ -216,11 +216,7 @@ impl FunctionPass<'_> {
                             (reject, accept)
                         };
                         pruned.branches += 1;
-                        visit(dropped, &mut |s| {
-                            if matches!(s, Statement::Call { .. }) {
-                                pruned.calls += 1;
-                            }
-                        });
+                        pruned.calls += dropped.iter().map(calls_in).sum::<usize>();
                         // The block taken goes in place of the `if`, its statements
                         // next in line.
                         let taken = std::mem::take(taken);
@@ -230,23 +226,6 @@ impl FunctionPass<'_> {
                         }
                         continue;
                     }
-                    self.block(accept, stores, known, pruned);
-                    self.block(reject, stores, known, pruned);
-                }
-                Statement::Block(ref mut inner) => self.block(inner, stores, known, pruned),
-                Statement::Switch { ref mut cases, .. } => {
-                    for case in cases {
-                        self.block(&mut case.body, stores, known, pruned);
-                    }
-                }
-                Statement::Loop {
-                    ref mut body,
-                    ref mut continuing,
-                    ..
-                } => {
-                    // Not in the body's scope: a `continue` may skip the body's store.
-                    self.block(body, stores, known, pruned);
-                    self.block(continuing, stores, known, pruned);
                 }
                 Statement::Emit(ref range) => {
                     // A load of a known local becomes the constant it loads.
@@ -273,6 +252,11 @@ impl FunctionPass<'_> {
                 }
                 _ => {}
             }
+            // Each nested block is its own scope: a loop's continuing block too, since a
+            // `continue` may skip the body's store.
+            for nested in nested_blocks_mut(&mut statement) {
+                self.block(nested, stores, known, pruned);
+            }
             let ends = matches!(
                 statement,
                 Statement::Return { .. } | Statement::Kill | Statement::Break | Statement::Continue
@@ -280,13 +264,10 @@ impl FunctionPass<'_> {
             block.push(statement, span);
             if ends {
                 // Nothing after it in this block can run.
-                for (dropped, _) in statements.drain(..) {
-                    visit_statement(&dropped, &mut |s| {
-                        if matches!(s, Statement::Call { .. }) {
-                            pruned.calls += 1;
-                        }
-                    });
-                }
+                pruned.calls += statements
+                    .drain(..)
+                    .map(|(s, _)| calls_in(&s))
+                    .sum::<usize>();
             }
         }
         known.truncate(scope);
@@ -333,30 +314,59 @@ fn visit(block: &Block, f: &mut impl FnMut(&Statement)) {
 
 fn visit_statement(statement: &Statement, f: &mut impl FnMut(&Statement)) {
     f(statement);
+    for nested in nested_blocks(statement) {
+        visit(nested, f);
+    }
+}
+
+/// The calls in `statement` and the blocks nested in it.
+fn calls_in(statement: &Statement) -> usize {
+    let mut calls = 0;
+    visit_statement(statement, &mut |s| {
+        if matches!(s, Statement::Call { .. }) {
+            calls += 1;
+        }
+    });
+    calls
+}
+
+/// The blocks nested directly in `statement`, in the order they can run.
+fn nested_blocks(statement: &Statement) -> Vec<&Block> {
     match *statement {
-        Statement::Block(ref inner) => visit(inner, f),
+        Statement::Block(ref inner) => vec![inner],
         Statement::If {
             ref accept,
             ref reject,
             ..
-        } => {
-            visit(accept, f);
-            visit(reject, f);
-        }
-        Statement::Switch { ref cases, .. } => {
-            for case in cases {
-                visit(&case.body, f);
-            }
-        }
+        } => vec![accept, reject],
+        Statement::Switch { ref cases, .. } => cases.iter().map(|case| &case.body).collect(),
         Statement::Loop {
             ref body,
             ref continuing,
             ..
-        } => {
-            visit(body, f);
-            visit(continuing, f);
+        } => vec![body, continuing],
+        _ => Vec::new(),
+    }
+}
+
+/// [`nested_blocks`], to change.
+fn nested_blocks_mut(statement: &mut Statement) -> Vec<&mut Block> {
+    match *statement {
+        Statement::Block(ref mut inner) => vec![inner],
+        Statement::If {
+            ref mut accept,
+            ref mut reject,
+            ..
+        } => vec![accept, reject],
+        Statement::Switch { ref mut cases, .. } => {
+            cases.iter_mut().map(|case| &mut case.body).collect()
         }
-        _ => {}
+        Statement::Loop {
+            ref mut body,
+            ref mut continuing,
+            ..
+        } => vec![body, continuing],
+        _ => Vec::new(),
     }
 }
 
@@ -388,29 +398,11 @@ fn filter_emits(block: &mut Block, expressions: &naga::Arena<Expression>) {
                 }
                 continue;
             }
-            Statement::Block(ref mut inner) => filter_emits(inner, expressions),
-            Statement::If {
-                ref mut accept,
-                ref mut reject,
-                ..
-            } => {
-                filter_emits(accept, expressions);
-                filter_emits(reject, expressions);
-            }
-            Statement::Switch { ref mut cases, .. } => {
-                for case in cases {
-                    filter_emits(&mut case.body, expressions);
+            _ => {
+                for nested in nested_blocks_mut(&mut statement) {
+                    filter_emits(nested, expressions);
                 }
             }
-            Statement::Loop {
-                ref mut body,
-                ref mut continuing,
-                ..
-            } => {
-                filter_emits(body, expressions);
-                filter_emits(continuing, expressions);
-            }
-            _ => {}
         }
         block.push(statement, span);
     }
