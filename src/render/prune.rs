@@ -12,7 +12,9 @@
 //! WGSL's `&&` and `||` reach naga as an `if` that stores into a nameless local, which
 //! the branch then loads (`var t; if (a) { t = b; } else { t = false; } if (t) { … }`).
 //! A load that follows the local's only store, in the same block or one nested in it,
-//! takes the stored constant; so `FEATURE_X && runtime_test` folds too.
+//! takes the stored constant; so `FEATURE_X && runtime_test` folds too. And a function
+//! pruned down to `return <constant>` (`principled_is_diffuse` in a kernel with the
+//! diffuse lobe alone) is that constant at its calls, so the branches on it fold.
 
 use std::collections::HashMap;
 
@@ -46,18 +48,28 @@ pub fn prune(module: &mut Module) -> Pruned {
         .filter_map(|(handle, function)| Some((handle, function.result.as_ref()?.ty)))
         .collect();
     let mut pruned = Pruned::default();
-    let functions = module.functions.iter_mut().map(|(_, function)| function);
+    // naga orders functions callee first, so a function is pruned before its callers
+    // ask whether it returns a constant.
+    let mut constant_functions = HashMap::new();
+    let functions = module
+        .functions
+        .iter_mut()
+        .map(|(h, function)| (Some(h), function));
     let entry_points = module
         .entry_points
         .iter_mut()
-        .map(|entry| &mut entry.function);
-    for function in functions.chain(entry_points) {
+        .map(|entry| (None, &mut entry.function));
+    for (handle, function) in functions.chain(entry_points) {
         let mut pass = FunctionPass {
             constants: &constants,
             results: &results,
+            constant_functions: &constant_functions,
             function,
         };
         pass.run(&mut pruned);
+        if let (Some(handle), Some(value)) = (handle, pass.constant_result()) {
+            constant_functions.insert(handle, value);
+        }
     }
     if pruned != Pruned::default() {
         let before = module.functions.len();
@@ -115,6 +127,8 @@ fn comparable(a: Literal, b: Literal) -> bool {
 struct FunctionPass<'a> {
     constants: &'a HashMap<Handle<naga::Constant>, Literal>,
     results: &'a HashMap<Handle<Function>, Handle<naga::Type>>,
+    /// Functions already pruned to `return <constant>` with nothing else to do.
+    constant_functions: &'a HashMap<Handle<Function>, Literal>,
     function: &'a mut Function,
 }
 
@@ -176,6 +190,25 @@ impl FunctionPass<'_> {
             _ => {}
         });
         stores
+    }
+
+    /// The constant the function returns when all it does is return one: its body, once
+    /// pruned, is emits and stores into its own locals (which its return discards), then
+    /// `return <constant>`.
+    fn constant_result(&self) -> Option<Literal> {
+        let (last, rest) = self.function.body.split_last()?;
+        let Statement::Return { value: Some(value) } = *last else {
+            return None;
+        };
+        let idle = rest.iter().all(|statement| match *statement {
+            Statement::Emit(_) => true,
+            Statement::Store { pointer, .. } => matches!(
+                self.function.expressions[pointer],
+                Expression::LocalVariable(_)
+            ),
+            _ => false,
+        });
+        if idle { self.value(value) } else { None }
     }
 
     fn value(&self, expr: Handle<Expression>) -> Option<Literal> {
@@ -241,6 +274,17 @@ impl FunctionPass<'_> {
                             self.function.expressions[expr] = Expression::Literal(literal);
                         }
                     }
+                }
+                Statement::Call {
+                    function,
+                    result: Some(result),
+                    ..
+                } if self.constant_functions.contains_key(&function) => {
+                    // A call that only returns a constant is the constant.
+                    self.function.expressions[result] =
+                        Expression::Literal(self.constant_functions[&function]);
+                    pruned.calls += 1;
+                    continue;
                 }
                 Statement::Store { pointer, value } => {
                     if let Expression::LocalVariable(local) = self.function.expressions[pointer]
@@ -483,6 +527,33 @@ mod tests {
         assert!(!has_function(&module, "heavy") && !has_function(&module, "other"));
         assert!(has_function(&module, "kept"));
         assert_eq!(pruned.calls, 2);
+    }
+
+    #[test]
+    fn a_call_that_only_returns_a_constant_is_the_constant() {
+        // shaders/bsdf/principled.wgsl's `principled_is_diffuse` in a kernel with the
+        // diffuse lobe alone.
+        let wgsl = format!(
+            "{HEAVY}
+            const LAYERED: bool = false;
+            fn matte(x: f32) -> bool {{
+                if (!LAYERED && !LAYERED) {{ return true; }}
+                return x > 0.0 && other(x) > 1.0;
+            }}
+            @compute @workgroup_size(1) fn main(@builtin(global_invocation_id) id: vec3<u32>) {{
+                let u = out[id.x];
+                if (matte(u)) {{ out[id.x] = kept(u); }} else {{ out[id.x] = heavy(u); }}
+            }}"
+        );
+        let (module, pruned) = pruned(&wgsl);
+        assert!(
+            !has_function(&module, "matte"),
+            "its one call became `true`"
+        );
+        assert!(!has_function(&module, "heavy") && !has_function(&module, "other"));
+        assert!(has_function(&module, "kept"));
+        // other() in matte's tail, matte() itself, heavy() in the branch not taken.
+        assert_eq!(pruned.calls, 3);
     }
 
     #[test]
