@@ -163,10 +163,10 @@ impl FunctionPass<'_> {
             .map(|(handle, _)| (handle, Some(0)))
             .collect();
         for (_, expr) in function.expressions.iter() {
-            let pointer = match *expr {
-                Expression::Load { .. } => continue,
-                Expression::Access { base, .. } | Expression::AccessIndex { base, .. } => base,
-                _ => continue,
+            let (Expression::Access { base: pointer, .. }
+            | Expression::AccessIndex { base: pointer, .. }) = *expr
+            else {
+                continue;
             };
             if let Expression::LocalVariable(local) = function.expressions[pointer] {
                 stores.insert(local, None);
