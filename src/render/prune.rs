@@ -467,11 +467,19 @@ mod tests {
         (module, pruned)
     }
 
-    fn has_function(module: &Module, name: &str) -> bool {
-        module
+    /// The names of the functions left in `module`, sorted.
+    fn functions(module: &Module) -> Vec<&str> {
+        let mut names: Vec<_> = module
             .functions
             .iter()
-            .any(|(_, f)| f.name.as_deref() == Some(name))
+            .filter_map(|(_, f)| f.name.as_deref())
+            .collect();
+        names.sort_unstable();
+        names
+    }
+
+    fn has_function(module: &Module, name: &str) -> bool {
+        functions(module).contains(&name)
     }
 
     const HEAVY: &str = "
@@ -497,15 +505,8 @@ mod tests {
             }}"
         );
         let (module, pruned) = pruned(&wgsl);
-        assert!(
-            !has_function(&module, "heavy"),
-            "heavy() only ran under OFF"
-        );
-        assert!(
-            !has_function(&module, "other"),
-            "other() only ran when MODE == 3"
-        );
-        assert!(has_function(&module, "kept"), "kept() runs whenever ON");
+        // heavy() only ran under OFF, other() only when MODE == 3; kept() runs whenever ON.
+        assert_eq!(functions(&module), ["kept"]);
         assert_eq!(pruned.calls, 2);
     }
 
@@ -524,8 +525,7 @@ mod tests {
             }}"
         );
         let (module, pruned) = pruned(&wgsl);
-        assert!(!has_function(&module, "heavy") && !has_function(&module, "other"));
-        assert!(has_function(&module, "kept"));
+        assert_eq!(functions(&module), ["kept", "shade"]);
         assert_eq!(pruned.calls, 2);
     }
 
@@ -546,12 +546,8 @@ mod tests {
             }}"
         );
         let (module, pruned) = pruned(&wgsl);
-        assert!(
-            !has_function(&module, "matte"),
-            "its one call became `true`"
-        );
-        assert!(!has_function(&module, "heavy") && !has_function(&module, "other"));
-        assert!(has_function(&module, "kept"));
+        // matte()'s one call became `true`.
+        assert_eq!(functions(&module), ["kept"]);
         // other() in matte's tail, matte() itself, heavy() in the branch not taken.
         assert_eq!(pruned.calls, 3);
     }
@@ -576,10 +572,9 @@ mod tests {
             }}"
         );
         let (module, pruned) = pruned(&wgsl);
-        assert!(has_function(&module, "heavy"), "t may be true or false");
-        assert!(has_function(&module, "other"), "ON && u > 1.0 depends on u");
-        // `true || u > 2.0` is true, and the loop ends before kept().
-        assert!(!has_function(&module, "kept"));
+        // heavy(): t may be true or false; other(): ON && u > 1.0 depends on u.
+        assert_eq!(functions(&module), ["heavy", "other"]);
+        // `true || u > 2.0` is true: the loop ends before kept(), the one call removed.
         assert_eq!(pruned.calls, 1);
     }
 
