@@ -1,9 +1,9 @@
 // Texel tables (`Space::Texels` in src/shader/bindings.rs): arrays of fixed-size elements
 // in rgba32uint texels, `TEXELS_PER_*` of them side by side in one row of
-// `*_PER_TEXEL_ROW` elements (both generated from `TexelLayout`). Traversal reads the BVHs, the
-// triangles and the instances from them, and shading the instances, the vertices and their
-// indices: on a software rasteriser a texel fetch is one vector gather, a storage load that
-// differs between lanes a loop over the lanes for every word.
+// `*_PER_TEXEL_ROW` elements (both generated from `TexelLayout`), declared as `TexelTable`
+// and read with `texel_load` (both generated from `TexelReads`). Traversal reads the BVHs,
+// the triangles and the instances from them, and shading the instances, the vertices and
+// their indices: on a software rasteriser a texel read is a vector load per lane.
 
 // What traversal reads of an instance: the world-to-object rows and the root of its mesh's
 // BVH, texels 3–6 of its nine (`Instance` in shaders/scene.wgsl).
@@ -14,11 +14,11 @@ struct Placement {
 
 // Texel `k` of element `i` in a table of `texels` texels per element, `per_row` elements
 // per row.
-fn texel_of(t: texture_2d<u32>, i: u32, texels: u32, per_row: u32, k: u32) -> vec4<u32> {
-    return textureLoad(t, vec2<u32>(texels * (i % per_row) + k, i / per_row), 0);
+fn texel_of(t: TexelTable, i: u32, texels: u32, per_row: u32, k: u32) -> vec4<u32> {
+    return texel_load(t, vec2<u32>(texels * (i % per_row) + k, i / per_row));
 }
 
-fn node_from_texels(t: texture_2d<u32>, i: u32) -> WideNode {
+fn node_from_texels(t: TexelTable, i: u32) -> WideNode {
     let a = texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 0u);
     let steps = array<vec4<u32>, 2>(
         texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 2u),
@@ -27,7 +27,7 @@ fn node_from_texels(t: texture_2d<u32>, i: u32) -> WideNode {
     return WideNode(bitcast<vec3<f32>>(a.xyz), a.w, texel_of(t, i, TEXELS_PER_NODE, NODES_PER_TEXEL_ROW, 1u), steps);
 }
 
-fn triangle_from_texels(t: texture_2d<u32>, i: u32) -> Triangle {
+fn triangle_from_texels(t: TexelTable, i: u32) -> Triangle {
     return Triangle(
         bitcast<vec4<f32>>(texel_of(t, i, TEXELS_PER_TRIANGLE, TRIANGLES_PER_TEXEL_ROW, 0u)),
         bitcast<vec4<f32>>(texel_of(t, i, TEXELS_PER_TRIANGLE, TRIANGLES_PER_TEXEL_ROW, 1u)),

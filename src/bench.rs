@@ -18,7 +18,7 @@ use crate::render::gpu_scene::texel_table;
 use crate::render::{Backend, GpuContext, KernelKind, RenderControl, RenderSettings, Renderer};
 use crate::scene::{self, Camera, Material, Scene, UNLIMITED_BOUNCES, shapes};
 use crate::shader::Ablation;
-use crate::shader::bindings::{Space, TexelLayout, layout_entry};
+use crate::shader::bindings::{Space, TexelLayout, TexelReads, layout_entry};
 use crate::shader::sampling::Sampler;
 
 #[derive(clap::Args, Debug)]
@@ -68,8 +68,9 @@ pub struct BenchArgs {
     #[arg(long)]
     pub ablation: bool,
     /// Instead of samples/s: what a dependent load costs on this adapter, from a storage
-    /// buffer and as a texel fetch, with a working set that stays in the cache and one that
-    /// does not (the loads of BVH traversal).
+    /// buffer and from a texel table read each way the adapter can (sampled, storage
+    /// texture), with a working set that stays in the cache and one that does not (the
+    /// loads of BVH traversal).
     #[arg(long)]
     pub fetch: bool,
     /// Instead of samples/s: the speed/accuracy trade at equal time. Each scene rendered
@@ -1155,7 +1156,8 @@ fn ablation(
 }
 
 /// `kiln bench --fetch`: nanoseconds per dependent vec4 load, from a storage buffer and
-/// as a texel fetch (shaders/bench/fetch.wgsl), at a 16 KiB and a 16 MiB working set.
+/// from a texel table read each way the adapter can ([`TexelReads`];
+/// shaders/bench/fetch.wgsl), at a 16 KiB and a 16 MiB working set.
 fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
     use wgpu::util::DeviceExt;
 
@@ -1168,7 +1170,7 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
     let words: Vec<u32> = (0..ENTRIES * 4)
         .map(|i| i.wrapping_mul(2_654_435_761))
         .collect();
-    let entries = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
+    let entries_buffer = device.create_buffer_init(&wgpu::util::BufferInitDescriptor {
         label: Some("fetch entries"),
         contents: bytemuck::cast_slice(&words),
         usage: wgpu::BufferUsages::STORAGE,
@@ -1191,38 +1193,11 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
         usage: wgpu::BufferUsages::STORAGE,
         mapped_at_creation: false,
     });
-    let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
-        label: Some("fetch"),
-        entries: &[
-            layout_entry(0, Space::ReadOnly, 0),
-            layout_entry(1, Space::Texels, 0),
-            layout_entry(2, Space::ReadWrite, 0),
-        ],
-    });
-    let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
-        label: Some("fetch"),
-        layout: &layout,
-        entries: &[
-            wgpu::BindGroupEntry {
-                binding: 0,
-                resource: entries.as_entire_binding(),
-            },
-            wgpu::BindGroupEntry {
-                binding: 1,
-                resource: wgpu::BindingResource::TextureView(&view),
-            },
-            wgpu::BindGroupEntry {
-                binding: 2,
-                resource: sink.as_entire_binding(),
-            },
-        ],
-    });
-    let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
-        label: Some("fetch"),
-        bind_group_layouts: &[Some(&layout)],
-        immediate_size: 0,
-    });
-
+    // How the table is read, or None for the storage buffer.
+    let mut ways = vec![None, Some(TexelReads::Sampled)];
+    if ctx.storage_texels {
+        ways.push(Some(TexelReads::Storage));
+    }
     writeln!(
         out,
         "Adapter: {}; {WIDTH}x{WIDTH} invocations, each a chain of {STEPS} dependent vec4 loads; \
@@ -1232,16 +1207,53 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
     writeln!(out)?;
     writeln!(
         out,
-        "| working set | storage buffer | texel fetch | ratio |"
+        "| working set | storage buffer | sampled texture | storage texture |"
     )?;
     writeln!(out, "|---|---:|---:|---:|")?;
     for entries in [1u32 << 10, ENTRIES] {
-        let mut ns = [0.0; 2];
-        for (storage, ns) in [true, false].into_iter().zip(&mut ns) {
+        let mut ns = Vec::new();
+        for way in &ways {
+            let reads = way.unwrap_or_default();
+            let layout = device.create_bind_group_layout(&wgpu::BindGroupLayoutDescriptor {
+                label: Some("fetch"),
+                entries: &[
+                    layout_entry(0, Space::ReadOnly, 0),
+                    wgpu::BindGroupLayoutEntry {
+                        ty: reads.binding_type(),
+                        ..layout_entry(1, Space::Texels, 0)
+                    },
+                    layout_entry(2, Space::ReadWrite, 0),
+                ],
+            });
+            let bind_group = device.create_bind_group(&wgpu::BindGroupDescriptor {
+                label: Some("fetch"),
+                layout: &layout,
+                entries: &[
+                    wgpu::BindGroupEntry {
+                        binding: 0,
+                        resource: entries_buffer.as_entire_binding(),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 1,
+                        resource: wgpu::BindingResource::TextureView(&view),
+                    },
+                    wgpu::BindGroupEntry {
+                        binding: 2,
+                        resource: sink.as_entire_binding(),
+                    },
+                ],
+            });
+            let pipeline_layout = device.create_pipeline_layout(&wgpu::PipelineLayoutDescriptor {
+                label: Some("fetch"),
+                bind_group_layouts: &[Some(&layout)],
+                immediate_size: 0,
+            });
             let source = format!(
-                "const FETCH_STORAGE: bool = {storage};\nconst FETCH_MASK: u32 = {}u;\n\
-                 const FETCH_STEPS: u32 = {STEPS}u;\nconst FETCH_WIDTH: u32 = {WIDTH}u;\n{SOURCE}",
-                entries - 1
+                "const FETCH_FROM_BUFFER: bool = {};\nconst FETCH_MASK: u32 = {}u;\n\
+                 const FETCH_STEPS: u32 = {STEPS}u;\nconst FETCH_WIDTH: u32 = {WIDTH}u;\n{}{SOURCE}",
+                way.is_none(),
+                entries - 1,
+                reads.wgsl(),
             );
             let module = device.create_shader_module(wgpu::ShaderModuleDescriptor {
                 label: Some("fetch"),
@@ -1271,15 +1283,17 @@ fn fetch(ctx: &GpuContext, out: &mut dyn std::io::Write) -> Result<()> {
                     .map_err(|e| anyhow::anyhow!("waiting for the fetch benchmark: {e}"))?;
                 best = best.min(t.elapsed().as_secs_f64());
             }
-            *ns = best * 1e9 / f64::from(WIDTH * WIDTH * STEPS);
+            ns.push(format!(
+                "{:.2} ns",
+                best * 1e9 / f64::from(WIDTH * WIDTH * STEPS)
+            ));
         }
+        ns.resize(3, "–".to_owned());
         writeln!(
             out,
-            "| {} KiB | {:.1} ns | {:.1} ns | {:.1}× |",
+            "| {} KiB | {} |",
             u64::from(entries) * 16 / 1024,
-            ns[0],
-            ns[1],
-            ns[0] / ns[1]
+            ns.join(" | ")
         )?;
     }
     Ok(())

@@ -10,6 +10,7 @@ use glam::{Affine3A, Quat, Vec3};
 use kiln::accel::build_scene_accel;
 use kiln::render::probe::{Probe, run_probe};
 use kiln::scene::{Camera, Material, Mesh, Scene};
+use kiln::shader::bindings::TexelReads;
 
 const RAYS: u32 = 100_000;
 const MISS: u32 = u32::MAX;
@@ -149,17 +150,53 @@ fn texel_tables_and_storage_pages_render_the_same_film() {
     };
     let a = common::render(&ctx, &scene, texels);
     let b = common::render(&ctx, &scene, pages);
-    let bits = |film: &kiln::film::Film| -> Vec<u32> {
-        film.radiance()
-            .iter()
-            .flat_map(|c| c.to_array().map(f32::to_bits))
-            .collect()
-    };
     assert!(
         a.radiance().iter().any(|c| c.max_element() > 0.0),
         "a lit film"
     );
-    assert_eq!(bits(&a), bits(&b), "texel tables against storage pages");
+    assert_eq!(
+        film_bits(&a),
+        film_bits(&b),
+        "texel tables against storage pages"
+    );
+}
+
+/// The bits of a film's radiance, for comparisons that must be exact.
+fn film_bits(film: &kiln::film::Film) -> Vec<u32> {
+    film.radiance()
+        .iter()
+        .flat_map(|c| c.to_array().map(f32::to_bits))
+        .collect()
+}
+
+/// Texel tables read as sampled textures and as read-only storage textures (what each
+/// adapter gets: `GpuContext::texel_reads`) give the same film, bit for bit.
+#[test]
+fn sampled_and_storage_texel_reads_render_the_same_film() {
+    let ctx = gpu();
+    assert!(
+        ctx.storage_texels,
+        "{} cannot read storage texels; this test needs an adapter that can (lavapipe can)",
+        ctx.describe()
+    );
+    let scene = kiln::scene::default_scene().expect("bundled scene");
+    let render = |reads| {
+        let s = kiln::render::RenderSettings {
+            texel_reads: Some(reads),
+            ..settings(24, 24, 4)
+        };
+        common::render(&ctx, &scene, s)
+    };
+    let sampled = render(TexelReads::Sampled);
+    assert!(
+        sampled.radiance().iter().any(|c| c.max_element() > 0.0),
+        "a lit film"
+    );
+    assert_eq!(
+        film_bits(&sampled),
+        film_bits(&render(TexelReads::Storage)),
+        "sampled against storage reads"
+    );
 }
 
 #[test]

@@ -1,11 +1,12 @@
 // `kiln bench --fetch`: what a dependent, data-driven load costs, from a storage buffer
-// (`FETCH_STORAGE`) or as a texel fetch (otherwise). The BVH traversal's loads look like
-// this: the next address comes from the data just loaded. Each invocation follows a chain
+// (`FETCH_FROM_BUFFER`) or from a texel table (otherwise) read as `TexelTable` says
+// (`TexelReads::wgsl` in src/shader/bindings.rs, prepended with the constants). The BVH
+// traversal's loads look like this: the next address comes from the data just loaded. Each invocation follows a chain
 // of FETCH_STEPS loads through `FETCH_MASK + 1` vec4 entries, so the working set is
 // 16 × (FETCH_MASK + 1) bytes. The constants are prepended by src/bench.rs.
 
 @group(0) @binding(0) var<storage, read> entries: array<vec4<u32>>;
-@group(0) @binding(1) var texels: texture_2d<u32>;
+@group(0) @binding(1) var texels: TexelTable;
 @group(0) @binding(2) var<storage, read_write> sink: array<u32>;
 
 // Texels per row of `texels`.
@@ -18,10 +19,10 @@ fn fetch_hash(x: u32) -> u32 {
 }
 
 fn fetch_entry(i: u32) -> vec4<u32> {
-    if (FETCH_STORAGE) {
+    if (FETCH_FROM_BUFFER) {
         return entries[i];
     }
-    return textureLoad(texels, vec2<u32>(i % FETCH_ROW, i / FETCH_ROW), 0);
+    return texel_load(texels, vec2<u32>(i % FETCH_ROW, i / FETCH_ROW));
 }
 
 @compute @workgroup_size(8, 8)

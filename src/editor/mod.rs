@@ -46,14 +46,16 @@ pub use files::{FileDialogs, NativeDialogs, ScriptedDialogs};
 
 use std::sync::Arc;
 
-/// How the editor asks wgpu for its device: the adapter's own limits, as the renderer's
-/// [`GpuContext::new`](crate::render::GpuContext::new) does (eframe's default asks for
+/// How the editor asks wgpu for its device: the adapter's own limits and the features
+/// Kiln uses, as the renderer's [`GpuContext::new`](crate::render::GpuContext::new) does
+/// (eframe's default asks for
 /// WebGPU's, too small for the path-tracing kernel, and on GL for WebGL2's, which have no
 /// compute at all). `prefer_software` picks a CPU adapter first (lavapipe), for tests.
 pub fn wgpu_setup(prefer_software: bool) -> egui_wgpu::WgpuSetup {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| wgpu::DeviceDescriptor {
         label: Some("kiln editor"),
+        required_features: crate::render::context::device_features(adapter),
         required_limits: adapter.limits(),
         ..Default::default()
     });

@@ -5,6 +5,8 @@ use std::sync::Arc;
 
 use thiserror::Error;
 
+use crate::shader::bindings::TexelReads;
+
 /// Which graphics API to run compute on.
 #[derive(Clone, Copy, Debug, PartialEq, Eq)]
 pub enum Backend {
@@ -62,6 +64,41 @@ pub struct GpuContext {
     /// Where a renderer's kernel is compiled first when this context has not compiled
     /// it (see [`GpuContext::rehearse_compiles_on`]).
     rehearsal: std::sync::OnceLock<Arc<GpuContext>>,
+    /// The device can bind texel tables as read-only storage textures
+    /// ([`TexelReads::Storage`]); the tables are created so that both ways can read them.
+    pub storage_texels: bool,
+    /// How kernels on this device read texel tables unless a render says otherwise
+    /// ([`RenderSettings::texel_reads`](super::RenderSettings::texel_reads)).
+    pub texel_reads: TexelReads,
+}
+
+/// The optional device features Kiln asks of `adapter`: adapter-specific format
+/// features where it has them, for read-only storage textures ([`TexelReads::Storage`]).
+pub fn device_features(adapter: &wgpu::Adapter) -> wgpu::Features {
+    adapter.features() & wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES
+}
+
+/// Whether `device` on `adapter` can read rgba32uint storage textures, and how its kernels
+/// read texel tables: as storage textures on a software rasteriser that can
+/// (llvmpipe: 1.5× faster, docs/BENCHMARKS.md), sampled elsewhere (not measured on a
+/// GPU, where both go through the same texture units).
+fn texel_reads_for(adapter: &wgpu::Adapter, device: &wgpu::Device) -> (bool, TexelReads) {
+    let format = adapter.get_texture_format_features(wgpu::TextureFormat::Rgba32Uint);
+    let storage = device
+        .features()
+        .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+        && format
+            .allowed_usages
+            .contains(wgpu::TextureUsages::STORAGE_BINDING)
+        && format
+            .flags
+            .contains(wgpu::TextureFormatFeatureFlags::STORAGE_READ_ONLY);
+    let reads = if storage && adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+        TexelReads::Storage
+    } else {
+        TexelReads::Sampled
+    };
+    (storage, reads)
 }
 
 /// Records in the returned slot why `device` is lost, when it is.
@@ -168,7 +205,7 @@ impl GpuContext {
         let info = adapter.get_info();
         let (device, queue) = pollster::block_on(adapter.request_device(&wgpu::DeviceDescriptor {
             label: Some("kiln"),
-            required_features: wgpu::Features::empty(),
+            required_features: device_features(&adapter),
             required_limits: limits,
             ..Default::default()
         }))
@@ -182,6 +219,7 @@ impl GpuContext {
             tracing::error!("uncaptured wgpu error: {e}");
         }));
         let lost = watch_for_loss(&device);
+        let (storage_texels, texel_reads) = texel_reads_for(&adapter, &device);
         Ok(Arc::new(Self {
             adapter,
             device,
@@ -191,6 +229,8 @@ impl GpuContext {
             pipelines_compiled: Default::default(),
             lost,
             rehearsal: Default::default(),
+            storage_texels,
+            texel_reads,
         }))
     }
 
@@ -243,6 +283,7 @@ impl GpuContext {
             });
         }
         let lost = watch_for_loss(&device);
+        let (storage_texels, texel_reads) = texel_reads_for(&adapter, &device);
         Ok(Arc::new(Self {
             adapter,
             device,
@@ -252,6 +293,8 @@ impl GpuContext {
             pipelines_compiled: Default::default(),
             lost,
             rehearsal: Default::default(),
+            storage_texels,
+            texel_reads,
         }))
     }
 

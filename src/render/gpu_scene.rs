@@ -18,7 +18,7 @@ use crate::scene::{Scene, shapes};
 use crate::shader::bindings::{
     INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_PARAMS, MATERIAL_TEXELS,
     NODE_TEXELS, PAGES, Resource, Space, TRIANGLE_TEXELS, TRIANGLE_VERTEX_TEXELS, TexelLayout,
-    VERTEX_TEXELS, bound, scene_layout_entries,
+    TexelReads, VERTEX_TEXELS, bound, scene_layout_entries,
 };
 use crate::shader::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
@@ -72,6 +72,9 @@ pub struct GpuScene {
     pub vertices: wgpu::Texture,
     pub uv1: wgpu::Buffer,
     pub has_uv1: bool,
+    /// How kernels read the texel tables unless a render says otherwise: the context's
+    /// choice ([`GpuContext::texel_reads`]).
+    pub texel_reads: TexelReads,
     /// The materials, the emissive triangles and their CDF, as texels
     /// ([`MATERIAL_TEXELS`], [`LIGHT_TRIANGLE_TEXELS`], [`LIGHT_CDF_TEXELS`]).
     pub materials: wgpu::Texture,
@@ -480,7 +483,14 @@ pub fn texel_table<T: bytemuck::Pod>(
         dimension: wgpu::TextureDimension::D2,
         format: wgpu::TextureFormat::Rgba32Uint,
         // COPY_DST: edits write the instances' tables in place (`Renderer::update`).
-        usage: wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST,
+        // Kernels read a table either way the device can (`TexelReads`).
+        usage: if ctx.storage_texels {
+            wgpu::TextureUsages::TEXTURE_BINDING
+                | wgpu::TextureUsages::STORAGE_BINDING
+                | wgpu::TextureUsages::COPY_DST
+        } else {
+            wgpu::TextureUsages::TEXTURE_BINDING | wgpu::TextureUsages::COPY_DST
+        },
         view_formats: &[],
     });
     *bytes_total += u64::from(rows) * u64::from(layout.width()) * 16;
@@ -604,6 +614,7 @@ impl GpuScene {
             )?,
             uv1: storage_buffer(ctx, "second UV set", &a.uv1, limit, &mut bytes)?,
             has_uv1: !a.uv1.is_empty(),
+            texel_reads: ctx.texel_reads,
             materials: texel_table(ctx, "materials", MATERIAL_TEXELS, &a.materials, &mut bytes)?,
             material_count: a.materials.len() as u32,
             light_triangles: texel_table(
@@ -751,6 +762,7 @@ impl GpuScene {
             noise: false,
             uv1: self.has_uv1,
             ablation: Ablation::Full,
+            texel_reads: self.texel_reads,
         }
     }
 

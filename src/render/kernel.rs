@@ -257,7 +257,7 @@ mod tests {
     use super::*;
     use crate::shader::Ablation;
     use crate::shader::bindings::{
-        PAGES, SCENE_BINDINGS, SCENE_GROUP, Space, bound, scene_layout_entries,
+        PAGES, SCENE_BINDINGS, SCENE_GROUP, Space, TexelReads, bound, scene_layout_entries,
     };
 
     fn feature_sets() -> Vec<KernelFeatures> {
@@ -279,6 +279,7 @@ mod tests {
             uv1: false,
             noise: false,
             ablation: Ablation::Full,
+            texel_reads: TexelReads::Sampled,
         };
         let mixed = KernelFeatures {
             node_pages: 2,
@@ -293,7 +294,17 @@ mod tests {
             triangle_pages: 0,
             ..mixed
         };
-        vec![everything, nothing_optional, mixed, in_texels]
+        let in_storage_texels = KernelFeatures {
+            texel_reads: TexelReads::Storage,
+            ..in_texels
+        };
+        vec![
+            everything,
+            nothing_optional,
+            mixed,
+            in_texels,
+            in_storage_texels,
+        ]
     }
 
     /// naga's address space for a table entry.
@@ -365,29 +376,29 @@ mod tests {
                         .find(|(_, v)| v.name.as_deref() == Some(b.name))
                         .map(|(_, v)| v)
                         .expect("declared");
-                    assert!(
-                        matches!(
-                            module.types[var.ty].inner,
-                            naga::TypeInner::Image {
-                                dim: naga::ImageDimension::D2,
-                                arrayed: false,
-                                class: naga::ImageClass::Sampled {
-                                    kind: naga::ScalarKind::Uint,
-                                    multi: false
-                                },
-                            }
-                        ),
-                        "{name} is a texture_2d<u32>"
+                    let class = match features.texel_reads {
+                        TexelReads::Sampled => naga::ImageClass::Sampled {
+                            kind: naga::ScalarKind::Uint,
+                            multi: false,
+                        },
+                        TexelReads::Storage => naga::ImageClass::Storage {
+                            format: naga::StorageFormat::Rgba32Uint,
+                            access: naga::StorageAccess::LOAD,
+                        },
+                    };
+                    assert_eq!(
+                        module.types[var.ty].inner,
+                        naga::TypeInner::Image {
+                            dim: naga::ImageDimension::D2,
+                            arrayed: false,
+                            class,
+                        },
+                        "{name}: the WGSL type of a table read as {:?}",
+                        features.texel_reads
                     );
-                    assert!(
-                        matches!(
-                            layout[&b.binding].ty,
-                            wgpu::BindingType::Texture {
-                                sample_type: wgpu::TextureSampleType::Uint,
-                                view_dimension: wgpu::TextureViewDimension::D2,
-                                multisampled: false,
-                            }
-                        ),
+                    assert_eq!(
+                        layout[&b.binding].ty,
+                        features.texel_reads.binding_type(),
                         "layout type of {name}"
                     );
                     continue;

@@ -604,6 +604,11 @@ mod tests {
         for ablation in crate::shader::Ablation::ALL {
             variants.push(KernelFeatures { ablation, ..bare });
         }
+        // The kernel lavapipe runs: texel tables read as storage textures.
+        variants.push(KernelFeatures {
+            texel_reads: crate::shader::bindings::TexelReads::Storage,
+            ..bare
+        });
         for features in variants {
             let mut module = path_tracing_kernel(&features, &materials)
                 .validate()

@@ -35,6 +35,7 @@ use crate::accel::query::Enclosures;
 use crate::accel::{AccelError, build_scene_accel};
 use crate::film::{ExactFilm, Film};
 use crate::scene::Scene;
+use crate::shader::bindings::TexelReads;
 use crate::shader::gpu_types::{
     FLAG_ENVIRONMENT_MAP, FLAG_LIGHT_SAMPLING, FLAG_SHADOW_CATCHER, GpuParams, GpuStats,
 };
@@ -211,6 +212,9 @@ pub struct RenderSettings {
     /// The kernel cut down to a part of its work, for `kiln bench --ablation`; renders
     /// use [`Ablation::Full`].
     pub ablation: Ablation,
+    /// How the kernel reads its texel tables; default: the context's choice
+    /// ([`GpuContext::texel_reads`]). Tests set it to check that both read the same.
+    pub texel_reads: Option<TexelReads>,
 }
 
 /// What a kernel is specialised to, from the fastest to build on to the fastest to edit.
@@ -248,6 +252,7 @@ impl RenderSettings {
             aovs: false,
             film_piece_bytes: None,
             ablation: Ablation::Full,
+            texel_reads: None,
         }
     }
 }
@@ -425,6 +430,7 @@ pub(super) fn kernel_features(
         aovs: settings.aovs,
         noise: settings.aovs || settings.noise_threshold > 0.0,
         ablation: settings.ablation,
+        texel_reads: settings.texel_reads.unwrap_or(scene_features.texel_reads),
         ..scene_features
     };
     // `everything` keeps the bindings, so one layout serves both kernels.

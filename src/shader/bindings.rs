@@ -5,7 +5,7 @@
 //! bindings hold stay in `shaders/scene.wgsl`, mirrored in [`super::gpu_types`].
 //!
 //! It is not a general shader-interface description: every binding is a buffer or a
-//! table of texels (`texture_2d<u32>`, rgba32uint), and a probe's group 1
+//! table of rgba32uint texels (read as [`TexelReads`] says), and a probe's group 1
 //! ([`PROBE_BINDINGS`]) keeps its element types in its own test kernel.
 
 use std::num::NonZeroU64;
@@ -25,12 +25,12 @@ pub enum Space {
     ReadOnly,
     /// `var<storage, read_write>`
     ReadWrite,
-    /// `texture_2d<u32>` of rgba32uint texels holding an array of fixed-size elements
-    /// ([`TexelLayout`]), read with `textureLoad`. The traversal reads the BVHs, the
-    /// triangles and the instances' placements this way: on a software rasteriser
-    /// (llvmpipe) a texel fetch is one vector gather, while a storage-buffer load that
-    /// differs between lanes is a loop over the lanes for every word (`kiln bench
-    /// --fetch`: 10× slower from the cache).
+    /// A texture of rgba32uint texels holding an array of fixed-size elements
+    /// ([`TexelLayout`]), read with `textureLoad` as [`TexelReads`] says. The traversal
+    /// reads the BVHs, the triangles and the instances' placements this way: on a
+    /// software rasteriser (llvmpipe) a texel read is a vector load per lane, where a
+    /// storage-buffer load that differs between lanes was a loop over the lanes for every
+    /// word (`kiln bench --fetch` measures both).
     Texels,
 }
 
@@ -50,18 +50,65 @@ impl Space {
             Space::Uniform => wgpu::BufferBindingType::Uniform,
             Space::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
             Space::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
-            Space::Texels => {
-                return wgpu::BindingType::Texture {
-                    sample_type: wgpu::TextureSampleType::Uint,
-                    view_dimension: wgpu::TextureViewDimension::D2,
-                    multisampled: false,
-                };
-            }
+            Space::Texels => return TexelReads::Sampled.binding_type(),
         };
         wgpu::BindingType::Buffer {
             ty,
             has_dynamic_offset: false,
             min_binding_size: NonZeroU64::new(min_bytes),
+        }
+    }
+}
+
+/// How a kernel reads its texel tables ([`Space::Texels`]). Both read the same values;
+/// they differ in what the driver builds. Each kernel declares the tables as
+/// `TexelTable` and reads them with `texel_load` ([`TexelReads::wgsl`]).
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
+pub enum TexelReads {
+    /// `texture_2d<u32>`, read with `textureLoad` at level 0: every adapter has it.
+    #[default]
+    Sampled,
+    /// `texture_storage_2d<rgba32uint, read>`: needs wgpu's
+    /// `TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES` and read-only storage of rgba32uint
+    /// ([`GpuContext::storage_texels`](crate::render::GpuContext::storage_texels)).
+    /// llvmpipe builds every sampled texel fetch as a call to one function that takes
+    /// the mip level per lane and looks up each lane's row stride and offset; a storage
+    /// texture has no levels, and its read is address arithmetic and a load per lane.
+    /// The Cornell box renders 1.5× as fast so (docs/BENCHMARKS.md).
+    Storage,
+}
+
+impl TexelReads {
+    /// The WGSL of the `TexelTable` type the tables are declared with and of
+    /// `texel_load`, which reads the texel at `at`.
+    pub fn wgsl(self) -> &'static str {
+        match self {
+            TexelReads::Sampled => {
+                "alias TexelTable = texture_2d<u32>;\n\
+                 fn texel_load(t: TexelTable, at: vec2<u32>) -> vec4<u32> {\n    \
+                 return textureLoad(t, at, 0);\n}\n"
+            }
+            TexelReads::Storage => {
+                "alias TexelTable = texture_storage_2d<rgba32uint, read>;\n\
+                 fn texel_load(t: TexelTable, at: vec2<u32>) -> vec4<u32> {\n    \
+                 return textureLoad(t, at);\n}\n"
+            }
+        }
+    }
+
+    /// The layout's binding type of a texel table read this way.
+    pub fn binding_type(self) -> wgpu::BindingType {
+        match self {
+            TexelReads::Sampled => wgpu::BindingType::Texture {
+                sample_type: wgpu::TextureSampleType::Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+                multisampled: false,
+            },
+            TexelReads::Storage => wgpu::BindingType::StorageTexture {
+                access: wgpu::StorageTextureAccess::ReadOnly,
+                format: wgpu::TextureFormat::Rgba32Uint,
+                view_dimension: wgpu::TextureViewDimension::D2,
+            },
         }
     }
 }
@@ -313,14 +360,7 @@ const fn texels(
 ) -> Binding {
     Binding {
         space: Space::Texels,
-        ..read_only(
-            resource,
-            name,
-            binding,
-            "texture_2d<u32>",
-            element_bytes,
-            doc,
-        )
+        ..read_only(resource, name, binding, "TexelTable", element_bytes, doc)
     }
 }
 
@@ -547,7 +587,7 @@ pub const MATERIAL_PARAMS: usize = 2048;
 
 /// The group 0 declarations of a kernel built for `features`.
 pub fn bindings_wgsl(features: &KernelFeatures) -> String {
-    let mut text = String::new();
+    let mut text = features.texel_reads.wgsl().to_owned();
     for b in SCENE_BINDINGS {
         for line in b.doc.lines() {
             text.push_str(&format!("// {line}\n"));
@@ -573,6 +613,8 @@ pub fn bound(features: &KernelFeatures) -> impl Iterator<Item = &'static Binding
 }
 
 /// A compute stage's layout entry for a binding in `space`; `min_bytes` 0 for no minimum.
+/// A texel table's entry is [`TexelReads::Sampled`]'s; a kernel's group 0 reads them as
+/// its features say ([`scene_layout_entries`]).
 pub fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGroupLayoutEntry {
     wgpu::BindGroupLayoutEntry {
         binding,
@@ -585,7 +627,13 @@ pub fn layout_entry(binding: u32, space: Space, min_bytes: u64) -> wgpu::BindGro
 /// The entries of group 0's layout for a kernel built for `features`.
 pub fn scene_layout_entries(features: &KernelFeatures) -> Vec<wgpu::BindGroupLayoutEntry> {
     bound(features)
-        .map(|b| layout_entry(b.binding, b.space, b.element_bytes))
+        .map(|b| match b.space {
+            Space::Texels => wgpu::BindGroupLayoutEntry {
+                ty: features.texel_reads.binding_type(),
+                ..layout_entry(b.binding, b.space, b.element_bytes)
+            },
+            space => layout_entry(b.binding, space, b.element_bytes),
+        })
         .collect()
 }
 

@@ -1,7 +1,7 @@
 //! What a kernel is specialised for, and the WGSL generated from it: the `FEATURE_*`
 //! constants and the paged-array accessors.
 
-use super::bindings::TEXEL_LAYOUTS;
+use super::bindings::{TEXEL_LAYOUTS, TexelReads};
 use super::lobes;
 
 /// What a kernel is specialised for; only what a scene uses is compiled in. The shaders
@@ -32,6 +32,8 @@ pub struct KernelFeatures {
     pub noise: bool,
     /// The part of the path tracer's work the kernel does (`kiln bench --ablation`).
     pub ablation: Ablation,
+    /// How the kernel reads its texel tables.
+    pub texel_reads: TexelReads,
 }
 
 /// The path tracer cut down to a part of its work, to measure where its time goes
@@ -89,6 +91,7 @@ impl Default for KernelFeatures {
             uv1: true,
             noise: true,
             ablation: Ablation::Full,
+            texel_reads: TexelReads::Sampled,
         }
     }
 }

@@ -46,6 +46,7 @@ pub fn settings(width: u32, height: u32, spp: u32) -> RenderSettings {
         aovs: false,
         film_piece_bytes: None,
         ablation: kiln::shader::Ablation::Full,
+        texel_reads: None,
     }
 }
 

@@ -391,6 +391,7 @@ fn kiln_values(cases: &[(Node, &str)]) -> Vec<V> {
         aovs: false,
         film_piece_bytes: None,
         ablation: kiln::shader::Ablation::Full,
+        texel_reads: None,
     };
     // One device for every render: its pipeline cache keeps the kernel.
     static GPU: std::sync::OnceLock<std::sync::Arc<GpuContext>> = std::sync::OnceLock::new();
