@@ -18,3 +18,6 @@ pub use wide::{WIDE_INDEX_LIMIT, WIDE_MAX_LEAF, WideBvh, rebase, widen};
 /// ([`WideBvh::stack_need`]) cannot be traversed.
 pub const BLAS_STACK_SIZE: u32 = 96;
 pub const TLAS_STACK_SIZE: u32 = 64;
+/// Node indices of each level stay below this: a traversal stack entry packs a node's
+/// index in 24 bits (`pack_pending` in `shaders/traverse.wgsl`).
+pub const STACK_NODE_LIMIT: u32 = 1 << 24;

@@ -6,7 +6,10 @@ use std::time::{Duration, Instant};
 use glam::Vec3;
 use thiserror::Error;
 
-use super::{BLAS_STACK_SIZE, Bvh, TLAS_STACK_SIZE, WIDE_INDEX_LIMIT, WIDE_MAX_LEAF, build_bvh};
+use super::{
+    BLAS_STACK_SIZE, Bvh, STACK_NODE_LIMIT, TLAS_STACK_SIZE, WIDE_INDEX_LIMIT, WIDE_MAX_LEAF,
+    build_bvh,
+};
 use crate::scene::Scene;
 
 /// Triangles per BLAS leaf at most; SAH makes smaller leaves where they pay.
@@ -76,19 +79,20 @@ pub fn build_scene_accel(scene: &Scene) -> Result<SceneAccel, AccelError> {
 
     // The kernel addresses every mesh's nodes and triangles in one table each.
     let built = || blas.iter().flatten();
-    for (what, count) in [
-        ("nodes", built().map(|b| b.wide.nodes.len() as u64).sum()),
+    for (what, count, limit) in [
+        (
+            "nodes",
+            built().map(|b| b.wide.nodes.len() as u64).sum(),
+            STACK_NODE_LIMIT,
+        ),
         (
             "triangles",
             built().map(|b| b.primitive_order.len() as u64).sum(),
+            WIDE_INDEX_LIMIT,
         ),
     ] {
-        if count >= u64::from(WIDE_INDEX_LIMIT) {
-            return Err(AccelError::TooLarge {
-                what,
-                count,
-                limit: WIDE_INDEX_LIMIT,
-            });
+        if count >= u64::from(limit) {
+            return Err(AccelError::TooLarge { what, count, limit });
         }
     }
     let tlas = build_tlas(scene, &blas)?;
@@ -141,6 +145,13 @@ pub fn build_tlas(scene: &Scene, blas: &[Option<Bvh>]) -> Result<Option<Bvh>, Ac
         boxes.push((wlo - pad, whi + pad));
     }
     let bvh = build_bvh(&boxes, TLAS_MAX_LEAF_SIZE);
+    if bvh.wide.nodes.len() >= STACK_NODE_LIMIT as usize {
+        return Err(AccelError::TooLarge {
+            what: "instance BVH nodes",
+            count: bvh.wide.nodes.len() as u64,
+            limit: STACK_NODE_LIMIT,
+        });
+    }
     if bvh.wide.stack_need > TLAS_STACK_SIZE {
         return Err(AccelError::TooDeep {
             what: "the instances".into(),

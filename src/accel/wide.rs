@@ -20,8 +20,9 @@ pub struct WideBvh {
     /// Root first; children's references are relative to this tree (node indices into
     /// `nodes`, primitive indices into the binary BVH's `primitive_order`).
     pub nodes: Vec<WideNode>,
-    /// Entries the kernel's traversal stack needs at most: on the worst root-to-leaf path,
-    /// every node pushes all but one of its children.
+    /// Entries the kernel's traversal stack needs at most: a step on a node of two or
+    /// more children writes the children an ancestor left pending as one entry, so on the
+    /// worst root-to-leaf path, one for each such node but the last.
     pub stack_need: u32,
 }
 
@@ -117,12 +118,12 @@ fn quantize(boxes: &[(Vec3, Vec3)], child: [u32; 4]) -> WideNode {
 pub fn widen(nodes: &[BvhNode]) -> WideBvh {
     let mut wide = vec![WideNode::default()];
     let mut stack_need = 0;
-    // (wide node, its binary node, pushes on the path above it)
+    // (wide node, its binary node, nodes of two or more children above it)
     let mut work = vec![(0usize, 0usize, 0u32)];
     while let Some((w, b, above)) = work.pop() {
         let children = open(nodes, b);
-        let pushes = above + children.len() as u32 - 1;
-        stack_need = stack_need.max(pushes);
+        let pushes = above + u32::from(children.len() > 1);
+        stack_need = stack_need.max(pushes.saturating_sub(1));
         let mut child = [WIDE_EMPTY; 4];
         for (slot, &c) in children.iter().enumerate() {
             let n = nodes[c];
@@ -191,7 +192,8 @@ mod tests {
     }
 
     /// Walks the wide tree: every primitive in exactly one leaf and inside the decoded box
-    /// of every node above it, and no path needing more stack than `stack_need`.
+    /// of every node above it, and no path needing more stack than `stack_need` (an entry
+    /// for every node of two or more children on it but the last).
     fn check(boxes: &[(Vec3, Vec3)], max_leaf: u32) -> (usize, usize) {
         let bvh = build_bvh(boxes, max_leaf);
         let wide = &bvh.wide;
@@ -202,7 +204,8 @@ mod tests {
             let n = wide.nodes[w];
             let used = n.child.iter().filter(|&&c| c != WIDE_EMPTY).count() as u32;
             assert!(used >= 1 && n.child[..used as usize].iter().all(|&c| c != WIDE_EMPTY));
-            need = need.max(above + used - 1);
+            let pushes = above + u32::from(used > 1);
+            need = need.max(pushes.saturating_sub(1));
             for slot in 0..used as usize {
                 // What a ray must pass through to reach this child: its decoded box and
                 // every ancestor's.
@@ -213,7 +216,7 @@ mod tests {
                 let c = n.child[slot];
                 let count = c >> WIDE_COUNT_SHIFT;
                 if count == 0 {
-                    work.push((c as usize, Some((lo, hi)), above + used - 1));
+                    work.push((c as usize, Some((lo, hi)), pushes));
                     continue;
                 }
                 let first = c & WIDE_INDEX_LIMIT;
