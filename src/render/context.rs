@@ -79,21 +79,25 @@ pub fn device_features(adapter: &wgpu::Adapter) -> wgpu::Features {
 }
 
 /// Whether `device` on `adapter` can read rgba32uint storage textures, and how its kernels
-/// read texel tables: as storage textures on a software rasteriser that can
-/// (llvmpipe: 1.5× faster, docs/BENCHMARKS.md), sampled elsewhere (not measured on a
-/// GPU, where both go through the same texture units).
+/// read texel tables: as storage textures on a software rasteriser that can (llvmpipe: 1.5×
+/// faster, docs/BENCHMARKS.md), sampled elsewhere (not measured on a GPU, where both go
+/// through the same texture units). wgpu's GL backend on llvmpipe offers read-only storage
+/// textures but reads zeros from them (`tests/cli_flags.rs` renders through both APIs and
+/// compares), so GL reads texel tables sampled.
 fn texel_reads_for(adapter: &wgpu::Adapter, device: &wgpu::Device) -> (bool, TexelReads) {
+    let info = adapter.get_info();
     let format = adapter.get_texture_format_features(wgpu::TextureFormat::Rgba32Uint);
-    let storage = device
-        .features()
-        .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
+    let storage = info.backend != wgpu::Backend::Gl
+        && device
+            .features()
+            .contains(wgpu::Features::TEXTURE_ADAPTER_SPECIFIC_FORMAT_FEATURES)
         && format
             .allowed_usages
             .contains(wgpu::TextureUsages::STORAGE_BINDING)
         && format
             .flags
             .contains(wgpu::TextureFormatFeatureFlags::STORAGE_READ_ONLY);
-    let reads = if storage && adapter.get_info().device_type == wgpu::DeviceType::Cpu {
+    let reads = if storage && info.device_type == wgpu::DeviceType::Cpu {
         TexelReads::Storage
     } else {
         TexelReads::Sampled
