@@ -160,7 +160,7 @@ fn keep_hits(p: ptr<function, Pending>, sp: ptr<function, u32>, node: u32, s: Wi
 
 // Takes the nearest pending child that can still hold a hit nearer than `t` into
 // `current`, reading the entries above `bottom` back from the stack as the pending ones
-// run out (`children` reads a node's child references: TLAS or BLAS); false when none is
+// run out (their nodes are the TLAS's when `tlas`, else the BLAS's); false when none is
 // left.
 fn next_pending(p: ptr<function, Pending>, sp: ptr<function, u32>, bottom: u32, t: f32, tlas: bool, current: ptr<function, u32>) -> bool {
     loop {

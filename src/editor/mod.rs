@@ -48,9 +48,9 @@ use std::sync::Arc;
 
 /// How the editor asks wgpu for its device: the adapter's own limits and the features
 /// Kiln uses, as the renderer's [`GpuContext::new`](crate::render::GpuContext::new) does
-/// (eframe's default asks for
-/// WebGPU's, too small for the path-tracing kernel, and on GL for WebGL2's, which have no
-/// compute at all). `prefer_software` picks a CPU adapter first (lavapipe), for tests.
+/// (eframe's default asks for WebGPU's limits, too small for the path-tracing kernel, and
+/// on GL for WebGL2's, which have no compute at all). `prefer_software` picks a CPU
+/// adapter first (lavapipe), for tests.
 pub fn wgpu_setup(prefer_software: bool) -> egui_wgpu::WgpuSetup {
     let mut setup = egui_wgpu::WgpuSetupCreateNew::without_display_handle();
     setup.device_descriptor = Arc::new(|adapter: &wgpu::Adapter| wgpu::DeviceDescriptor {
