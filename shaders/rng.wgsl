@@ -93,9 +93,20 @@ fn sobol_dimension() -> vec2<u32> {
     return vec2<u32>(hash, owen_scramble(rng_index, hash));
 }
 
+// Whether the draws are Sobol' points: the sampler compiled into the kernel where it has
+// one (FEATURE_FIXED_SAMPLER, src/shader/features.rs), else the one rng_begin was given.
+// Lavapipe runs both sides of a branch for the whole SIMD batch; a sampler known when the
+// kernel is compiled costs only its own draws.
+fn draws_sobol() -> bool {
+    if (FEATURE_FIXED_SAMPLER) {
+        return FIXED_SAMPLER == SAMPLER_SOBOL;
+    }
+    return rng_sampler == SAMPLER_SOBOL;
+}
+
 // Uniform in [0, 1).
 fn rand() -> f32 {
-    if (rng_sampler == SAMPLER_SOBOL) {
+    if (draws_sobol()) {
         let d = sobol_dimension();
         return unit_float(owen_scramble(reverseBits(d.y), pcg_hash(d.x)));
     }
@@ -105,7 +116,7 @@ fn rand() -> f32 {
 
 // Uniform in [0, 1)^2.
 fn rand2() -> vec2<f32> {
-    if (rng_sampler == SAMPLER_SOBOL) {
+    if (draws_sobol()) {
         let d = sobol_dimension();
         let x = owen_scramble(reverseBits(d.y), pcg_hash(d.x));
         let y = owen_scramble(sobol_second(d.y), pcg_hash(d.x ^ 0x5bd1e995u));

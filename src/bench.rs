@@ -373,11 +373,14 @@ fn convergence(
             },
             half,
         )?;
-        // The kernel is the references' (the driver has compiled it): the timed renders
-        // start warm. Each sampler against the same reference.
+        // Each sampler against the same reference. The sampler is compiled into the kernel:
+        // a pass rendered and cleared first has the driver compile it, so the timed
+        // renders start warm.
         let mut errors = Vec::new();
         for sampler in Sampler::ALL {
             let mut measured = renderer(1, sampler)?;
+            measured.render(0..1, RenderControl::default())?;
+            measured.clear_film();
             let (mut done, mut seconds, mut fit) = (0, 0.0, Vec::new());
             let mut spp = 1;
             while spp <= max_spp {

@@ -18,6 +18,7 @@ use kiln::render::{
     GpuContext, KernelKind, Pacing, RenderControl, RenderSettings, Renderer, UpdateError, Updated,
 };
 use kiln::scene::{self, Light, Material, Scene};
+use kiln::shader::sampling::Sampler;
 
 const SIZE: u32 = 48;
 const SAMPLES: u32 = 6;
@@ -124,6 +125,38 @@ fn a_light_edit_writes_the_light_distribution() {
     new.environment = Vec3::new(0.05, 0.06, 0.08);
     let updated = check_update(&old, &new, false);
     assert!(updated.lights && !updated.instances, "{updated:?}");
+}
+
+/// The editor's kernel draws with the sampler `Params.sampler` names, so another sampler
+/// is a parameter there.
+#[test]
+fn the_editors_kernel_takes_another_sampler_in_place() {
+    let old = scene();
+    let mut new = old.clone();
+    new.settings.sampling.sampler = Sampler::Independent;
+    let ctx = fresh_gpu();
+    let s = render_settings(false);
+    let mut renderer = Renderer::new(Arc::clone(&ctx), &old, s).expect("renderer");
+    let before = film(&mut renderer);
+    let compiled = ctx.pipelines_compiled();
+    let updated = renderer.update(&old, &new).expect("an in-place update");
+    assert!(updated.sampling && !updated.lights, "{updated:?}");
+    renderer.clear_film();
+    let after = film(&mut renderer);
+    assert_eq!(
+        ctx.pipelines_compiled(),
+        compiled,
+        "the update compiled a kernel"
+    );
+    assert!(after != before, "the sampler did not change the image");
+    let independent = RenderSettings {
+        sampling: new.settings.sampling,
+        ..s
+    };
+    assert!(
+        after == fresh(&ctx, &new, independent),
+        "the updated renderer's film differs from a fresh renderer's"
+    );
 }
 
 #[test]
@@ -239,11 +272,19 @@ fn edits_that_need_a_new_renderer_are_refused_and_change_nothing() {
     metal.materials[0].principled.metallic = 1.0;
     let mut invalid = old.clone();
     invalid.instances[0].material = 99;
+    // Lights at infinity, which the kernel of a scene without them leaves out.
+    let mut sky = old.clone();
+    sky.environment = Vec3::new(0.05, 0.06, 0.08);
+    // The specialised kernel has its sampler compiled in.
+    let mut sampler = old.clone();
+    sampler.settings.sampling.sampler = Sampler::Independent;
 
     for (what, new, kernel) in [
         ("an added instance", &added, Some(false)),
         ("a changed mesh", &remeshed, Some(false)),
         ("a new lobe", &metal, Some(true)),
+        ("a sky", &sky, Some(true)),
+        ("another sampler", &sampler, Some(true)),
         ("an invalid scene", &invalid, None),
     ] {
         match (renderer.update(&old, new), kernel) {

@@ -13,6 +13,11 @@
 // a tenth at least, so that neither is starved where the estimate is wrong (a sky behind
 // walls, a lamp facing away).
 fn infinite_light_pick(p: vec3<f32>) -> f32 {
+    // A kernel without lights at infinity: the host gives them no share either
+    // (light_split.x is 0).
+    if (!FEATURE_INFINITE_LIGHTS) {
+        return 0.0;
+    }
     let at_infinity = params.light_split.x;
     let local = params.light_split.y;
     if (local <= 0.0) {
@@ -58,7 +63,7 @@ fn sample_light(p: vec3<f32>) -> LightSample {
     let u = rand2();
     var ls: LightSample;
     ls.pdf = 0.0;
-    if (u_pick < p_infinite) {
+    if (FEATURE_INFINITE_LIGHTS && u_pick < p_infinite) {
         let u_side = min(u_pick / p_infinite, ONE_MINUS_EPSILON);
         let p_env = params.environment.w;
         if (u_side < p_env) {

@@ -755,6 +755,7 @@ impl GpuScene {
             lobes: self.lobes,
             environment_map: self.has_environment_map,
             analytic_lights: self.analytic_light_count > 0,
+            infinite_lights: self.light_split[0] > 0.0,
             emissive_triangles: self.light_count > 0,
             shadow_catcher: self.has_shadow_catcher,
             textures: self.texture_count > 0,
@@ -763,6 +764,7 @@ impl GpuScene {
             uv1: self.has_uv1,
             ablation: Ablation::Full,
             texel_reads: self.texel_reads,
+            sampler: None,
         }
     }
 

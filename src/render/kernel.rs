@@ -272,6 +272,7 @@ mod tests {
             lobes: crate::shader::lobes::DIFFUSE,
             environment_map: false,
             analytic_lights: false,
+            infinite_lights: false,
             emissive_triangles: false,
             shadow_catcher: false,
             textures: false,
@@ -280,6 +281,7 @@ mod tests {
             noise: false,
             ablation: Ablation::Full,
             texel_reads: TexelReads::Sampled,
+            sampler: Some(crate::shader::sampling::Sampler::Independent),
         };
         let mixed = KernelFeatures {
             node_pages: 2,

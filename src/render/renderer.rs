@@ -431,6 +431,7 @@ pub(super) fn kernel_features(
         noise: settings.aovs || settings.noise_threshold > 0.0,
         ablation: settings.ablation,
         texel_reads: settings.texel_reads.unwrap_or(scene_features.texel_reads),
+        sampler: Some(settings.sampling.sampler),
         ..scene_features
     };
     // `everything` keeps the bindings, so one layout serves both kernels.

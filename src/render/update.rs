@@ -24,7 +24,7 @@ use super::gpu_scene::{
     write_texels,
 };
 use super::materials::SceneMaterials;
-use super::renderer::{RenderError, Renderer, kernel_features};
+use super::renderer::{RenderError, RenderSettings, Renderer, kernel_features};
 use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::{Bvh, build_tlas};
 use crate::scene::Scene;
@@ -143,9 +143,14 @@ impl Renderer {
         let instances = old.instances != new.instances;
         let lights = old.lights != new.lights || old.environment != new.environment;
         let light_data = light_arrays(new);
-        self.check_features(new, &light_data)?;
+        let sampling = if old.settings.sampling != new.settings.sampling {
+            new.settings.sampling
+        } else {
+            self.settings.sampling
+        };
+        self.check_features(new, &light_data, sampling)?;
         let compiled = if materials {
-            Some(self.check_materials(new, &light_data)?)
+            Some(self.check_materials(new, &light_data, sampling)?)
         } else {
             None
         };
@@ -227,7 +232,7 @@ impl Renderer {
     pub fn update_instances(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
-        self.check_features(scene, &lights)?;
+        self.check_features(scene, &lights, self.settings.sampling)?;
         let (tlas, packed) = self.place_instances(scene)?;
         self.check_lights(&lights)?;
         self.check_volume_grids(scene, self.settings.volume_resolution)?;
@@ -308,7 +313,7 @@ impl Renderer {
     pub fn update_lights(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
-        self.check_features(scene, &lights)?;
+        self.check_features(scene, &lights, self.settings.sampling)?;
         self.check_lights(&lights)?;
         self.write_lights(scene, &lights)
     }
@@ -319,7 +324,7 @@ impl Renderer {
     pub fn update_materials(&mut self, scene: &Scene) -> Result<(), UpdateError> {
         let scene = &*self.with_world(scene)?;
         let lights = light_arrays(scene);
-        let compiled = self.check_materials(scene, &lights)?;
+        let compiled = self.check_materials(scene, &lights, self.settings.sampling)?;
         self.check_lights(&lights)?;
         self.check_volume_grids(scene, self.settings.volume_resolution)?;
         self.write_materials(scene, &compiled)?;
@@ -368,15 +373,16 @@ impl Renderer {
         Ok(super::world_bake::resolve_world(&self.ctx, scene)?)
     }
 
-    /// Checks that the scene's materials (and its `lights`, [`light_arrays`]) fit the
-    /// kernel; returns them compiled as the kernel has them (with their live constants, if
-    /// the kernel reads those).
+    /// Checks that the scene's materials (and its `lights`, [`light_arrays`], and
+    /// `sampling`) fit the kernel; returns them compiled as the kernel has them (with their
+    /// live constants, if the kernel reads those).
     fn check_materials(
         &self,
         scene: &Scene,
         lights: &LightArrays,
+        sampling: Sampling,
     ) -> Result<SceneMaterials, UpdateError> {
-        self.check_features(scene, lights)?;
+        self.check_features(scene, lights, sampling)?;
         if scene.materials.len() as u32 != self.gpu_scene.material_count {
             return Err(UpdateError::rebuild("the material count changed"));
         }
@@ -419,21 +425,31 @@ impl Renderer {
     }
 
     /// Refuses an edit after which the scene would need a kernel with other features
-    /// (a lobe, a light type the kernel left out); `lights` are the scene's
-    /// ([`light_arrays`]), computed once per edit by the caller.
-    fn check_features(&self, scene: &Scene, lights: &LightArrays) -> Result<(), UpdateError> {
+    /// (a lobe, a light type the kernel left out, another sampler where the kernel has one
+    /// compiled in); `lights` are the scene's ([`light_arrays`]), computed once per edit by
+    /// the caller, and `sampling` what the renderer samples with after the edit.
+    fn check_features(
+        &self,
+        scene: &Scene,
+        lights: &LightArrays,
+        sampling: Sampling,
+    ) -> Result<(), UpdateError> {
         let needed = kernel_features(
             KernelFeatures {
                 lobes: instanced_lobes(scene),
                 analytic_lights: !lights.analytic_lights.is_empty(),
+                infinite_lights: lights.light_split[0] > 0.0,
                 emissive_triangles: !lights.light_triangles.is_empty(),
                 ..self.gpu_scene.features()
             },
-            &self.settings,
+            &RenderSettings {
+                sampling,
+                ..self.settings
+            },
         );
         if needed != self.features {
             return Err(UpdateError::kernel(
-                "the scene needs a kernel with other lobes or light types",
+                "the scene needs a kernel with other lobes, light types or sampler",
             ));
         }
         Ok(())

@@ -6,7 +6,7 @@
 use super::gpu_types::{FILTER_TABLE_SIZE, SAMPLER_INDEPENDENT, SAMPLER_SOBOL};
 
 /// Where a path's random numbers come from.
-#[derive(Clone, Copy, Debug, Default, PartialEq, Eq)]
+#[derive(Clone, Copy, Debug, Default, PartialEq, Eq, Hash)]
 pub enum Sampler {
     /// A hash per number: white noise, the error of Monte Carlo at N^-1/2.
     Independent,
