@@ -275,14 +275,13 @@ fn traverse_scene(ray: Ray, t_max: f32, any_hit: bool) -> SceneHit {
             current = s.child.x;
         }
         if (leaf) {
-            let first = wide_first(current);
-            for (var i = first; i < first + wide_count(current); i++) {
-                let placement = fetch_placement(i);
-                // The direction is not renormalised, so t means the same in both spaces.
-                let local = Ray(transform_point(placement.to_object, ray.origin), transform_vector(placement.to_object, ray.dir));
-                if (traverse_blas(i, placement.blas_root, local, any_hit, &best, sp) && any_hit) {
-                    return best;
-                }
+            // A TLAS leaf holds one instance (TLAS_MAX_LEAF_SIZE in src/accel/two_level.rs).
+            let i = wide_first(current);
+            let placement = fetch_placement(i);
+            // The direction is not renormalised, so t means the same in both spaces.
+            let local = Ray(transform_point(placement.to_object, ray.origin), transform_vector(placement.to_object, ray.dir));
+            if (traverse_blas(i, placement.blas_root, local, any_hit, &best, sp) && any_hit) {
+                return best;
             }
         }
         if (!next_pending(&pending, &sp, 0u, best.t, true, &current)) {
