@@ -20,8 +20,10 @@ struct Params {
     film_size: vec2<u32>,
     tile_origin: vec2<u32>,
     tile_size: vec2<u32>,
-    sample_start: u32,
-    sample_count: u32,
+    // The one sample a dispatch adds to each pixel of its tile.
+    sample_index: u32,
+    // Keeps the camera's vectors 16-byte aligned.
+    padding: u32,
     seed: u32,
     max_bounces: u32,
     flags: u32,

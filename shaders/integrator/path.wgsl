@@ -6,9 +6,12 @@
 // objects, nested as shaders/integrator/media.wgsl says, sampled by free flights with
 // one-sample MIS over the channels, with next-event estimation through media and volume
 // boundaries (transmittance) weighted against phase-function sampling.
-// Each invocation owns one pixel of the current tile and renders `sample_count` samples
-// into it, adding them to the film as 64-bit fixed point (`film_add`), so that sums over
-// 10^5 samples do not drift and split renders merge exactly.
+// Each invocation owns one pixel of the current tile and renders sample number
+// `sample_index` into it, adding it to the film as 64-bit fixed point (`film_add`), so
+// that sums over 10^5 samples do not drift and split renders merge exactly. A batch of
+// samples is one dispatch per sample, each with its own `Params` (a dynamic offset,
+// `Renderer::dispatch`): a loop over samples here would wrap the whole path, and
+// lavapipe runs such a loop ~10 % slower even for one sample (docs/BENCHMARKS.md).
 
 const RR_START_DEPTH: u32 = 3u;
 
@@ -723,74 +726,49 @@ fn render(@builtin(global_invocation_id) gid: vec3<u32>) {
         noise = film_noise[index];
         // Adaptive sampling found the pixel converged (shaders/integrator/adaptive.wgsl).
         if (noise.w != 0.0) {
-            atomicAdd(&stats.skipped_samples, params.sample_count);
+            atomicAdd(&stats.skipped_samples, 1u);
             return;
         }
     }
-    var low = film_sum[index];
-    var high = film_high[index];
-    var non_finite = 0u;
     rays_traced = 0u;
-    // The AOV sums are carried from the stored ones and added to sample by sample, as the
-    // film is, so that they do not depend on how a render splits into dispatches (the
-    // batch size adapts to time).
-    var aov_a = vec4<f32>(0.0);
-    var aov_n = vec4<f32>(0.0);
-    var aov_e = vec4<f32>(0.0);
-    if (FEATURE_AOVS) {
-        aov_a = film_aov[3u * index];
-        aov_n = film_aov[3u * index + 1u];
-        aov_e = film_aov[3u * index + 2u];
-    }
-    for (var i = 0u; i < params.sample_count; i++) {
-        rng_begin(pixel, params.sample_start + i, params.seed, params.sampler);
-        aov_albedo = vec3<f32>(0.0);
-        aov_normal = vec3<f32>(0.0);
-        aov_depth = 0.0;
-        aov_emission = vec3<f32>(0.0);
-        aov_alpha = 0.0;
-        let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
-        let primary = camera_ray(film_pos, rand2());
-        var l: vec3<f32>;
-        if (ABLATION == ABLATION_FULL) {
-            l = trace_path(primary);
-        } else {
-            l = ablated_path(primary);
-        }
-        if (!is_finite3(l)) {
-            non_finite++;
-            l = vec3<f32>(0.0);
-        }
-        if (FEATURE_AOVS) {
-            aov_a += vec4<f32>(aov_albedo, aov_depth);
-            aov_n += vec4<f32>(aov_normal, 1.0);
-            aov_e += vec4<f32>(aov_emission, aov_alpha);
-        }
-        if (FEATURE_NOISE) {
-            // The second moment of the sample's r + g + b, for the noise estimate; Kahan
-            // too, its compensation in y.
-            let s = l.r + l.g + l.b;
-            let y2 = s * s - noise.y;
-            let t2 = noise.x + y2;
-            noise.y = (t2 * params.opaque_one - noise.x) - y2;
-            noise.x = t2;
-        }
-        let added = film_add(FilmSum(low.xyz, high.xyz), l);
-        low = vec4<u32>(added.low, low.w + 1u);
-        high = vec4<u32>(added.high, 0u);
-    }
-    film_sum[index] = low;
-    film_high[index] = high;
-    if (FEATURE_NOISE) {
-        film_noise[index] = noise;
-    }
-    if (FEATURE_AOVS) {
-        film_aov[3u * index] = aov_a;
-        film_aov[3u * index + 1u] = aov_n;
-        film_aov[3u * index + 2u] = aov_e;
+    rng_begin(pixel, params.sample_index, params.seed, params.sampler);
+    aov_albedo = vec3<f32>(0.0);
+    aov_normal = vec3<f32>(0.0);
+    aov_depth = 0.0;
+    aov_emission = vec3<f32>(0.0);
+    aov_alpha = 0.0;
+    let film_pos = vec2<f32>(px) + vec2<f32>(0.5) + filter_offset(rand2());
+    let primary = camera_ray(film_pos, rand2());
+    var l: vec3<f32>;
+    if (ABLATION == ABLATION_FULL) {
+        l = trace_path(primary);
+    } else {
+        l = ablated_path(primary);
     }
     atomicAdd(&stats.rays, rays_traced);
-    if (non_finite > 0u) {
-        atomicAdd(&stats.non_finite, non_finite);
+    if (!is_finite3(l)) {
+        atomicAdd(&stats.non_finite, 1u);
+        l = vec3<f32>(0.0);
+    }
+    let low = film_sum[index];
+    let added = film_add(FilmSum(low.xyz, film_high[index].xyz), l);
+    film_sum[index] = vec4<u32>(added.low, low.w + 1u);
+    film_high[index] = vec4<u32>(added.high, 0u);
+    // The AOV sums are added to sample by sample, as the film is, so that they do not
+    // depend on how a render splits into dispatches.
+    if (FEATURE_AOVS) {
+        film_aov[3u * index] += vec4<f32>(aov_albedo, aov_depth);
+        film_aov[3u * index + 1u] += vec4<f32>(aov_normal, 1.0);
+        film_aov[3u * index + 2u] += vec4<f32>(aov_emission, aov_alpha);
+    }
+    if (FEATURE_NOISE) {
+        // The second moment of the sample's r + g + b, for the noise estimate; Kahan
+        // summation, its compensation in y.
+        let s = l.r + l.g + l.b;
+        let y2 = s * s - noise.y;
+        let t2 = noise.x + y2;
+        noise.y = (t2 * params.opaque_one - noise.x) - y2;
+        noise.x = t2;
+        film_noise[index] = noise;
     }
 }

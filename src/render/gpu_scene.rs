@@ -16,9 +16,9 @@ use super::volume_grid::{VolumeGrids, kernel_indices};
 use crate::accel::{SceneAccel, rebase};
 use crate::scene::{Scene, shapes};
 use crate::shader::bindings::{
-    INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_PARAMS, MATERIAL_TEXELS,
-    NODE_TEXELS, PAGES, Resource, Space, TRIANGLE_TEXELS, TRIANGLE_VERTEX_TEXELS, TexelLayout,
-    TexelReads, VERTEX_TEXELS, bound, scene_layout_entries,
+    Binding, INSTANCE_TEXELS, LIGHT_CDF_TEXELS, LIGHT_TRIANGLE_TEXELS, MATERIAL_PARAMS,
+    MATERIAL_TEXELS, NODE_TEXELS, PAGES, Resource, Space, TRIANGLE_TEXELS, TRIANGLE_VERTEX_TEXELS,
+    TexelLayout, TexelReads, VERTEX_TEXELS, bound, scene_layout_entries,
 };
 use crate::shader::gpu_types::{
     GpuAnalyticLight, GpuInstance, GpuLightTriangle, GpuMaterial, GpuTriangle,
@@ -798,7 +798,7 @@ impl GpuScene {
                 Some((b.binding, texture.create_view(&Default::default())))
             })
             .collect();
-        let buffers: Vec<(u32, &wgpu::Buffer)> = bound(&features)
+        let buffers: Vec<(&Binding, &wgpu::Buffer)> = bound(&features)
             .filter(|b| b.space != Space::Texels)
             .map(|b| {
                 let buffer = match b.resource {
@@ -828,14 +828,23 @@ impl GpuScene {
                     | Resource::NodeTexels
                     | Resource::TriangleTexels => unreachable!("texel tables are views"),
                 };
-                (b.binding, buffer)
+                (b, buffer)
             })
             .collect();
         let entries: Vec<wgpu::BindGroupEntry> = buffers
             .iter()
-            .map(|(binding, b)| wgpu::BindGroupEntry {
-                binding: *binding,
-                resource: b.as_entire_binding(),
+            .map(|(b, buffer)| wgpu::BindGroupEntry {
+                binding: b.binding,
+                // A slotted buffer is bound one slot wide; the dispatch picks the slot.
+                resource: if b.space == Space::UniformSlots {
+                    wgpu::BindingResource::Buffer(wgpu::BufferBinding {
+                        buffer,
+                        offset: 0,
+                        size: wgpu::BufferSize::new(b.element_bytes),
+                    })
+                } else {
+                    buffer.as_entire_binding()
+                },
             })
             .chain(views.iter().map(|(binding, view)| wgpu::BindGroupEntry {
                 binding: *binding,

@@ -312,7 +312,7 @@ mod tests {
     /// naga's address space for a table entry.
     fn address_space(space: Space) -> naga::AddressSpace {
         match space {
-            Space::Uniform => naga::AddressSpace::Uniform,
+            Space::Uniform | Space::UniformSlots => naga::AddressSpace::Uniform,
             Space::ReadOnly => naga::AddressSpace::Storage {
                 access: naga::StorageAccess::LOAD,
             },

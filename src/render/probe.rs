@@ -154,7 +154,7 @@ pub fn run_probe(
     {
         let mut pass = encoder.begin_compute_pass(&Default::default());
         pass.set_pipeline(&pipeline);
-        pass.set_bind_group(SCENE_GROUP, &scene_group, &[]);
+        pass.set_bind_group(SCENE_GROUP, &scene_group, &[0]);
         pass.set_bind_group(PROBE_GROUP, &probe_group, &[]);
         // Large probes are cut along y so no dimension exceeds the dispatch limit.
         let groups = invocations.div_ceil(PROBE_WORKGROUP_SIZE);

@@ -46,12 +46,12 @@ const TILE_SIZE: u32 = 256;
 const GIB: f64 = (1u64 << 30) as f64;
 const MIB: f64 = (1u64 << 20) as f64;
 const WORKGROUP_SIZE: u32 = 8;
-/// Dispatch duration the sample batching aims for.
-const TARGET_DISPATCH: Duration = Duration::from_millis(60);
-/// Lavapipe (Mesa 22.3) loses samples when one dispatch carries a few hundred samples per
-/// pixel of long paths (tests/determinism.rs checks every pixel's count); 64 is safe and
-/// already amortises the per-dispatch overhead.
-const MAX_SAMPLES_PER_DISPATCH: u32 = 64;
+/// How long a tile's batch of samples (one submission) should take.
+const TARGET_BATCH: Duration = Duration::from_millis(60);
+/// The most samples in a tile's batch: a dispatch per sample, each reading its own slot
+/// of the params buffer, which holds this many. 64 already amortises a submission's
+/// overhead.
+const MAX_BATCH: u32 = 64;
 /// Adaptive sampling checks the film first after this many samples per pixel: fewer
 /// make the variance estimate too noisy to stop on.
 pub const ADAPTIVE_MIN_SAMPLES: u32 = 16;
@@ -392,7 +392,11 @@ pub struct Renderer {
     noise_pipelines: Option<[wgpu::ComputePipeline; 2]>,
     /// Whether adaptive sampling found every pixel converged.
     all_converged: bool,
+    /// [`MAX_BATCH`] slots of `Params`, one per dispatch of a batch (`Space::UniformSlots`).
     params_buffer: wgpu::Buffer,
+    /// Bytes from one slot to the next: `Params` rounded up to the device's alignment of
+    /// uniform offsets.
+    params_stride: u64,
     /// The scene's buffers, which edits write into (`update.rs`).
     pub(super) gpu_scene: GpuScene,
     /// The meshes' BVHs, kept so a transform edit rebuilds only the top level.
@@ -416,7 +420,8 @@ pub struct Renderer {
     stats_staging: wgpu::Buffer,
     pub(super) base_params: GpuParams,
     pub(super) settings: RenderSettings,
-    samples_per_dispatch: u32,
+    /// Samples per pixel a tile's submission adds, adapted to [`TARGET_BATCH`].
+    samples_per_batch: u32,
     pub build_info: BuildInfo,
 }
 
@@ -653,9 +658,11 @@ impl Renderer {
             usage: wgpu::BufferUsages::MAP_READ | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
+        let params_stride = (std::mem::size_of::<GpuParams>() as u64)
+            .next_multiple_of(device.limits().min_uniform_buffer_offset_alignment as u64);
         let params_buffer = device.create_buffer(&wgpu::BufferDescriptor {
             label: Some("params"),
-            size: std::mem::size_of::<GpuParams>() as u64,
+            size: params_stride * MAX_BATCH as u64,
             usage: wgpu::BufferUsages::UNIFORM | wgpu::BufferUsages::COPY_DST,
             mapped_at_creation: false,
         });
@@ -695,6 +702,7 @@ impl Renderer {
             noise_pipelines,
             all_converged: false,
             params_buffer,
+            params_stride,
             gpu_scene,
             blas: accel.blas,
             enclosures,
@@ -708,13 +716,13 @@ impl Renderer {
             stats_staging,
             base_params,
             settings,
-            samples_per_dispatch: 1,
+            samples_per_batch: 1,
         };
         renderer.set_camera(&scene.camera);
         renderer.clear_film();
         // An empty dispatch makes drivers that compile lazily (lavapipe) do it now, so the
         // compile is counted here and not in the first samples.
-        renderer.dispatch(0, [0, 0], [0, 0], 0, 0, true)?;
+        renderer.dispatch(0, [0, 0], [0, 0], 0..1, true)?;
         renderer.bake_volume_grids()?;
         renderer.build_info.kernel_build = kernel_start.elapsed();
         Ok(renderer)
@@ -745,7 +753,7 @@ impl Renderer {
                     pass.set_bind_group(
                         crate::shader::bindings::SCENE_GROUP,
                         &self.pieces[0].bind_group,
-                        &[],
+                        &[0],
                     );
                     let n = (count - first).min(BAKE_VOXELS_PER_DISPATCH);
                     pass.dispatch_workgroups(n.div_ceil(BAKE_WORKGROUP_SIZE), 1, 1);
@@ -825,30 +833,38 @@ impl Renderer {
         tiles
     }
 
-    /// One dispatch over a tile of piece `piece`. With `read_stats` it zeroes the
-    /// statistics first and returns what the dispatch produced, waiting for it; without,
-    /// the statistics keep adding up on the device (read by [`Renderer::take_stats`]) and
-    /// the call still waits for the dispatch to finish, so the caller's next submission
-    /// never queues behind more than one dispatch.
+    /// Adds the samples with indices in `samples` to a tile of piece `piece`: one
+    /// submission, a dispatch per sample, each reading its own slot of the params buffer.
+    /// With `read_stats` it zeroes the statistics first and returns what the submission
+    /// produced, waiting for it; without, the statistics keep adding up on the device
+    /// (read by [`Renderer::take_stats`]) and the call still waits for the submission to
+    /// finish, so the caller's next one never queues behind more than one.
     fn dispatch(
         &mut self,
         piece: usize,
         origin: [u32; 2],
         size: [u32; 2],
-        sample_start: u32,
-        sample_count: u32,
+        samples: Range<u32>,
         read_stats: bool,
     ) -> Result<Option<GpuStats>, RenderError> {
-        let params = GpuParams {
+        debug_assert!(samples.len() as u32 <= MAX_BATCH);
+        let tile = GpuParams {
             tile_origin: origin,
             tile_size: size,
-            sample_start,
-            sample_count,
             film_piece_start: self.pieces[piece].rows.start * self.settings.width,
             ..self.base_params
         };
+        let stride = self.params_stride as usize;
+        let mut slots = vec![0u8; stride * samples.len()];
+        for (slot, sample_index) in slots.chunks_exact_mut(stride).zip(samples) {
+            let params = GpuParams {
+                sample_index,
+                ..tile
+            };
+            slot[..size_of::<GpuParams>()].copy_from_slice(bytemuck::bytes_of(&params));
+        }
         let queue = &self.ctx.queue;
-        queue.write_buffer(&self.params_buffer, 0, bytemuck::bytes_of(&params));
+        queue.write_buffer(&self.params_buffer, 0, &slots);
         if read_stats {
             self.zero_stats();
         }
@@ -856,16 +872,18 @@ impl Renderer {
         {
             let mut pass = encoder.begin_compute_pass(&Default::default());
             pass.set_pipeline(&self.pipeline);
-            pass.set_bind_group(
-                crate::shader::bindings::SCENE_GROUP,
-                &self.pieces[piece].bind_group,
-                &[],
-            );
-            pass.dispatch_workgroups(
-                size[0].div_ceil(WORKGROUP_SIZE).max(1),
-                size[1].div_ceil(WORKGROUP_SIZE).max(1),
-                1,
-            );
+            for offset in (0..slots.len()).step_by(stride) {
+                pass.set_bind_group(
+                    crate::shader::bindings::SCENE_GROUP,
+                    &self.pieces[piece].bind_group,
+                    &[offset as u32],
+                );
+                pass.dispatch_workgroups(
+                    size[0].div_ceil(WORKGROUP_SIZE).max(1),
+                    size[1].div_ceil(WORKGROUP_SIZE).max(1),
+                    1,
+                );
+            }
         }
         if !read_stats {
             self.submit_and_wait(encoder, "a render dispatch")?;
@@ -977,7 +995,7 @@ impl Renderer {
             // The first pass, which nothing but an error stops, is as short as it can be:
             // one sample per pixel, whatever batch an earlier render settled on.
             let batch = if self.film_has_whole_pass {
-                self.samples_per_dispatch
+                self.samples_per_batch
             } else {
                 1
             };
@@ -1003,7 +1021,7 @@ impl Renderer {
                     break 'passes;
                 }
                 let t = Instant::now();
-                let s = self.dispatch(piece, origin, size, next, count, read_each)?;
+                let s = self.dispatch(piece, origin, size, next..next + count, read_each)?;
                 slowest = slowest.max(t.elapsed());
                 pass_dispatch_time += t.elapsed();
                 let tile_pixels = size[0] as u64 * size[1] as u64;
@@ -1067,11 +1085,10 @@ impl Renderer {
                 let mean = pass_dispatch_time / tiles.len().max(1) as u32;
                 self.tile_size = adapt_tile(self.tile_size, mean, budget_us);
             }
-            if slowest < TARGET_DISPATCH / 2 {
-                self.samples_per_dispatch =
-                    (self.samples_per_dispatch * 2).min(MAX_SAMPLES_PER_DISPATCH);
-            } else if slowest > TARGET_DISPATCH * 2 {
-                self.samples_per_dispatch = (self.samples_per_dispatch / 2).max(1);
+            if slowest < TARGET_BATCH / 2 {
+                self.samples_per_batch = (self.samples_per_batch * 2).min(MAX_BATCH);
+            } else if slowest > TARGET_BATCH * 2 {
+                self.samples_per_batch = (self.samples_per_batch / 2).max(1);
             }
         }
         stats.elapsed = start.elapsed();
@@ -1107,7 +1124,11 @@ impl Renderer {
             for pipeline in passes {
                 let mut pass = encoder.begin_compute_pass(&Default::default());
                 pass.set_pipeline(pipeline);
-                pass.set_bind_group(crate::shader::bindings::SCENE_GROUP, &piece.bind_group, &[]);
+                pass.set_bind_group(
+                    crate::shader::bindings::SCENE_GROUP,
+                    &piece.bind_group,
+                    &[0],
+                );
                 pass.dispatch_workgroups(
                     width.div_ceil(WORKGROUP_SIZE),
                     (piece.rows.len() as u32).div_ceil(WORKGROUP_SIZE),

@@ -21,6 +21,9 @@ use super::gpu_types::{
 pub enum Space {
     /// `var<uniform>`: takes none of GL's 16 storage-buffer slots.
     Uniform,
+    /// `var<uniform>` bound at a dynamic offset: the buffer holds a slot per dispatch of a
+    /// submission, and each dispatch picks its own with `set_bind_group`'s offsets.
+    UniformSlots,
     /// `var<storage, read>`
     ReadOnly,
     /// `var<storage, read_write>`
@@ -38,7 +41,7 @@ impl Space {
     /// What is written between `var` and the name: `<uniform>`, `<storage, read>`, …
     pub fn wgsl(self) -> &'static str {
         match self {
-            Space::Uniform => "<uniform>",
+            Space::Uniform | Space::UniformSlots => "<uniform>",
             Space::ReadOnly => "<storage, read>",
             Space::ReadWrite => "<storage, read_write>",
             Space::Texels => "",
@@ -47,14 +50,14 @@ impl Space {
 
     fn binding_type(self, min_bytes: u64) -> wgpu::BindingType {
         let ty = match self {
-            Space::Uniform => wgpu::BufferBindingType::Uniform,
+            Space::Uniform | Space::UniformSlots => wgpu::BufferBindingType::Uniform,
             Space::ReadOnly => wgpu::BufferBindingType::Storage { read_only: true },
             Space::ReadWrite => wgpu::BufferBindingType::Storage { read_only: false },
             Space::Texels => return TexelReads::Sampled.binding_type(),
         };
         wgpu::BindingType::Buffer {
             ty,
-            has_dynamic_offset: false,
+            has_dynamic_offset: self == Space::UniformSlots,
             min_binding_size: NonZeroU64::new(min_bytes),
         }
     }
@@ -373,7 +376,7 @@ pub const SCENE_BINDINGS: &[Binding] = &[
         resource: Resource::Params,
         name: "params",
         binding: 0,
-        space: Space::Uniform,
+        space: Space::UniformSlots,
         wgsl_type: "Params",
         element_bytes: bytes::<GpuParams>(),
         stand_in: None,

@@ -62,8 +62,10 @@ pub struct GpuParams {
     pub film_size: [u32; 2],
     pub tile_origin: [u32; 2],
     pub tile_size: [u32; 2],
-    pub sample_start: u32,
-    pub sample_count: u32,
+    /// The one sample a dispatch adds to each pixel of its tile.
+    pub sample_index: u32,
+    /// Keeps the camera's vectors 16-byte aligned.
+    pub padding: u32,
     pub seed: u32,
     pub max_bounces: u32,
     pub flags: u32,
@@ -301,8 +303,8 @@ mod tests {
                 film_size,
                 tile_origin,
                 tile_size,
-                sample_start,
-                sample_count,
+                sample_index,
+                padding,
                 seed,
                 max_bounces,
                 flags,
