@@ -291,6 +291,30 @@ fn drag(harness: &mut Harness<'_, EditorApp>, from: egui::Pos2, to: egui::Pos2) 
 }
 
 #[test]
+fn a_new_material_keeps_the_node_editor_s_height() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    let bar = harness.get_by_label("✚ Drag").rect().center().y;
+    let viewport = harness.state().viewport_rect().unwrap();
+    let materials = harness.state().document().scene().materials.len();
+
+    harness.get_by_label("New").click();
+    for _ in 0..3 {
+        harness.step();
+    }
+    assert_eq!(
+        harness.state().document().scene().materials.len(),
+        materials + 1
+    );
+    assert_eq!(harness.state().node_editor().material(), Some(materials));
+    // The frame that picks the new material draws no canvas (the document holds it from
+    // the next one); the panel must not shrink to that frame.
+    let moved = (harness.get_by_label("✚ Drag").rect().center().y - bar).abs();
+    assert!(moved < 1.0, "the node editor's bar moved {moved} px");
+    assert_eq!(harness.state().viewport_rect().unwrap(), viewport);
+}
+
+#[test]
 fn a_material_dragged_onto_an_object_in_the_outliner_or_the_viewport_is_assigned() {
     let mut harness = harness(ScriptedDialogs::default());
     harness.step();
@@ -434,6 +458,66 @@ fn save_reopen_gives_the_same_document_and_unsaved_changes_prompt() {
     harness.step();
     assert_eq!(*harness.state().document().scene(), edited);
     assert!(!harness.state().document().is_dirty());
+}
+
+/// Whether the last frame asked the window to close.
+fn asked_to_close(harness: &Harness<'_, EditorApp>) -> bool {
+    harness
+        .output()
+        .viewport_output
+        .values()
+        .any(|v| v.commands.contains(&egui::ViewportCommand::Close))
+}
+
+/// Presses Ctrl+Q (Cmd+Q on a Mac) and says whether the frame that saw it asked the
+/// window to close; then releases the keys. (`key_press_modifiers` would step past that
+/// frame: it runs one frame per event.)
+fn press_quit(harness: &mut Harness<'_, EditorApp>) -> bool {
+    let key = |pressed| egui::Event::Key {
+        key: egui::Key::Q,
+        physical_key: None,
+        pressed,
+        repeat: false,
+        modifiers: egui::Modifiers::COMMAND,
+    };
+    harness.event(egui::Event::ModifiersChanged(egui::Modifiers::COMMAND));
+    harness.event(key(true));
+    harness.step();
+    let closing = asked_to_close(harness);
+    harness.event(key(false));
+    harness.event(egui::Event::ModifiersChanged(egui::Modifiers::NONE));
+    harness.step();
+    closing
+}
+
+#[test]
+fn ctrl_q_quits_and_asks_first_about_unsaved_changes() {
+    let mut harness = harness(ScriptedDialogs::default());
+    harness.step();
+    assert!(!asked_to_close(&harness));
+
+    // Nothing unsaved: Ctrl+Q closes the window at once.
+    assert!(press_quit(&mut harness));
+    assert!(!harness.state().is_prompting());
+
+    // An unsaved edit: Ctrl+Q asks first, and Cancel keeps the window and the edit.
+    harness.get_by_label("block.001").click();
+    harness.step();
+    set_field(&mut harness, "Scale", 1, 200.0);
+    assert!(!press_quit(&mut harness));
+    assert!(harness.state().is_prompting());
+    assert!(harness.query_by_label("Unsaved changes").is_some());
+    harness.get_by_label("Cancel").click();
+    harness.step();
+    assert!(!asked_to_close(&harness));
+    assert!(!harness.state().is_prompting());
+    assert!(harness.state().document().is_dirty());
+
+    // Don't Save closes it (the click's last frame, its release, is where it acts).
+    assert!(!press_quit(&mut harness));
+    harness.get_by_label("Don't Save").click();
+    harness.step();
+    assert!(asked_to_close(&harness));
 }
 
 #[test]

@@ -166,6 +166,7 @@ const SAVE_AS: KeyboardShortcut =
     KeyboardShortcut::new(Modifiers::COMMAND.plus(Modifiers::SHIFT), Key::S);
 const OPEN: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::O);
 const NEW: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::N);
+const QUIT: KeyboardShortcut = KeyboardShortcut::new(Modifiers::COMMAND, Key::Q);
 const DUPLICATE: KeyboardShortcut = KeyboardShortcut::new(Modifiers::SHIFT, Key::D);
 
 /// What the viewport's scene is made of: the document (serial, image revision) and the
@@ -315,6 +316,9 @@ impl EditorApp {
             }
             background
         });
+        // Ctrl+Q is the editor's own shortcut (`QUIT`, shown in the File menu), taken the
+        // way File ▸ Quit is; egui's built-in copy of it goes, so that there is one.
+        cc.egui_ctx.options_mut(|o| o.quit_shortcuts.clear());
         let viewport = gpu.as_ref().map(|ctx| {
             let egui_ctx = cc.egui_ctx.clone();
             ViewportRenderer::new(Arc::clone(ctx), move || egui_ctx.request_repaint())
@@ -995,6 +999,9 @@ impl EditorApp {
         if ctx.input_mut(|i| i.consume_shortcut(&NEW)) {
             self.request(Pending::New, ctx);
         }
+        if ctx.input_mut(|i| i.consume_shortcut(&QUIT)) {
+            self.request(Pending::Close, ctx);
+        }
         let add = KeyboardShortcut::new(Modifiers::SHIFT, Key::A);
         let over_viewport = ctx
             .pointer_hover_pos()
@@ -1112,8 +1119,11 @@ impl EditorApp {
                     self.export_render();
                 }
                 ui.separator();
-                if ui.button("Quit").clicked() {
-                    ui.ctx().send_viewport_cmd(egui::ViewportCommand::Close);
+                if ui
+                    .add(egui::Button::new("Quit").shortcut_text(ui.ctx().format_shortcut(&QUIT)))
+                    .clicked()
+                {
+                    self.request(Pending::Close, ui.ctx());
                 }
             });
             ui.menu_button("Edit", |ui| {

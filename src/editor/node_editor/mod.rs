@@ -401,9 +401,13 @@ impl NodeEditor {
         } else {
             let Some(material) = self.material else {
                 ui.label("No material.");
+                ui.allocate_space(ui.available_size());
                 return commands;
             };
+            // None for the one frame between picking a new material and the document
+            // holding it. A frame that leaves the panel empty would shrink it for good.
             let Some(top) = document.material_graph(material) else {
+                ui.allocate_space(ui.available_size());
                 return commands;
             };
             (material, top)
