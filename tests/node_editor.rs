@@ -97,6 +97,63 @@ fn add_from_menu(harness: &mut Harness<'_, EditorApp>, at: egui::Vec2, query: &s
     steps(harness, 3);
 }
 
+#[test]
+fn enter_in_the_add_menu_s_search_adds_the_first_match() {
+    let mut harness = harness(ScriptedDialogs::default());
+    steps(&mut harness, 2);
+    harness.get_by_label("left wall").click();
+    steps(&mut harness, 2);
+    let before = graph(harness.state()).nodes.len();
+    // The red wall's material is of fixed parameters: its nodes are laid out
+    // automatically, and adding one must not move them.
+    let drawn = |h: &Harness<'_, EditorApp>| {
+        ["surface", "output"].map(|id| h.state().node_editor().node_position(id).unwrap())
+    };
+    let was = drawn(&harness);
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    harness.event(egui::Event::PointerMoved(
+        canvas.left_top() + egui::vec2(60.0, 60.0),
+    ));
+    harness.step();
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::A);
+    steps(&mut harness, 2);
+    harness
+        .get_by_role_and_label(Role::TextInput, "Search")
+        .type_text("noise");
+    steps(&mut harness, 2);
+    // "Noise Texture" and "White Noise Texture" match; Enter takes the first.
+    assert!(harness.query_by_label("White Noise Texture").is_some());
+    harness.key_press(egui::Key::Enter);
+    steps(&mut harness, 3);
+    let after = graph(harness.state());
+    assert_eq!(after.nodes.len(), before + 1);
+    assert!(
+        after.nodes.keys().any(|id| id == "noise_texture"),
+        "{:?}",
+        after.nodes.keys()
+    );
+    assert!(
+        harness.query_by_label("White Noise Texture").is_none(),
+        "the menu closed"
+    );
+    let now = drawn(&harness);
+    for (a, b) in was.iter().zip(&now) {
+        assert!(a.distance(*b) < 0.5, "a node moved from {a:?} to {b:?}");
+    }
+
+    // A search that matches nothing says so, and Enter adds nothing.
+    harness.key_press_modifiers(egui::Modifiers::SHIFT, egui::Key::A);
+    steps(&mut harness, 2);
+    harness
+        .get_by_role_and_label(Role::TextInput, "Search")
+        .type_text("no such node");
+    steps(&mut harness, 2);
+    assert!(harness.query_by_label("No node matches.").is_some());
+    harness.key_press(egui::Key::Enter);
+    steps(&mut harness, 3);
+    assert_eq!(graph(harness.state()).nodes.len(), before + 1);
+}
+
 /// Presses the primary button at `from`, moves by `by` in steps and releases, as a mouse
 /// drag does.
 fn mouse_drag(harness: &mut Harness<'_, EditorApp>, from: egui::Pos2, by: egui::Vec2) {

@@ -571,6 +571,17 @@ impl NodeEditor {
                 edits.push((edit, None));
             }
         }
+        // A graph laid out automatically (a material of fixed parameters, a file without
+        // positions) is laid out again when it grows, which would move every node the
+        // user sees: the edit that adds the first node also saves where they are drawn,
+        // as the first move does.
+        if let Some((edit, _)) = edits.iter_mut().find(|(e, _)| e.adds_nodes()) {
+            let drawn = graph_edit::fix_layout(graph);
+            if !drawn.is_empty() {
+                let add = std::mem::replace(edit, GraphEdit::Batch(Vec::new()));
+                *edit = GraphEdit::Batch(vec![GraphEdit::MoveNodes(drawn), add]);
+            }
+        }
         commands.extend(
             edits.into_iter().map(|(edit, gesture)| {
                 (command(structure::scoped(scope.as_deref(), edit)), gesture)
@@ -1078,9 +1089,9 @@ const LAYOUT_NODES: &[(&str, &str, &str)] = &[(
 )];
 
 /// The add-node menu: a search field, then the node library grouped by category (or,
-/// while searching, the matching nodes). With `only`, lists only node types that have a
-/// socket that can take the given socket type (an input when the flag is true). Returns
-/// the chosen node type.
+/// while searching, the matching nodes, the first highlighted: Enter picks it, as in
+/// Blender's search). With `only`, lists only node types that have a socket that can take
+/// the given socket type (an input when the flag is true). Returns the chosen node type.
 fn add_menu(
     ui: &mut Ui,
     search: &mut String,
@@ -1133,32 +1144,38 @@ fn add_menu(
             }
         });
     } else {
+        // (type, label, tooltip) of every match, library nodes first.
+        let matches: Vec<(&'static str, &'static str, String)> = nodes::library()
+            .iter()
+            .filter(|d| {
+                fits(d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
+            })
+            .map(|d| (d.kind, d.label, format!("{} — {}", d.category, d.doc)))
+            .chain(
+                LAYOUT_NODES
+                    .iter()
+                    .filter(|(kind, label, _)| {
+                        label.to_lowercase().contains(&query) || kind.contains(&query)
+                    })
+                    .map(|&(kind, label, doc)| (kind, label, format!("Layout — {doc}"))),
+            )
+            .collect();
+        if field.lost_focus() && ui.input(|i| i.key_pressed(egui::Key::Enter)) {
+            chosen = matches.first().map(|m| m.0);
+        }
         egui::ScrollArea::vertical()
             .max_height(300.0)
             .show(ui, |ui| {
-                for def in nodes::library().iter().filter(|d| {
-                    fits(d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
-                }) {
-                    if ui
-                        .button(def.label)
-                        .on_hover_text(format!("{} — {}", def.category, def.doc))
-                        .clicked()
-                    {
-                        chosen = Some(def.kind);
-                    }
-                }
-                for &(kind, label, doc) in LAYOUT_NODES.iter().filter(|(kind, label, _)| {
-                    label.to_lowercase().contains(&query) || kind.contains(&query)
-                }) {
-                    if ui
-                        .button(label)
-                        .on_hover_text(format!("Layout — {doc}"))
-                        .clicked()
-                    {
-                        chosen = Some(kind);
+                for (i, (kind, label, tooltip)) in matches.iter().enumerate() {
+                    let button = egui::Button::new(*label).selected(i == 0);
+                    if ui.add(button).on_hover_text(tooltip).clicked() {
+                        chosen = Some(*kind);
                     }
                 }
             });
+        if matches.is_empty() {
+            ui.weak("No node matches.");
+        }
     }
     if chosen.is_some() {
         search.clear();
