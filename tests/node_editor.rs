@@ -109,6 +109,12 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
     harness.get_by_label("left wall").click();
     steps(&mut harness, 2);
     let before = graph(harness.state()).nodes.len();
+    // The red wall's material is of fixed parameters: its nodes are laid out
+    // automatically, and adding one must not move them.
+    let drawn = |h: &Harness<'_, EditorApp>| {
+        ["surface", "output"].map(|id| h.state().node_editor().node_position(id).unwrap())
+    };
+    let was = drawn(&harness);
     let at = egui::vec2(60.0, 60.0);
     search_add_menu(&mut harness, at, "noise");
     // "Noise Texture" and "White Noise Texture" match; Enter takes the first.
@@ -126,6 +132,9 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
         harness.query_by_label("White Noise Texture").is_none(),
         "the menu closed"
     );
+    for (a, b) in was.iter().zip(&drawn(&harness)) {
+        assert!(a.distance(*b) < 0.5, "a node moved from {a:?} to {b:?}");
+    }
 
     // A search that matches nothing says so, and Enter adds nothing.
     search_add_menu(&mut harness, at, "no such node");
@@ -861,6 +870,31 @@ fn frame_all(harness: &mut Harness<'_, EditorApp>) {
     steps(harness, 3);
 }
 
+/// Scrolls the canvas with the mouse wheel, as a user pans, until node `id` is drawn at its
+/// centre: Home shows a tall graph from its top, at a scale text can be read at.
+fn scroll_into_view(harness: &mut Harness<'_, EditorApp>, id: &str) {
+    let canvas = harness.state().node_editor().canvas_rect().unwrap();
+    let rect = harness
+        .state()
+        .node_editor()
+        .node_rect(id)
+        .unwrap_or_else(|| panic!("node {id} is drawn"));
+    harness.event(egui::Event::PointerMoved(canvas.center()));
+    harness.step();
+    harness.event(egui::Event::MouseWheel {
+        unit: egui::MouseWheelUnit::Point,
+        delta: canvas.center() - rect.center(),
+        phase: egui::TouchPhase::Move,
+        modifiers: egui::Modifiers::NONE,
+    });
+    steps(harness, 10);
+    let rect = harness.state().node_editor().node_rect(id).unwrap();
+    assert!(
+        canvas.contains_rect(rect),
+        "node {id} scrolled into the canvas {canvas:?}: {rect:?}"
+    );
+}
+
 /// Shift+clicks the header of node `id` (snarl adds it to its selection).
 fn shift_click_node(harness: &mut Harness<'_, EditorApp>, id: &str) {
     let rect = harness
@@ -978,6 +1012,7 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
     // Tab on the group node enters it: the breadcrumb names the path, the inner nodes
     // and the group's output node show.
     frame_all(&mut harness);
+    scroll_into_view(&mut harness, "group");
     shift_click_node(&mut harness, "group");
     harness.key_press(egui::Key::Tab);
     steps(&mut harness, 3);
@@ -1037,6 +1072,7 @@ fn group_enter_edit_exit_ungroup_undo_and_a_frame_saved_and_reopened() {
 
     // Ctrl+Alt+G ungroups: the nodes are back, wired as before, the group gone.
     frame_all(&mut harness);
+    scroll_into_view(&mut harness, "group");
     shift_click_node(&mut harness, "group");
     harness.key_press_modifiers(
         egui::Modifiers::COMMAND.plus(egui::Modifiers::ALT),

@@ -571,6 +571,17 @@ impl NodeEditor {
                 edits.push((edit, None));
             }
         }
+        // A graph laid out automatically (a material of fixed parameters, a file without
+        // positions) is laid out again when it grows, which would move every node the
+        // user sees: the edit that adds the first node also saves where they are drawn,
+        // as the first move does.
+        if let Some((edit, _)) = edits.iter_mut().find(|(e, _)| e.adds_nodes()) {
+            let drawn = graph_edit::fix_layout(graph);
+            if !drawn.is_empty() {
+                let add = std::mem::replace(edit, GraphEdit::Batch(Vec::new()));
+                *edit = GraphEdit::Batch(vec![GraphEdit::MoveNodes(drawn), add]);
+            }
+        }
         commands.extend(
             edits.into_iter().map(|(edit, gesture)| {
                 (command(structure::scoped(scope.as_deref(), edit)), gesture)
