@@ -115,6 +115,8 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
         ["surface", "output"].map(|id| h.state().node_editor().node_position(id).unwrap())
     };
     let was = drawn(&harness);
+    let panel_edge = |h: &Harness<'_, EditorApp>| h.get_by_label("Outliner").rect().left();
+    let edge = panel_edge(&harness);
     let at = egui::vec2(60.0, 60.0);
     search_add_menu(&mut harness, at, "noise");
     // "Noise Texture" and "White Noise Texture" match; Enter takes the first.
@@ -135,6 +137,11 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
     for (a, b) in was.iter().zip(&drawn(&harness)) {
         assert!(a.distance(*b) < 0.5, "a node moved from {a:?} to {b:?}");
     }
+    // The inspector beside it now calls the material a graph; its panel keeps its width
+    // (a line that does not wrap would widen it and narrow the node editor).
+    harness.get_by_label("A node-graph material: its parameters are set by its nodes.");
+    let moved = (panel_edge(&harness) - edge).abs();
+    assert!(moved < 0.5, "the side panel's edge moved {moved} px");
 
     // A search that matches nothing says so, and Enter adds nothing.
     search_add_menu(&mut harness, at, "no such node");

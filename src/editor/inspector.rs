@@ -235,10 +235,21 @@ fn material_ui(
     let title = format!("Material: {}", m.name);
     ui.add_space(6.0);
     if m.graph.is_some() {
-        section(ui, &title, |ui| {
-            ui.weak("A node-graph material: its parameters are set by its nodes.");
-            ui.end_row();
-        });
+        // Not a `section`: text in a grid cell does not wrap, and would widen the panel
+        // (and narrow the node editor beside it) to its length.
+        egui::CollapsingHeader::new(RichText::new(title).strong())
+            .default_open(true)
+            .show(ui, |ui| {
+                ui.add(
+                    egui::Label::new(
+                        RichText::new(
+                            "A node-graph material: its parameters are set by its nodes.",
+                        )
+                        .weak(),
+                    )
+                    .wrap(),
+                );
+            });
         return;
     }
     if users > 1 {
