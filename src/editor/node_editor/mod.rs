@@ -162,6 +162,9 @@ pub struct NodeEditor {
     /// Set when the view should frame all nodes in the next frame (another material
     /// shown, or Home).
     frame_all: bool,
+    /// Set by a framing from estimated node sizes: the next frame frames again with the
+    /// sizes the nodes were drawn at (the estimates err wide).
+    reframe: bool,
     /// Nodes selected with A, over snarl's own selection ([`keys`]).
     select_all: Option<keys::SelectAll>,
     /// Part of the canvas's egui id; deselect all (Alt+A) moves to the next.
@@ -232,6 +235,7 @@ impl Default for NodeEditor {
             node_rects: BTreeMap::new(),
             rect: None,
             frame_all: true,
+            reframe: false,
             select_all: None,
             canvas_generation: 0,
             keep_view: false,
@@ -494,8 +498,12 @@ impl NodeEditor {
         // The canvas fills what is left of the panel (snarl's response covers the whole
         // plane it pans over, so it cannot tell where the canvas is).
         let canvas = ui.available_rect_before_wrap();
+        let reframe = std::mem::take(&mut self.reframe);
         if std::mem::take(&mut self.frame_all) {
-            viewer.frame = Some((bounds(graph, &self.positions), canvas));
+            viewer.frame = Some((bounds(graph, &self.positions, &BTreeMap::new()), canvas));
+            self.reframe = true;
+        } else if reframe {
+            viewer.frame = Some((bounds(graph, &self.positions, &self.node_rects), canvas));
         }
         SnarlWidget::new()
             .id(canvas_id)
@@ -1008,22 +1016,29 @@ impl NodeEditor {
     }
 }
 
-/// The bounds of the nodes at `positions` in canvas coordinates, with the layout's
-/// estimate of their sizes.
-fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
+/// The bounds of the nodes at `positions` in canvas coordinates: each node as large as it
+/// was `drawn`, else as the layout estimates it.
+fn bounds(
+    graph: &Graph,
+    positions: &BTreeMap<String, [f32; 2]>,
+    drawn: &BTreeMap<String, egui::Rect>,
+) -> egui::Rect {
     let mut bounds = egui::Rect::NOTHING;
     for (id, p) in positions {
         let Some(node) = graph.nodes.get(id) else {
             continue;
         };
         let min = Pos2::new(p[0], p[1]);
-        bounds = bounds.union(egui::Rect::from_min_size(
-            min,
-            egui::vec2(
-                graph_edit::estimated_width(graph, node),
-                graph_edit::estimated_height(graph, node),
-            ),
-        ));
+        let size = drawn.get(id).map_or_else(
+            || {
+                egui::vec2(
+                    graph_edit::estimated_width(graph, node),
+                    graph_edit::estimated_height(graph, node),
+                )
+            },
+            |r| r.size(),
+        );
+        bounds = bounds.union(egui::Rect::from_min_size(min, size));
     }
     if bounds.is_finite() {
         // Room for the frames around nodes, and their label bars above.
@@ -1037,14 +1052,17 @@ fn bounds(graph: &Graph, positions: &BTreeMap<String, [f32; 2]>) -> egui::Rect {
     }
 }
 
-/// The view that shows `bounds` in `canvas`: whole when it fits at a readable scale
-/// (at most 1, at least 0.8: text stays legible, as in Blender, and a tall graph is shown
-/// from its top, to be scrolled), else from its top, centred across.
+/// The view that shows `bounds` in `canvas`, at most at scale 1: whole when it fits at a
+/// readable scale, else from its top, centred across. A graph reads from left to right,
+/// inputs to the output, so its whole width is shown down to scale 0.5 (Blender's Home
+/// zooms out without a limit); its height only down to 0.8, where text stays legible, and
+/// a taller graph is scrolled.
 fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
     let margin = 24.0;
     let room = (canvas.size() - egui::vec2(2.0 * margin, 2.0 * margin)).max(egui::vec2(1.0, 1.0));
-    let fit = (room.x / bounds.width()).min(room.y / bounds.height());
-    let scale = fit.clamp(0.8, 1.0);
+    let fit_width = room.x / bounds.width();
+    let fit_height = room.y / bounds.height();
+    let scale = fit_width.min(fit_height.max(0.8)).clamp(0.5, 1.0);
     let x = canvas.center().x - bounds.center().x * scale;
     let y = if bounds.height() * scale <= room.y {
         canvas.center().y - bounds.center().y * scale
@@ -1931,6 +1949,53 @@ impl SnarlViewer<String> for Viewer<'_> {
 #[cfg(test)]
 mod tests {
     use super::*;
+
+    /// `bounds` in screen points under `view`.
+    fn shown(view: TSTransform, bounds: egui::Rect) -> egui::Rect {
+        egui::Rect::from_min_max(view * bounds.min, view * bounds.max)
+    }
+
+    #[test]
+    fn home_shows_a_graph_s_whole_width_and_a_tall_one_from_its_top() {
+        let canvas = egui::Rect::from_min_size(egui::pos2(0.0, 400.0), egui::vec2(940.0, 300.0));
+        // Small: whole and centred, at scale 1.
+        let small = egui::Rect::from_min_size(egui::pos2(-50.0, 20.0), egui::vec2(400.0, 150.0));
+        let view = framing(small, canvas);
+        assert_eq!(view.scaling, 1.0);
+        assert!((shown(view, small).center() - canvas.center()).length() < 1e-3);
+        // Wide and short: zoomed out until its whole width shows.
+        let wide = egui::Rect::from_min_size(egui::pos2(-300.0, 0.0), egui::vec2(1400.0, 200.0));
+        let view = framing(wide, canvas);
+        assert!(
+            view.scaling < 0.8 && view.scaling >= 0.5,
+            "{}",
+            view.scaling
+        );
+        assert!(
+            canvas.contains_rect(shown(view, wide)),
+            "{:?}",
+            shown(view, wide)
+        );
+        // Wide and tall (a Principled BSDF among other nodes): the whole width, from the top.
+        let tall = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(1100.0, 800.0));
+        let view = framing(tall, canvas);
+        let r = shown(view, tall);
+        assert!(
+            r.left() >= canvas.left() && r.right() <= canvas.right(),
+            "{r:?}"
+        );
+        assert!((r.top() - (canvas.top() + 24.0)).abs() < 1e-3, "{r:?}");
+        // Narrow and tall: legible (0.8), from the top.
+        let column = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(300.0, 900.0));
+        let view = framing(column, canvas);
+        assert_eq!(view.scaling, 0.8);
+        assert!((shown(view, column).top() - (canvas.top() + 24.0)).abs() < 1e-3);
+        // Wider than scale 0.5 can show: 0.5, centred across.
+        let huge = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(4000.0, 100.0));
+        let view = framing(huge, canvas);
+        assert_eq!(view.scaling, 0.5);
+        assert!((shown(view, huge).center().x - canvas.center().x).abs() < 1e-3);
+    }
 
     #[test]
     fn a_drag_stops_at_the_soft_range_unless_it_started_beyond() {
