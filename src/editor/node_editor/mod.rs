@@ -1054,7 +1054,7 @@ fn bounds(
 
 /// The view that shows `bounds` in `canvas`, at most at scale 1: whole when it fits at a
 /// readable scale, else from its top, centred across. A graph reads from left to right,
-/// inputs to the output, so its whole width is shown down to scale 0.5 (Blender's Home
+/// inputs to the output, so its whole width is shown down to scale 0.4 (Blender's Home
 /// zooms out without a limit); its height only down to 0.8, where text stays legible, and
 /// a taller graph is scrolled.
 fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
@@ -1062,7 +1062,7 @@ fn framing(bounds: egui::Rect, canvas: egui::Rect) -> TSTransform {
     let room = (canvas.size() - egui::vec2(2.0 * margin, 2.0 * margin)).max(egui::vec2(1.0, 1.0));
     let fit_width = room.x / bounds.width();
     let fit_height = room.y / bounds.height();
-    let scale = fit_width.min(fit_height.max(0.8)).clamp(0.5, 1.0);
+    let scale = fit_width.min(fit_height.max(0.8)).clamp(0.4, 1.0);
     let x = canvas.center().x - bounds.center().x * scale;
     let y = if bounds.height() * scale <= room.y {
         canvas.center().y - bounds.center().y * scale
@@ -1967,7 +1967,7 @@ mod tests {
         let wide = egui::Rect::from_min_size(egui::pos2(-300.0, 0.0), egui::vec2(1400.0, 200.0));
         let view = framing(wide, canvas);
         assert!(
-            view.scaling < 0.8 && view.scaling >= 0.5,
+            view.scaling < 0.8 && view.scaling >= 0.4,
             "{}",
             view.scaling
         );
@@ -1990,10 +1990,10 @@ mod tests {
         let view = framing(column, canvas);
         assert_eq!(view.scaling, 0.8);
         assert!((shown(view, column).top() - (canvas.top() + 24.0)).abs() < 1e-3);
-        // Wider than scale 0.5 can show: 0.5, centred across.
-        let huge = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(4000.0, 100.0));
+        // Wider than scale 0.4 can show: 0.4, centred across.
+        let huge = egui::Rect::from_min_size(egui::pos2(0.0, 0.0), egui::vec2(5000.0, 100.0));
         let view = framing(huge, canvas);
-        assert_eq!(view.scaling, 0.5);
+        assert_eq!(view.scaling, 0.4);
         assert!((shown(view, huge).center().x - canvas.center().x).abs() < 1e-3);
     }
 
