@@ -162,8 +162,8 @@ pub struct NodeEditor {
     /// Set when the view should frame all nodes in the next frame (another material
     /// shown, or Home).
     frame_all: bool,
-    /// Set by a framing from estimated node sizes: the next frame frames again with the
-    /// sizes the nodes were drawn at (the estimates err wide).
+    /// Set by a framing: the next frame frames again, with the sizes the nodes were
+    /// drawn at where the first used the layout's estimates (which err wide).
     reframe: bool,
     /// Nodes selected with A, over snarl's own selection ([`keys`]).
     select_all: Option<keys::SelectAll>,
@@ -498,12 +498,13 @@ impl NodeEditor {
         // The canvas fills what is left of the panel (snarl's response covers the whole
         // plane it pans over, so it cannot tell where the canvas is).
         let canvas = ui.available_rect_before_wrap();
+        // Home on the graph drawn last frame frames it at once; another graph's nodes are
+        // not drawn yet, so it is framed from their estimated sizes, then again.
         let reframe = std::mem::take(&mut self.reframe);
-        if std::mem::take(&mut self.frame_all) {
-            viewer.frame = Some((bounds(graph, &self.positions, &BTreeMap::new()), canvas));
-            self.reframe = true;
-        } else if reframe {
+        let frame_all = std::mem::take(&mut self.frame_all);
+        if frame_all || reframe {
             viewer.frame = Some((bounds(graph, &self.positions, &self.node_rects), canvas));
+            self.reframe = frame_all;
         }
         SnarlWidget::new()
             .id(canvas_id)
