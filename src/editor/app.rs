@@ -1364,7 +1364,16 @@ impl EditorApp {
                         status.size[1],
                     ));
                     if status.building {
-                        ui.label(RichText::new("· preparing…").weak());
+                        let since = status.building_since.map(|t| t.elapsed());
+                        ui.label(RichText::new(preparing_label(since)).weak())
+                            .on_hover_text(
+                                "Building the viewport's renderers: the scene's BVHs, their \
+                                 upload and, the first time a kernel is used, its compile, which \
+                                 a software driver (lavapipe) can take minutes over. Mesa keeps \
+                                 compiled kernels on disk, so the next time is quick.",
+                            );
+                        // The clock ticks while nothing else repaints.
+                        ui.ctx().request_repaint_after(Duration::from_millis(500));
                     }
                     let interpreted = status.kernel == Some(KernelKind::Interpreted);
                     let text = match (interpreted, status.compiling) {
@@ -2433,5 +2442,35 @@ impl EditorApp {
             // Come back for the autosave even when nothing else asks for a frame.
             ctx.request_repaint_after(self.autosave_every.min(Duration::from_secs(5)));
         }
+    }
+}
+
+/// The status bar's note while the viewport's renderers are built, with how long that has
+/// taken (a first compile on a software driver can take minutes).
+fn preparing_label(since: Option<Duration>) -> String {
+    match since {
+        Some(t) => {
+            let secs = t.as_secs();
+            format!("· preparing… {}:{:02}", secs / 60, secs % 60)
+        }
+        None => "· preparing…".to_owned(),
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn the_preparing_note_counts_minutes_and_seconds() {
+        assert_eq!(preparing_label(None), "· preparing…");
+        assert_eq!(
+            preparing_label(Some(Duration::from_millis(4_900))),
+            "· preparing… 0:04"
+        );
+        assert_eq!(
+            preparing_label(Some(Duration::from_secs(545))),
+            "· preparing… 9:05"
+        );
     }
 }

@@ -119,6 +119,8 @@ pub struct ViewportStatus {
     /// True while a renderer is being built in the background (the old image stays and
     /// keeps accumulating meanwhile).
     pub building: bool,
+    /// When that build started.
+    pub building_since: Option<Instant>,
     /// Side in pixels of the tiles the full image's passes are cut into at present
     /// (adapted so that one dispatch takes about [`DISPATCH_BUDGET_US`]).
     pub tile_size: u32,
@@ -530,7 +532,10 @@ impl Worker {
         };
         if let Some(build) = self.spawn_build(target, posted, kernel) {
             self.build = Some(build);
-            self.publish(|s| s.building = true);
+            self.publish(|s| {
+                s.building = true;
+                s.building_since = Some(Instant::now());
+            });
         }
     }
 
@@ -712,6 +717,7 @@ impl Worker {
                     s.kernel_builds += kernels;
                     s.error = None;
                     s.building = false;
+                    s.building_since = None;
                     s.kernel = Some(kernel);
                 });
                 self.current = Some(target);
@@ -723,6 +729,7 @@ impl Worker {
                 self.publish(|s| {
                     s.error = Some(message);
                     s.building = false;
+                    s.building_since = None;
                 });
             }
         }
