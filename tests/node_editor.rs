@@ -151,6 +151,34 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
     assert_eq!(graph(harness.state()).nodes.len(), before + 1);
 }
 
+#[test]
+fn deleting_a_node_of_an_automatically_laid_out_graph_leaves_the_others_in_place() {
+    let mut harness = harness(ScriptedDialogs::default());
+    steps(&mut harness, 2);
+    harness.get_by_label("left wall").click();
+    steps(&mut harness, 2);
+    // The red wall's material is of fixed parameters, its two nodes laid out
+    // automatically: without the BSDF, the output alone would be laid out again, leftmost.
+    let was = harness
+        .state()
+        .node_editor()
+        .node_position("output")
+        .unwrap();
+    shift_click_node(&mut harness, "surface");
+    harness.key_press(egui::Key::X);
+    steps(&mut harness, 3);
+    assert!(!graph(harness.state()).nodes.contains_key("surface"));
+    let now = harness
+        .state()
+        .node_editor()
+        .node_position("output")
+        .unwrap();
+    assert!(
+        was.distance(now) < 0.5,
+        "the output moved from {was:?} to {now:?}"
+    );
+}
+
 /// Presses the primary button at `from`, moves by `by` in steps and releases, as a mouse
 /// drag does.
 fn mouse_drag(harness: &mut Harness<'_, EditorApp>, from: egui::Pos2, by: egui::Vec2) {

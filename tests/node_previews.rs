@@ -324,8 +324,9 @@ fn viewport_centre(harness: &mut Harness<'_, EditorApp>) -> [u8; 3] {
 fn wait_for_image(harness: &mut Harness<'_, EditorApp>, what: &str) {
     let before = harness.state().viewport_status().unwrap().shown_revision;
     step_until(harness, what, |app| {
-        app.viewport_status()
-            .is_some_and(|s| s.shown_revision != before && s.samples >= SAMPLE_LIMIT && !s.building)
+        app.viewport_status().is_some_and(|s| {
+            s.shown_revision != before && s.samples >= SAMPLE_LIMIT && s.building.is_none()
+        })
     });
     steps(harness, 3);
 }

@@ -188,7 +188,7 @@ fn edits_at(size: [u32; 2]) {
         if s.shown_revision == Some(revision) {
             break s;
         }
-        if s.building && s.shown_revision == Some(revision - 1) {
+        if s.building.is_some() && s.shown_revision == Some(revision - 1) {
             passes_meanwhile = s.passes - before.passes;
         }
         assert!(
@@ -203,7 +203,7 @@ fn edits_at(size: [u32; 2]) {
         rebuilt.kernel_builds > turned.kernel_builds,
         "the graph material compiled no kernel"
     );
-    assert!(!rebuilt.building);
+    assert!(rebuilt.building.is_none());
     if size[0] * size[1] <= 64 * 48 {
         // A compile takes far longer than a pass of this small image.
         assert!(

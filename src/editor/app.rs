@@ -1363,9 +1363,8 @@ impl EditorApp {
                         status.size[0],
                         status.size[1],
                     ));
-                    if status.building {
-                        let since = status.building_since.map(|t| t.elapsed());
-                        ui.label(RichText::new(preparing_label(since)).weak())
+                    if let Some(since) = status.building {
+                        ui.label(RichText::new(preparing_label(since.elapsed())).weak())
                             .on_hover_text(
                                 "Building the viewport's renderers: the scene's BVHs, their \
                                  upload and, the first time a kernel is used, its compile, which \
@@ -1958,7 +1957,7 @@ impl EditorApp {
     /// Asks for thumbnails of the document's materials when they may have changed, and
     /// pauses them while the viewport builds a kernel (one device, one queue).
     fn update_thumbnails(&mut self, ctx: &egui::Context) {
-        let building = self.viewport_status().is_some_and(|s| s.building);
+        let building = self.viewport_status().is_some_and(|s| s.building.is_some());
         let Some(thumbnails) = self.thumbnails.as_mut() else {
             return;
         };
@@ -2447,14 +2446,9 @@ impl EditorApp {
 
 /// The status bar's note while the viewport's renderers are built, with how long that has
 /// taken (a first compile on a software driver can take minutes).
-fn preparing_label(since: Option<Duration>) -> String {
-    match since {
-        Some(t) => {
-            let secs = t.as_secs();
-            format!("· preparing… {}:{:02}", secs / 60, secs % 60)
-        }
-        None => "· preparing…".to_owned(),
-    }
+fn preparing_label(taken: Duration) -> String {
+    let secs = taken.as_secs();
+    format!("· preparing… {}:{:02}", secs / 60, secs % 60)
 }
 
 #[cfg(test)]
@@ -2463,13 +2457,12 @@ mod tests {
 
     #[test]
     fn the_preparing_note_counts_minutes_and_seconds() {
-        assert_eq!(preparing_label(None), "· preparing…");
         assert_eq!(
-            preparing_label(Some(Duration::from_millis(4_900))),
+            preparing_label(Duration::from_millis(4_900)),
             "· preparing… 0:04"
         );
         assert_eq!(
-            preparing_label(Some(Duration::from_secs(545))),
+            preparing_label(Duration::from_secs(545)),
             "· preparing… 9:05"
         );
     }

@@ -139,16 +139,22 @@ pub fn inspector_ui(ui: &mut Ui, document: &Document, view: &Camera) -> Vec<Insp
     actions
 }
 
-pub(super) fn section(ui: &mut Ui, title: &str, body: impl FnOnce(&mut Ui)) {
+/// A titled part of the inspector, open until the user folds it.
+fn heading(ui: &mut Ui, title: &str, body: impl FnOnce(&mut Ui)) {
     egui::CollapsingHeader::new(RichText::new(title).strong())
         .default_open(true)
-        .show(ui, |ui| {
-            egui::Grid::new(title)
-                .num_columns(2)
-                .spacing([8.0, 4.0])
-                .striped(false)
-                .show(ui, body);
-        });
+        .show(ui, body);
+}
+
+/// A [`heading`] over rows of a label and its value.
+pub(super) fn section(ui: &mut Ui, title: &str, body: impl FnOnce(&mut Ui)) {
+    heading(ui, title, |ui| {
+        egui::Grid::new(title)
+            .num_columns(2)
+            .spacing([8.0, 4.0])
+            .striped(false)
+            .show(ui, body);
+    });
 }
 
 fn object_ui(ui: &mut Ui, document: &Document, object: usize, actions: &mut Vec<InspectorAction>) {
@@ -237,19 +243,10 @@ fn material_ui(
     if m.graph.is_some() {
         // Not a `section`: text in a grid cell does not wrap, and would widen the panel
         // (and narrow the node editor beside it) to its length.
-        egui::CollapsingHeader::new(RichText::new(title).strong())
-            .default_open(true)
-            .show(ui, |ui| {
-                ui.add(
-                    egui::Label::new(
-                        RichText::new(
-                            "A node-graph material: its parameters are set by its nodes.",
-                        )
-                        .weak(),
-                    )
-                    .wrap(),
-                );
-            });
+        heading(ui, &title, |ui| {
+            let note = "A node-graph material: its parameters are set by its nodes.";
+            ui.add(egui::Label::new(RichText::new(note).weak()).wrap());
+        });
         return;
     }
     if users > 1 {

@@ -116,11 +116,9 @@ pub struct ViewportStatus {
     /// The value `restarts` had when the shown image was started: an image of the latest
     /// change is on screen when it equals `restarts`.
     pub shown_restart: u64,
-    /// True while a renderer is being built in the background (the old image stays and
-    /// keeps accumulating meanwhile).
-    pub building: bool,
-    /// When that build started.
-    pub building_since: Option<Instant>,
+    /// When the renderer being built in the background started building, while one is
+    /// (the old image stays and keeps accumulating meanwhile).
+    pub building: Option<Instant>,
     /// Side in pixels of the tiles the full image's passes are cut into at present
     /// (adapted so that one dispatch takes about [`DISPATCH_BUDGET_US`]).
     pub tile_size: u32,
@@ -532,10 +530,7 @@ impl Worker {
         };
         if let Some(build) = self.spawn_build(target, posted, kernel) {
             self.build = Some(build);
-            self.publish(|s| {
-                s.building = true;
-                s.building_since = Some(Instant::now());
-            });
+            self.publish(|s| s.building = Some(Instant::now()));
         }
     }
 
@@ -716,8 +711,7 @@ impl Worker {
                     s.renderer_builds += 1;
                     s.kernel_builds += kernels;
                     s.error = None;
-                    s.building = false;
-                    s.building_since = None;
+                    s.building = None;
                     s.kernel = Some(kernel);
                 });
                 self.current = Some(target);
@@ -728,8 +722,7 @@ impl Worker {
                 self.failed = Some((target.scene_revision, target.size));
                 self.publish(|s| {
                     s.error = Some(message);
-                    s.building = false;
-                    s.building_since = None;
+                    s.building = None;
                 });
             }
         }

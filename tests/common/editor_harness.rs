@@ -195,7 +195,7 @@ fn describe(s: &kiln::editor::viewport::ViewportStatus) -> String {
         s.kernel,
         s.samples,
         s.passes,
-        s.building,
+        s.building.is_some(),
         s.compiling,
         s.renderer_builds,
         s.kernel_builds,

@@ -112,16 +112,6 @@ impl GraphEdit {
         }
     }
 
-    /// Whether the edit adds a node.
-    pub fn adds_nodes(&self) -> bool {
-        match self {
-            GraphEdit::AddNode { .. } => true,
-            GraphEdit::InGroup { edit, .. } => edit.adds_nodes(),
-            GraphEdit::Batch(edits) => edits.iter().any(GraphEdit::adds_nodes),
-            _ => false,
-        }
-    }
-
     /// Whether the edit changes what the material renders: moves and preview toggles
     /// do not.
     pub fn changes_image(&self) -> bool {

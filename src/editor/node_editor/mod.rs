@@ -581,10 +581,10 @@ impl NodeEditor {
             }
         }
         // A graph laid out automatically (a material of fixed parameters, a file without
-        // positions) is laid out again when it grows, which would move every node the
-        // user sees: the edit that adds the first node also saves where they are drawn,
-        // as the first move does.
-        if let Some((edit, _)) = edits.iter_mut().find(|(e, _)| e.adds_nodes()) {
+        // positions) is laid out again when its nodes or links change, which would move
+        // every node the user sees: its first edit also saves where they are drawn (a
+        // move saves them itself, `move_edit`).
+        if let Some((edit, _)) = edits.iter_mut().find(|(e, _)| !e.only_moves()) {
             let drawn = graph_edit::fix_layout(graph);
             if !drawn.is_empty() {
                 let add = std::mem::replace(edit, GraphEdit::Batch(Vec::new()));
@@ -1163,19 +1163,18 @@ fn add_menu(
             }
         });
     } else {
+        let found = |kind: &str, label: &str| {
+            label.to_lowercase().contains(&query) || kind.contains(&query)
+        };
         // (type, label, tooltip) of every match, library nodes first.
         let matches: Vec<(&'static str, &'static str, String)> = nodes::library()
             .iter()
-            .filter(|d| {
-                fits(d) && (d.label.to_lowercase().contains(&query) || d.kind.contains(&query))
-            })
+            .filter(|d| fits(d) && found(d.kind, d.label))
             .map(|d| (d.kind, d.label, format!("{} — {}", d.category, d.doc)))
             .chain(
                 LAYOUT_NODES
                     .iter()
-                    .filter(|(kind, label, _)| {
-                        label.to_lowercase().contains(&query) || kind.contains(&query)
-                    })
+                    .filter(|(kind, label, _)| found(kind, label))
                     .map(|&(kind, label, doc)| (kind, label, format!("Layout — {doc}"))),
             )
             .collect();
