@@ -102,12 +102,19 @@ fn add_from_menu(harness: &mut Harness<'_, EditorApp>, at: egui::Vec2, query: &s
     steps(harness, 3);
 }
 
-#[test]
-fn enter_in_the_add_menu_s_search_adds_the_first_match() {
+/// An editor showing the red wall's material: of fixed parameters, its two nodes laid
+/// out automatically.
+fn red_wall_material() -> Harness<'static, EditorApp> {
     let mut harness = harness(ScriptedDialogs::default());
     steps(&mut harness, 2);
     harness.get_by_label("left wall").click();
     steps(&mut harness, 2);
+    harness
+}
+
+#[test]
+fn enter_in_the_add_menu_s_search_adds_the_first_match() {
+    let mut harness = red_wall_material();
     let before = graph(harness.state()).nodes.len();
     // The red wall's material is of fixed parameters: its nodes are laid out
     // automatically, and adding one must not move them.
@@ -153,10 +160,7 @@ fn enter_in_the_add_menu_s_search_adds_the_first_match() {
 
 #[test]
 fn deleting_a_node_of_an_automatically_laid_out_graph_leaves_the_others_in_place() {
-    let mut harness = harness(ScriptedDialogs::default());
-    steps(&mut harness, 2);
-    harness.get_by_label("left wall").click();
-    steps(&mut harness, 2);
+    let mut harness = red_wall_material();
     // The red wall's material is of fixed parameters, its two nodes laid out
     // automatically: without the BSDF, the output alone would be laid out again, leftmost.
     let was = harness
